@@ -1,0 +1,46 @@
+# The ROS-free core: library `binloop_core` and its gtests. Included by the catkin package and by the
+# plain CMake project in cmake/core_only, which builds and tests the core with no ROS at all.
+# Expects BINLOOP_ROOT to point at the repository root.
+
+set(CMAKE_CXX_STANDARD 17)
+set(CMAKE_CXX_STANDARD_REQUIRED ON)
+set(CMAKE_CXX_EXTENSIONS OFF)
+if(NOT CMAKE_BUILD_TYPE)
+  set(CMAKE_BUILD_TYPE RelWithDebInfo)
+endif()
+set(BINLOOP_WARNINGS -Wall -Wextra -Wno-unused-parameter)
+
+find_package(OpenCV REQUIRED COMPONENTS core imgproc imgcodecs features2d calib3d)
+find_package(Eigen3 REQUIRED NO_MODULE)
+find_package(Threads REQUIRED)
+
+file(GLOB_RECURSE BINLOOP_CORE_SOURCES CONFIGURE_DEPENDS ${BINLOOP_ROOT}/src/core/*.cpp)
+add_library(binloop_core SHARED ${BINLOOP_CORE_SOURCES})
+target_include_directories(binloop_core PUBLIC ${BINLOOP_ROOT}/include ${OpenCV_INCLUDE_DIRS})
+target_link_libraries(binloop_core PUBLIC Eigen3::Eigen ${OpenCV_LIBS} Threads::Threads)
+target_compile_options(binloop_core PRIVATE ${BINLOOP_WARNINGS})
+
+# Where tests find ../shared/data; the environment variable BINLOOP_SHARED_DATA overrides it at run time.
+get_filename_component(BINLOOP_SHARED_DATA_DIR ${BINLOOP_ROOT}/../shared/data ABSOLUTE)
+
+# Small helpers the tests share (temporary folders, where shared data is, tiny data makers).
+file(GLOB BINLOOP_TEST_SUPPORT_SOURCES CONFIGURE_DEPENDS ${BINLOOP_ROOT}/test/support/*.cpp)
+
+# One gtest executable per test/core/**/<name>_test.cpp; the file name decides the role.
+function(binloop_add_core_tests)
+  find_package(GTest REQUIRED)
+  include(GoogleTest)
+  add_library(binloop_test_support STATIC ${BINLOOP_TEST_SUPPORT_SOURCES})
+  target_include_directories(binloop_test_support PUBLIC ${BINLOOP_ROOT}/test)
+  target_compile_definitions(binloop_test_support PUBLIC BINLOOP_SHARED_DATA_DIR="${BINLOOP_SHARED_DATA_DIR}"
+                             BINLOOP_ROOT_DIR="${BINLOOP_ROOT}")
+  target_link_libraries(binloop_test_support PUBLIC binloop_core GTest::gtest)
+  file(GLOB_RECURSE tests CONFIGURE_DEPENDS ${BINLOOP_ROOT}/test/core/*_test.cpp)
+  foreach(t ${tests})
+    get_filename_component(name ${t} NAME_WE)
+    add_executable(${name} ${t})
+    target_link_libraries(${name} binloop_test_support GTest::gtest_main)
+    target_compile_options(${name} PRIVATE ${BINLOOP_WARNINGS})
+    gtest_discover_tests(${name} DISCOVERY_TIMEOUT 60 PROPERTIES TIMEOUT 600)
+  endforeach()
+endfunction()

@@ -1,0 +1,25 @@
+#pragma once
+// A one-line progress bar for command-line tools. Draws on stderr only when stderr is a terminal,
+// so logs and CI output stay clean.
+#include <chrono>
+#include <cstdio>
+#include <string>
+
+namespace binloop {
+
+class ProgressBar {
+ public:
+  ProgressBar(std::string label, size_t total);
+  ~ProgressBar();  // finishes the line if it was drawn
+  void update(size_t done);
+  void finish();
+
+ private:
+  std::string label_;
+  size_t total_;
+  bool tty_;
+  bool finished_ = false;
+  std::chrono::steady_clock::time_point start_, last_draw_;
+};
+
+}  // namespace binloop

@@ -1,0 +1,42 @@
+#pragma once
+// Every conversion between ROS messages and core types lives here (and is tested in
+// test/ros/msg_conversion_test.cpp), so the rest of the ROS layer never touches message fields.
+#include <geometry_msgs/Pose.h>
+#include <opencv2/core/mat.hpp>
+#include <ros/time.h>
+#include <sensor_msgs/CameraInfo.h>
+#include <sensor_msgs/Image.h>
+#include <stdexcept>
+#include <string>
+
+#include "binloop/types/pose.h"
+#include "binloop/types/stereo_camera.h"
+
+namespace binloop_ros {
+
+/// Thrown for a message that cannot be converted; the text says which field and why.
+class ConversionError : public std::runtime_error {
+ public:
+  using std::runtime_error::runtime_error;
+};
+
+/// Copies an 8-bit grey image into a mono8 message.
+sensor_msgs::Image toImageMsg(const cv::Mat& gray, const ros::Time& stamp, const std::string& frame_id);
+/// mono8 is taken as is; bgr8/rgb8/bgra8/rgba8 are converted to grey. Anything else (16-bit, Bayer,
+/// float) or a message whose step or data size disagrees with its width/height throws ConversionError.
+cv::Mat toGray(const sensor_msgs::Image& msg);
+
+/// CameraInfo of a rectified stereo camera (D empty-zero, R identity, P with Tx = -fx·b for the right).
+sensor_msgs::CameraInfo toCameraInfo(const binloop::StereoCamera& cam, bool right, const ros::Time& stamp,
+                                     const std::string& frame_id);
+/// Builds the stereo camera from a left/right CameraInfo pair; throws ConversionError when they are not
+/// a rectified pair (different intrinsics or sizes, right Tx not negative).
+binloop::StereoCamera toStereoCamera(const sensor_msgs::CameraInfo& left, const sensor_msgs::CameraInfo& right);
+
+geometry_msgs::Pose toPoseMsg(const binloop::Pose3& T);
+binloop::Pose3 toPose3(const geometry_msgs::Pose& msg);
+
+/// Seconds from the start of a sequence to a ROS stamp; throws ConversionError outside ROS's range.
+ros::Time toRosTime(double seconds);
+
+}  // namespace binloop_ros

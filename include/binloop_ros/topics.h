@@ -1,0 +1,17 @@
+#pragma once
+// Default topic and frame names, shared by kitti2bag, the launch files and the nodelets, so a bag made by
+// one plays into the other without remapping. Layout follows stereo_image_proc (<ns>/left/image_rect).
+namespace binloop_ros::topics {
+
+constexpr const char* kLeftImage = "/stereo/left/image_rect";
+constexpr const char* kLeftInfo = "/stereo/left/camera_info";
+constexpr const char* kRightImage = "/stereo/right/image_rect";
+constexpr const char* kRightInfo = "/stereo/right/camera_info";
+constexpr const char* kGroundTruth = "/ground_truth/odom";
+
+constexpr const char* kLeftFrame = "stereo_left_optical_frame";
+constexpr const char* kRightFrame = "stereo_right_optical_frame";
+/// KITTI's ground-truth world: camera 0's optical frame at the first frame (z forward, y down).
+constexpr const char* kGroundTruthFrame = "world";
+
+}  // namespace binloop_ros::topics

@@ -1,0 +1,28 @@
+#!/usr/bin/env bash
+# Builds binloop into the git-ignored .build/: the catkin workspace .build/ws (package symlinked into
+# ws/src) and the ROS-free core build .build/core. Incremental: a second run rebuilds only what changed.
+#   scripts/build.sh            both
+#   scripts/build.sh --core     only the ROS-free core and its tests
+#   scripts/build.sh --ros      only the catkin package
+set -euo pipefail
+source "$(dirname "${BASH_SOURCE[0]}")/env.sh"
+
+what="${1:-all}"
+mkdir -p "$BINLOOP_WS/src" "$BINLOOP_CORE_BUILD"
+
+if [ "$what" = all ] || [ "$what" = --core ]; then
+  echo "build: core (no ROS) -> $BINLOOP_CORE_BUILD"
+  [ -f "$BINLOOP_CORE_BUILD/CMakeCache.txt" ] ||
+    cmake -S "$BINLOOP_ROOT/cmake/core_only" -B "$BINLOOP_CORE_BUILD" -DCMAKE_BUILD_TYPE=Release >/dev/null
+  cmake --build "$BINLOOP_CORE_BUILD" -j "$BINLOOP_JOBS"
+fi
+
+if [ "$what" = all ] || [ "$what" = --ros ]; then
+  echo "build: catkin package -> $BINLOOP_WS"
+  ln -sfn "$BINLOOP_ROOT" "$BINLOOP_WS/src/binloop"
+  cd "$BINLOOP_WS"
+  catkin_make -j"$BINLOOP_JOBS" -DCMAKE_BUILD_TYPE=Release -DPYTHON_EXECUTABLE=/usr/bin/python3 \
+    -DCATKIN_ENABLE_TESTING=ON
+  # Test binaries too, so that `scripts/test.sh` only runs them.
+  catkin_make -j"$BINLOOP_JOBS" tests
+fi
