@@ -15,26 +15,26 @@ fi
 mkdir -p "$log"
 
 echo "== core tests (no ROS)"
-(cd "$BINLOOP_CORE_BUILD" && ctest --output-on-failure -j "$BINLOOP_JOBS" --timeout 900) 2>&1 | tee "$log/core.txt"
-core_total=$(grep -oE 'tests failed out of [0-9]+' "$log/core.txt" | grep -oE '[0-9]+$' || echo 0)
-core_failed=$(grep -oE '[0-9]+ tests failed out of' "$log/core.txt" | grep -oE '^[0-9]+' || echo 1)
-core_skipped=$(grep -cE 'Not Run|\*\*\*Skipped|Skipped ' "$log/core.txt" || true)
+rm -f "$log/core.xml"
+(cd "$BINLOOP_CORE_BUILD" && ctest --output-on-failure -j "$BINLOOP_JOBS" --timeout 900 --output-junit "$log/core.xml") \
+  2>&1 | tee "$log/core.txt" | grep -vE '^ *Start|Test +#[0-9]+: .* Passed' || true
+[ -f "$log/core.xml" ] || echo '<testsuite><testcase name="ctest-did-not-run"><failure/></testcase></testsuite>' >"$log/core.xml"
+read -r core_p core_f core_s < <("$BINLOOP_ROOT/scripts/junit_summary.py" "$log/core.xml")
 
 echo "== ROS tests (gtest, rostest)"
 rm -rf "$BINLOOP_WS/build/test_results"
 (cd "$BINLOOP_WS" && catkin_make -j"$BINLOOP_JOBS" run_tests) >"$log/ros.txt" 2>&1
-grep -E '^\[ *(RUN|OK|FAILED|SKIPPED) *\]|Failure|rostest|FAILURE|ERROR' "$log/ros.txt" | grep -v '^\[ RUN' || true
-(cd "$BINLOOP_WS" && catkin_test_results build/test_results) | tee "$log/ros-summary.txt" | tail -5
-sum_line=$(grep -E '^Summary:' "$log/ros-summary.txt" || echo "Summary: 0 tests, 1 errors, 0 failures, 0 skipped")
-ros_total=$(echo "$sum_line" | grep -oE '[0-9]+ tests' | grep -oE '[0-9]+')
-ros_err=$(echo "$sum_line" | grep -oE '[0-9]+ errors' | grep -oE '[0-9]+')
-ros_fail=$(echo "$sum_line" | grep -oE '[0-9]+ failures' | grep -oE '[0-9]+')
-ros_skip=$(echo "$sum_line" | grep -oE '[0-9]+ skipped' | grep -oE '[0-9]+')
-[ "$ros_total" -gt 0 ] || { echo "test: no ROS test results found (see $log/ros.txt)"; ros_err=1; }
+grep -E '^\[ *(FAILED|SKIPPED) *\]|Failure|FAILURE|ERROR' "$log/ros.txt" || true
+shopt -s nullglob
+ros_xml=("$BINLOOP_WS"/build/test_results/binloop/*.xml)
+if [ ${#ros_xml[@]} -eq 0 ]; then
+  echo "test: no ROS test results found (see $log/ros.txt)"
+  ros_p=0 ros_f=1 ros_s=0
+else
+  read -r ros_p ros_f ros_s < <("$BINLOOP_ROOT/scripts/junit_summary.py" "${ros_xml[@]}")
+fi
 
-failed=$((core_failed + ros_err + ros_fail))
-skipped=$((core_skipped + ros_skip))
-passed=$((core_total - core_failed - core_skipped + ros_total - ros_err - ros_fail - ros_skip))
-echo "core: $((core_total - core_failed - core_skipped)) passed, $core_failed failed, $core_skipped skipped; ros: $((ros_total - ros_err - ros_fail - ros_skip)) passed, $((ros_err + ros_fail)) failed, $ros_skip skipped"
-echo "binloop: $passed passed, $failed failed, $skipped skipped"
+failed=$((core_f + ros_f))
+echo "core: $core_p passed, $core_f failed, $core_s skipped; ros: $ros_p passed, $ros_f failed, $ros_s skipped (logs in $log)"
+echo "binloop: $((core_p + ros_p)) passed, $failed failed, $((core_s + ros_s)) skipped"
 [ "$failed" -eq 0 ]
