@@ -6,13 +6,14 @@
 
 #include "binloop/io/filesystem.h"
 #include "binloop/io/trajectory_io.h"
+#include "binloop/sim/builtin_route.h"
 #include "binloop/sim/stereo_renderer.h"
 #include "binloop/util/cli_args.h"
 #include "binloop/util/progress_bar.h"
 
 int main(int argc, char** argv) {
   binloop::CliArgs args("render", "render --route <poses.txt> --out <sequence_dir> [options]");
-  args.option("route", "ground-truth poses of the route (KITTI format, T_w_c per frame)")
+  args.option("route", "ground-truth poses of the route (KITTI format, T_w_c per frame), or 'loop' for the built-in 1.3 laps of a 120x200 m block")
       .option("times", "times.txt of the route (default: 10 Hz)")
       .option("out", "sequence folder to write (image_0/, image_1/, calib.txt, times.txt, poses.txt)")
       .option("start", "first route frame", "0")
@@ -23,7 +24,7 @@ int main(int argc, char** argv) {
       .option("calib", "camera: kitti00 (00-02), kitti03, kitti04 (04-12)", "kitti00")
       .option("baseline", "stereo baseline in metres (default: the camera's, 0.537 for kitti00)")
       .option("seed", "world and noise seed: same seed, same bytes", "1")
-      .option("noise", "sensor noise sigma in grey levels", "0")
+      .option("noise", "sensor noise sigma in grey levels (seeded: same seed, same noise)", "2")
       .option("lighting", "exposure swing over time, e.g. 0.3 for +-30 % (0 = constant)", "0")
       .option("blur", "optical blur sigma in pixels", "0.6")
       .option("textures", "extra folder of photos for façade textures (added to the Debian photos)")
@@ -32,7 +33,7 @@ int main(int argc, char** argv) {
   try {
     if (!args.parse(argc, argv)) return 0;
     if (!args.has("route") || !args.has("out")) throw binloop::CliError("--route and --out are required");
-    const auto route = binloop::readKittiPoses(args.str("route"));
+    const auto route = args.str("route") == "loop" ? binloop::sim::loopRoute() : binloop::readKittiPoses(args.str("route"));
     if (route.size() < 2) throw binloop::CliError("--route needs at least 2 poses");
     std::vector<double> times;
     if (args.has("times")) {

@@ -11,7 +11,7 @@ namespace binloop::sim {
 
 struct RenderOptions {
   double blur_sigma = 0.6;      // optics: a slight blur, as real lenses give (0 = off)
-  double noise_sigma = 0.0;     // sensor noise, grey levels (0 = off); seeded per frame
+  double noise_sigma = 2.0;     // sensor noise, grey levels (0 = off); seeded per frame, so still repeatable
   double exposure_swing = 0.0;  // gain varies by ±this over time, so revisits differ in exposure (0 = off)
   double max_distance_m = 180.0;
 };

@@ -37,6 +37,7 @@ struct WorldParams {
   double repeat_probability = 0.1;  // chance a façade copies an earlier one exactly (perceptual aliasing)
   double car_probability = 0.35, tree_probability = 0.3, pole_spacing_m = 30.0;
   double clearance_m = 5.0;         // nothing but ground within this distance of any route point
+  bool populate = true;             // false: ground only (tests then add their own quads)
 };
 
 
@@ -45,6 +46,9 @@ class World {
   /// Builds the world around `route` (ground-truth T_w_c per frame) with textures from `bank`.
   static World build(const std::vector<Pose3>& route_T_w_c, TextureBank bank, const WorldParams& params,
                      uint64_t seed);
+
+  /// Adds quads (e.g. a test's known façade) after building.
+  void addQuads(const std::vector<Quad>& quads);
 
   const TextureBank& bank() const { return bank_; }
   const std::vector<Quad>& quads() const { return quads_; }
@@ -75,6 +79,7 @@ class World {
   std::vector<std::vector<int>> route_grid_;
   int rgw_ = 0, rgh_ = 0;  // route grid size (cells)
   int nearestRouteSample(double x, double z) const;
+  void indexQuads();
 };
 
 }  // namespace binloop::sim

@@ -239,20 +239,13 @@ World World::build(const std::vector<Pose3>& route_T_w_c, TextureBank bank, cons
 
   Builder b{params, seed, w.route_, w.route_dir_, [&w](double x, double z) { return w.nearestRouteSample(x, z); },
             {}, &w.quads_};
-  b.facadesOnSide(+1, w.bank_);
-  b.facadesOnSide(-1, w.bank_);
-  b.streetFurniture(+1, w.bank_);
-  b.streetFurniture(-1, w.bank_);
-
-  w.grid_.assign(static_cast<size_t>(w.gw_) * w.gh_, {});
-  for (size_t k = 0; k < w.quads_.size(); ++k) {
-    const Quad& q = w.quads_[k];
-    const Eigen::Vector3f c = q.o + q.a * q.lu / 2 + q.b * q.lv / 2;
-    const int cx = std::clamp(static_cast<int>((c.x() - w.gx0_) / w.cell_), 0, w.gw_ - 1);
-    const int cz = std::clamp(static_cast<int>((c.z() - w.gz0_) / w.cell_), 0, w.gh_ - 1);
-    w.grid_[static_cast<size_t>(cz) * w.gw_ + cx].push_back(static_cast<int>(k));
-    w.max_quad_extent_ = std::max(w.max_quad_extent_, static_cast<double>(std::max(q.lu, q.lv)));
+  if (params.populate) {
+    b.facadesOnSide(+1, w.bank_);
+    b.facadesOnSide(-1, w.bank_);
+    b.streetFurniture(+1, w.bank_);
+    b.streetFurniture(-1, w.bank_);
   }
+  w.indexQuads();
 
   // Ground materials by distance to the route.
   w.mx0_ = w.gx0_;
@@ -278,6 +271,24 @@ World World::build(const std::vector<Pose3>& route_T_w_c, TextureBank bank, cons
       w.material_.at<uint8_t>(r, c) = d < road ? 0 : (d < pave ? 1 : 2);
     }
   return w;
+}
+
+void World::indexQuads() {
+  grid_.assign(static_cast<size_t>(gw_) * gh_, {});
+  max_quad_extent_ = 0;
+  for (size_t k = 0; k < quads_.size(); ++k) {
+    const Quad& q = quads_[k];
+    const Eigen::Vector3f c = q.o + q.a * q.lu / 2 + q.b * q.lv / 2;
+    const int cx = std::clamp(static_cast<int>((c.x() - gx0_) / cell_), 0, gw_ - 1);
+    const int cz = std::clamp(static_cast<int>((c.z() - gz0_) / cell_), 0, gh_ - 1);
+    grid_[static_cast<size_t>(cz) * gw_ + cx].push_back(static_cast<int>(k));
+    max_quad_extent_ = std::max(max_quad_extent_, static_cast<double>(std::max(q.lu, q.lv)));
+  }
+}
+
+void World::addQuads(const std::vector<Quad>& quads) {
+  quads_.insert(quads_.end(), quads.begin(), quads.end());
+  indexQuads();
 }
 
 int World::nearestRouteSample(double x, double z) const {

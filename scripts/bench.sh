@@ -1,0 +1,13 @@
+#!/usr/bin/env bash
+# Builds and runs the benchmarks (bench/*.cpp); each prints markdown tables. Not part of the test suite.
+#   scripts/bench.sh            all
+#   scripts/bench.sh render     only bench/render_bench.cpp
+set -euo pipefail
+source "$(dirname "${BASH_SOURCE[0]}")/env.sh"
+"$BINLOOP_ROOT/scripts/build.sh" --ros >/dev/null
+for b in "$BINLOOP_WS"/devel/lib/binloop/bench_*; do
+  name=$(basename "$b")
+  if [ $# -gt 0 ] && [[ "$name" != "bench_$1"* ]]; then continue; fi
+  echo "== $name"
+  "$b" 2> >(grep -v 'libpng warning' >&2)
+done
