@@ -13,7 +13,7 @@ int main(int argc, char** argv) {
       .option("image", "an image and its caption, 'path:caption' (repeat; shown in order)")
       .option("columns", "images per row", "2")
       .option("scale", "scale of each image", "0.5");
-  try {
+  return binloop::runTool("contact-sheet", [&] {
     if (!args.parse(argc, argv)) return 0;
     const auto items = args.all("image");
     if (items.empty() || !args.has("out")) throw binloop::CliError("--out and at least one --image are needed");
@@ -48,11 +48,5 @@ int main(int argc, char** argv) {
     if (!cv::imwrite(args.str("out"), sheet)) throw std::runtime_error(args.str("out") + ": cannot write");
     std::cout << "contact-sheet: " << tiles.size() << " images -> " << args.str("out") << "\n";
     return 0;
-  } catch (const binloop::CliError& e) {
-    std::cerr << "contact-sheet: " << e.what() << "\n";
-    return 2;
-  } catch (const std::exception& e) {
-    std::cerr << "contact-sheet: error: " << e.what() << "\n";
-    return 1;
-  }
+  });
 }

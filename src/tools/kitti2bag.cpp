@@ -19,7 +19,7 @@ int main(int argc, char** argv) {
       .option("stamp-offset", "seconds added to times.txt (ROS time cannot be 0)", "1.0")
       .flag("lz4", "compress the bag with LZ4")
       .flag("force", "overwrite an existing bag");
-  try {
+  return binloop::runTool("kitti2bag", [&] {
     if (!args.parse(argc, argv)) return 0;
     const auto seq = binloop::KittiSequence::open(args.str("sequence_dir"), args.str("poses"));
     binloop_ros::KittiBagOptions opt;
@@ -46,11 +46,5 @@ int main(int argc, char** argv) {
       std::cout << "  " << t::kGroundTruth << " (nav_msgs/Odometry, " << summary.ground_truth << " poses, frame '"
                 << t::kGroundTruthFrame << "')\n";
     return 0;
-  } catch (const binloop::CliError& e) {
-    std::cerr << "kitti2bag: " << e.what() << "\n";
-    return 2;
-  } catch (const std::exception& e) {
-    std::cerr << "kitti2bag: error: " << e.what() << "\n";
-    return 1;
-  }
+  });
 }

@@ -30,7 +30,7 @@ int main(int argc, char** argv) {
       .option("textures", "extra folder of photos for façade textures (added to the Debian photos)")
       .flag("procedural", "use procedural textures only (no photos)")
       .flag("force", "write into an existing non-empty folder");
-  try {
+  return binloop::runTool("render", [&] {
     if (!args.parse(argc, argv)) return 0;
     if (!args.has("route") || !args.has("out")) throw binloop::CliError("--route and --out are required");
     const auto route = args.str("route") == "loop" ? binloop::sim::loopRoute() : binloop::readKittiPoses(args.str("route"));
@@ -96,11 +96,5 @@ int main(int argc, char** argv) {
     std::cout << "render: wrote " << frames << " stereo frames to " << job.out_dir << " in " << secs << " s ("
               << frames / secs << " frames/s)\n";
     return 0;
-  } catch (const binloop::CliError& e) {
-    std::cerr << "render: " << e.what() << "\n";
-    return 2;
-  } catch (const std::exception& e) {
-    std::cerr << "render: error: " << e.what() << "\n";
-    return 1;
-  }
+  });
 }

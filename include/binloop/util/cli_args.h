@@ -2,6 +2,7 @@
 // The command-line parser every tool uses, so that all of them treat options alike: `--name value`,
 // `--name=value`, boolean `--flag`, positionals in order, `--help`. Unknown options, missing values and
 // non-numeric numbers throw CliError with a message naming the option.
+#include <functional>
 #include <map>
 #include <optional>
 #include <stdexcept>
@@ -44,5 +45,9 @@ class CliArgs {
   std::vector<std::pair<std::string, std::string>> positionals_;
   std::multimap<std::string, std::string> values_;
 };
+
+/// Runs a tool's body with the exit-code convention every tool shares: 0 done, 2 bad command line
+/// (CliError, message prefixed with the tool's name), 1 any other error ("<tool>: error: ...").
+int runTool(const std::string& tool, const std::function<int()>& body);
 
 }  // namespace binloop

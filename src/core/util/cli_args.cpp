@@ -108,4 +108,16 @@ std::string CliArgs::usage() const {
   return s.str();
 }
 
+int runTool(const std::string& tool, const std::function<int()>& body) {
+  try {
+    return body();
+  } catch (const CliError& e) {
+    std::cerr << tool << ": " << e.what() << "\n";
+    return 2;
+  } catch (const std::exception& e) {
+    std::cerr << tool << ": error: " << e.what() << "\n";
+    return 1;
+  }
+}
+
 }  // namespace binloop
