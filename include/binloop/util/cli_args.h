@@ -30,7 +30,6 @@ class CliArgs {
   bool has(const std::string& name) const;  // given on the command line (or a flag that is set)
   long integer(const std::string& name) const;
   double number(const std::string& name) const;
-  bool isSet(const std::string& name) const { return has(name); }
   /// All values of an option that may be repeated (e.g. --images a --images b).
   std::vector<std::string> all(const std::string& name) const;
   std::string usage() const;

@@ -140,15 +140,13 @@ struct Builder {
       // Side walls going back from the street, seen through gaps.
       const double depth = rng.uniform(6.0, 12.0);
       const Eigen::Vector3d away = side * right(i);
-      for (const auto& [p, r_idx] : {std::make_pair(a, i), std::make_pair(b, j)}) {
+      for (const Vec2& p : {a, b}) {
         const Vec2 back = p + xz(away) * depth;
         if (clearOfRoute(p, back, prm.clearance_m)) {
           const int tex = bank.walls[rng.below(static_cast<int>(bank.walls.size()))];
-          Quad w = wall(p, back, y_base, height + 1.0, tex, rng, 50.0f);
-          quads->push_back(w);
+          quads->push_back(wall(p, back, y_base, height + 1.0, tex, rng, 50.0f));
           footprints.emplace_back(p + xz(away) * 0.5, back);
         }
-        (void)r_idx;
       }
       i = j + (rng.chance(prm.gap_probability) ? static_cast<size_t>(rng.uniform(2, 6)) : 0);
     }
