@@ -5,7 +5,7 @@
 set -euo pipefail
 source "$(dirname "${BASH_SOURCE[0]}")/env.sh"
 "$BINLOOP_ROOT/scripts/build.sh" --ros >/dev/null
-for b in "$BINLOOP_WS"/devel/lib/binloop/bench_*; do
+for b in "$BINLOOP_WS"/devel/lib/binloop/bench/bench_*; do
   name=$(basename "$b")
   if [ $# -gt 0 ] && [[ "$name" != "bench_$1"* ]]; then continue; fi
   echo "== $name"

@@ -28,13 +28,16 @@ KittiBagSummary writeKittiBag(const binloop::KittiSequence& seq, const std::stri
     rosbag::Bag bag(partial, rosbag::bagmode::Write);
     if (opt.lz4) bag.setCompression(rosbag::compression::LZ4);
     const size_t total = last - opt.start + 1;
+    auto left_info = toCameraInfo(seq.camera(), false, ros::Time(), topics::kLeftFrame);
+    auto right_info = toCameraInfo(seq.camera(), true, ros::Time(), topics::kRightFrame);
     for (size_t i = opt.start; i <= last; ++i) {
       const auto frame = seq.load(i);
       const ros::Time stamp = toRosTime(frame.stamp_s + opt.stamp_offset_s);
       bag.write(topics::kLeftImage, stamp, toImageMsg(frame.left, stamp, topics::kLeftFrame));
-      bag.write(topics::kLeftInfo, stamp, toCameraInfo(seq.camera(), false, stamp, topics::kLeftFrame));
+      left_info.header.stamp = right_info.header.stamp = stamp;
+      bag.write(topics::kLeftInfo, stamp, left_info);
       bag.write(topics::kRightImage, stamp, toImageMsg(frame.right, stamp, topics::kRightFrame));
-      bag.write(topics::kRightInfo, stamp, toCameraInfo(seq.camera(), true, stamp, topics::kRightFrame));
+      bag.write(topics::kRightInfo, stamp, right_info);
       if (seq.hasPoses()) {
         nav_msgs::Odometry odom;
         odom.header.stamp = stamp;

@@ -1,6 +1,5 @@
 // kitti2bag: a KITTI odometry sequence folder -> ROS 1 bag (see README, "Tools").
 #include <iostream>
-#include <memory>
 
 #include "binloop/io/data_error.h"
 #include "binloop/io/kitti_sequence.h"
@@ -30,12 +29,10 @@ int main(int argc, char** argv) {
     opt.overwrite = args.has("force");
     std::cout << "kitti2bag: " << seq.directory() << ": " << seq.size() << " frames, camera "
               << seq.camera().describe() << (seq.hasPoses() ? ", with ground truth" : ", no ground truth") << "\n";
-    std::unique_ptr<binloop::ProgressBar> pbar;
-    const auto summary = binloop_ros::writeKittiBag(seq, args.str("out.bag"), opt, [&](size_t done, size_t total) {
-      if (!pbar) pbar = std::make_unique<binloop::ProgressBar>("kitti2bag", total);
-      pbar->update(done);
-    });
-    if (pbar) pbar->finish();
+    binloop::ProgressBar bar("kitti2bag");
+    const auto summary = binloop_ros::writeKittiBag(seq, args.str("out.bag"), opt,
+                                                    [&](size_t done, size_t total) { bar.update(done, total); });
+    bar.finish();
     namespace t = binloop_ros::topics;
     std::cout << "kitti2bag: wrote " << args.str("out.bag") << " (" << summary.bytes / 1e6 << " MB)\n"
               << "  " << summary.frames << " stereo frames, stamps " << std::fixed << summary.first_stamp << " .. "

@@ -2,7 +2,6 @@
 #include <chrono>
 #include <filesystem>
 #include <iostream>
-#include <memory>
 
 #include "binloop/io/filesystem.h"
 #include "binloop/io/trajectory_io.h"
@@ -83,15 +82,14 @@ int main(int argc, char** argv) {
     ropt.exposure_swing = args.number("lighting");
     ropt.blur_sigma = args.number("blur");
     binloop::sim::StereoRenderer renderer(world, cam, ropt, seed);
-    std::unique_ptr<binloop::ProgressBar> bar;
+    binloop::ProgressBar bar("render");
     const auto t0 = std::chrono::steady_clock::now();
     size_t frames = 0;
     binloop::sim::renderSequence(renderer, job, [&](size_t done, size_t total) {
-      if (!bar) bar = std::make_unique<binloop::ProgressBar>("render", total);
-      bar->update(done);
+      bar.update(done, total);
       frames = done;
     });
-    if (bar) bar->finish();
+    bar.finish();
     const double secs = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
     std::cout << "render: wrote " << frames << " stereo frames to " << job.out_dir << " in " << secs << " s ("
               << frames / secs << " frames/s)\n";

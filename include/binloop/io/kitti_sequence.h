@@ -2,7 +2,6 @@
 // A KITTI odometry sequence folder: image_0/ and image_1/ (rectified left/right PNGs, one per line of
 // times.txt), calib.txt, times.txt, and optionally poses.txt (ground truth, T_w_c of camera 0).
 #include <opencv2/core/mat.hpp>
-#include <optional>
 #include <string>
 #include <vector>
 

@@ -13,11 +13,6 @@ struct StereoCamera {
 
   /// fx·b: disparity (px) times depth (m).
   double bf() const { return fx * baseline_m; }
-  /// Pixel of a point given in the left camera frame (z forward, x right, y down).
-  Eigen::Vector2d project(const Eigen::Vector3d& p_c) const {
-    return {fx * p_c.x() / p_c.z() + cx, fy * p_c.y() / p_c.z() + cy};
-  }
-  double disparity(double depth_m) const { return bf() / depth_m; }
   /// 3x4 projection matrix of the left (right=false) or right camera, as in KITTI calib.txt.
   Eigen::Matrix<double, 3, 4> projectionMatrix(bool right) const;
   /// One line per value, for start-up logs.

@@ -4,7 +4,6 @@
 // non-numeric numbers throw CliError with a message naming the option.
 #include <functional>
 #include <map>
-#include <optional>
 #include <stdexcept>
 #include <string>
 #include <vector>

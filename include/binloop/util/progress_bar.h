@@ -9,9 +9,14 @@ namespace binloop {
 
 class ProgressBar {
  public:
-  ProgressBar(std::string label, size_t total);
+  /// `total` may be left 0 and given with update(done, total), for callbacks that learn it late.
+  explicit ProgressBar(std::string label, size_t total = 0);
   ~ProgressBar();  // finishes the line if it was drawn
   void update(size_t done);
+  void update(size_t done, size_t total) {
+    total_ = total;
+    update(done);
+  }
   void finish();
 
  private:

@@ -63,8 +63,9 @@ void ViewRenderer::drawGround(const World& world, const StereoCamera& cam, const
       if (t <= near_ || t > max_distance_) continue;
       const Eigen::Vector3d ray = row0 + x * dx;
       const Eigen::Vector3d p = c + t * ray;
-      const double range = t * ray.norm();
-      const double cosang = denom / ray.norm();
+      const double ray_len = ray.norm();
+      const double range = t * ray_len;
+      const double cosang = denom / ray_len;
       const int level = mipLevel(static_cast<float>(range * kGroundTexelsPerM / (cam.fx * std::sqrt(cosang))));
       const Texture& tex = bank.textures[world.groundMaterial(p.x(), p.z())];
       g[x] = tex.sample(static_cast<float>(p.x() * kGroundTexelsPerM), static_cast<float>(p.z() * kGroundTexelsPerM),
@@ -154,10 +155,9 @@ void ViewRenderer::drawQuad(const World& world, const Quad& q, const StereoCamer
       const float zc = A.z() * u + B.z() * v + C.z();
       if (zc >= z[x] || zc < near_) continue;
       const float tu = q.off_u + u * q.texels_per_m, tv = q.off_v + (q.lv - v) * q.texels_per_m;
-      const float value = tex.sample(tu, tv, mipLevel(zc * level_scale));
       if (q.shape == Quad::kTree && !treeOpaque(u, v, q.lu, q.lv, tex.sample(tu * 0.25f, tv * 0.25f, 3) / 255.0f))
         continue;
-      g[x] = q.shade * value;
+      g[x] = q.shade * tex.sample(tu, tv, mipLevel(zc * level_scale));
       z[x] = zc;
     }
   }

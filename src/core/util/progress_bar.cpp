@@ -27,7 +27,7 @@ void ProgressBar::update(size_t done) {
 }
 
 void ProgressBar::finish() {
-  if (!tty_ || finished_) return;
+  if (!tty_ || finished_ || total_ == 0) return;
   update(total_);
   finished_ = true;
   std::fprintf(stderr, "\n");
