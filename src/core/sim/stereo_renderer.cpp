@@ -11,7 +11,7 @@
 #include "binloop/io/data_error.h"
 #include "binloop/io/kitti_calib.h"
 #include "binloop/io/trajectory_io.h"
-#include "binloop/sim/hash_random.h"
+#include "binloop/util/hash_random.h"
 
 namespace fs = std::filesystem;
 

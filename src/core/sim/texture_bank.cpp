@@ -4,7 +4,7 @@
 #include <opencv2/imgcodecs.hpp>
 #include <opencv2/imgproc.hpp>
 
-#include "binloop/sim/hash_random.h"
+#include "binloop/util/hash_random.h"
 
 namespace binloop::sim {
 

@@ -6,7 +6,7 @@
 #include <opencv2/imgproc.hpp>
 #include <stdexcept>
 
-#include "binloop/sim/hash_random.h"
+#include "binloop/util/hash_random.h"
 
 namespace binloop::sim {
 

@@ -1,11 +1,11 @@
 #pragma once
-// Randomness for world generation that is the same on every machine and standard library: values are
+// Randomness (world generation, k-means seeding) that is the same on every machine and standard library: values are
 // pure functions of (seed, stream, index) through SplitMix64, instead of std::*_distribution whose
 // results differ between library versions.
 #include <cmath>
 #include <cstdint>
 
-namespace binloop::sim {
+namespace binloop {
 
 inline uint64_t splitmix64(uint64_t x) {
   x += 0x9E3779B97F4A7C15ull;
@@ -37,4 +37,4 @@ class HashRng {
   uint64_t state_;
 };
 
-}  // namespace binloop::sim
+}  // namespace binloop

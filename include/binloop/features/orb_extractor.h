@@ -1,0 +1,28 @@
+#pragma once
+// ORB keypoints and descriptors of one grey image. OpenCV's ORB stands in until binloop has its own
+// ORB-SLAM2-style extractor (the SLAM issue); every tool and evaluation gets its features from here, so
+// swapping the extractor is one change.
+#include <opencv2/core/mat.hpp>
+#include <opencv2/core/types.hpp>
+#include <vector>
+
+#include "binloop/place/binary_descriptor.h"
+
+namespace binloop {
+
+struct OrbParams {
+  int features = 1000;
+  float scale_factor = 1.2f;
+  int levels = 8;
+  int fast_threshold = 20;
+};
+
+struct OrbFeatures {
+  std::vector<cv::KeyPoint> keypoints;
+  Descriptors descriptors;
+};
+
+/// Throws PlaceError for an empty or non-8-bit single-channel image.
+OrbFeatures extractOrb(const cv::Mat& gray, const OrbParams& p = {});
+
+}  // namespace binloop

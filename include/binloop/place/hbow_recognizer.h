@@ -1,0 +1,34 @@
+#pragma once
+// `hbow`: ORB-SLAM2's keyframe database on a vocabulary tree. A query (1) sets the bar to the lowest L1
+// score between the query and its reference keyframes, (2) counts common words with every other keyframe
+// through the inverted index and keeps those with more than 80 % of the best count, (3) keeps those that
+// score at least the bar, (4) accumulates each survivor's score with its group's and returns the best
+// keyframe of every group whose sum reaches 75 % of the best sum.
+#include <memory>
+#include <unordered_map>
+
+#include "binloop/place/place_recognizer.h"
+#include "binloop/place/vocabulary_tree.h"
+
+namespace binloop {
+
+class HbowRecognizer : public PlaceRecognizer {
+ public:
+  explicit HbowRecognizer(std::shared_ptr<const VocabularyTree> voc);
+  static std::shared_ptr<const VocabularyTree> loadVocabulary(const std::string& path);
+  std::string name() const override { return "hbow"; }
+  size_t indexBytesPerKeyframe() const override;
+  const BowVector& bow(KeyframeId id) const { return bows_.at(id); }
+
+ protected:
+  void addSignature(KeyframeId id, const Descriptors& d) override;
+  QueryResult querySignature(KeyframeId id, const QueryScope& scope,
+                             const std::function<bool(KeyframeId)>& excluded) const override;
+
+ private:
+  std::shared_ptr<const VocabularyTree> voc_;
+  std::unordered_map<KeyframeId, BowVector> bows_;
+  std::vector<std::vector<KeyframeId>> inverted_;  // per word
+};
+
+}  // namespace binloop

@@ -1,0 +1,111 @@
+#pragma once
+// The one interface of the five loop models (hbow, fabmap, vlad, hmvlad, vladpq). SLAM and the
+// evaluation tool both drive it the same way: add() a keyframe's descriptors, then query() that keyframe
+// with its scope — the reference keyframes (covisible neighbours in SLAM, the previous few keyframes on
+// an image sequence) whose scores set the bar, and the keyframes that must be ignored. A query says
+// which candidates passed, the bar it used, why nothing passed if so, and how long each step took.
+#include <chrono>
+#include <cstdint>
+#include <functional>
+#include <memory>
+#include <string>
+#include <unordered_map>
+#include <vector>
+
+#include "binloop/place/binary_descriptor.h"
+
+namespace binloop {
+
+using KeyframeId = uint32_t;
+
+struct QueryScope {
+  std::vector<KeyframeId> reference;  // set the bar; never candidates
+  std::vector<KeyframeId> ignore;     // never candidates
+};
+
+enum class QueryStatus {
+  kFound,               // candidates holds at least one keyframe
+  kUnknownKeyframe,     // the query keyframe was never added
+  kEmptyDatabase,       // nothing outside the scope to compare with
+  kNoReference,         // no reference keyframe in the database: no bar can be set
+  kNoPreCandidates,     // the pre-filter (common words, L2, short signature, shared codes) left nothing
+  kBelowReference,      // every candidate scored worse than the reference bar
+};
+std::string statusName(QueryStatus s);
+
+struct Candidate {
+  KeyframeId id = 0;
+  double score = 0;       // the model's own score (similarity, negative distance, or probability)
+  double confidence = 0;  // comparable across queries; >= 1 means it beat the reference bar
+};
+
+struct StepTime {
+  std::string step;
+  double ms = 0;
+};
+
+struct QueryResult {
+  QueryStatus status = QueryStatus::kEmptyDatabase;
+  std::string detail;                 // one line for logs: the numbers behind the status
+  std::vector<Candidate> candidates;  // best first
+  double threshold = 0;               // the bar, in the model's score units
+  /// The best keyframe that did not pass the bar (confidence < 1), when there was one; an evaluation
+  /// sweeps thresholds below the bar with it.
+  bool has_best_rejected = false;
+  Candidate best_rejected;
+  std::vector<StepTime> timings;
+  double total_ms = 0;
+};
+
+class PlaceRecognizer {
+ public:
+  virtual ~PlaceRecognizer() = default;
+  virtual std::string name() const = 0;
+  /// Computes and stores the keyframe's signature; returns the milliseconds spent on the signature.
+  /// Throws PlaceError for an empty descriptor set or an id added before.
+  double add(KeyframeId id, const Descriptors& d);
+  QueryResult query(KeyframeId id, const QueryScope& scope) const;
+  size_t size() const { return order_.size(); }
+  /// Memory of signatures and index per keyframe (the vocabulary is not counted).
+  virtual size_t indexBytesPerKeyframe() const = 0;
+  /// The descriptors given to add(), kept so another model can be rebuilt from them.
+  const Descriptors& descriptors(KeyframeId id) const;
+  const std::vector<KeyframeId>& keyframes() const { return order_; }
+  /// Adds every stored keyframe, in order, to `other` (switching models at run time).
+  void rebuildInto(PlaceRecognizer& other) const;
+  /// Who counts as a keyframe's group for hbow's score accumulation (SLAM: covisible keyframes).
+  /// Default: keyframes added within 2 positions of it.
+  using GroupFn = std::function<std::vector<KeyframeId>(KeyframeId)>;
+  void setGroupFunction(GroupFn f) { group_fn_ = std::move(f); }
+  void setKeepDescriptors(bool keep) { keep_descriptors_ = keep; }
+
+ protected:
+  virtual void addSignature(KeyframeId id, const Descriptors& d) = 0;
+  /// Called with a known id; `excluded` is true for ids that may not be candidates.
+  virtual QueryResult querySignature(KeyframeId id, const QueryScope& scope,
+                                     const std::function<bool(KeyframeId)>& excluded) const = 0;
+  std::vector<KeyframeId> group(KeyframeId id) const;
+  bool known(KeyframeId id) const { return position_.count(id) > 0; }
+
+ private:
+  std::vector<KeyframeId> order_;
+  std::unordered_map<KeyframeId, size_t> position_;
+  std::unordered_map<KeyframeId, Descriptors> descriptors_;
+  GroupFn group_fn_;
+  bool keep_descriptors_ = true;
+};
+
+struct RecognizerOptions {
+  std::string model_file;   // the trained model (vocabulary) of this model type
+  double fabmap_l2_offset = 0.05;  // see FabmapRecognizer
+};
+
+/// `name` is one of hbow, fabmap, vlad, hmvlad, vladpq; throws PlaceError for another name, or when the
+/// model file is missing, of another model type, truncated or corrupt.
+std::unique_ptr<PlaceRecognizer> makePlaceRecognizer(const std::string& name, const RecognizerOptions& opts);
+const std::vector<std::string>& placeModelNames();
+
+/// Milliseconds since `start` (steady clock), for step timings.
+double msSince(std::chrono::steady_clock::time_point start);
+
+}  // namespace binloop

@@ -1,0 +1,66 @@
+#pragma once
+// The vocabulary of the VLAD family: float centres in the binary-expanded descriptor space (each of the
+// 256 bits a 0/1 dimension), arranged as a tree of `levels` levels with `k` children per node. One level
+// (`levels` = 1) is plain VLAD's flat vocabulary of k words; HMVLAD uses every level, one VLAD each
+// (thesis eq. 4.8). Optional LCS-PCA with whitening per node (eq. 4.6).
+//
+// aggregate() gives, per level, v_i = sum over descriptors x assigned to word i of (x - c_i)/|x - c_i|
+// (eq. 4.2), then |v|^alpha sign(v) (4.3) and L2 normalisation of the level's vector (4.4).
+#include <cstdint>
+#include <vector>
+
+#include "binloop/place/binary_descriptor.h"
+#include "binloop/place/model_file.h"
+#include "binloop/place/vocabulary_tree.h"
+
+namespace binloop {
+
+struct VladParams {
+  int k = 4;          // thesis: VLAD 4 words; HMVLAD k = 2 with 2 levels (2 and 4 nodes)
+  int levels = 1;
+  float alpha = 0.5f;  // power normalisation exponent
+  int pca_dims = 0;    // 0: no LCS-PCA; otherwise dimensions kept per word (whitened)
+  uint64_t seed = 1;
+  int max_iterations = 25;
+  size_t max_training_descriptors = 200000;  // sampled evenly from all training descriptors
+};
+
+/// Bits of sign(v) > 0, packed in 64-bit words.
+using BinarySignature = std::vector<uint64_t>;
+BinarySignature binarizeSigns(const std::vector<float>& v);
+inline int hammingBits(const BinarySignature& a, const BinarySignature& b) {
+  int d = 0;
+  for (size_t i = 0; i < a.size(); ++i) d += __builtin_popcountll(a[i] ^ b[i]);
+  return d;
+}
+
+class VladVocabulary {
+ public:
+  static VladVocabulary train(const std::vector<Descriptors>& images, const VladParams& p, const ProgressFn& progress = {});
+
+  int levels() const { return static_cast<int>(level_begin_.size()); }
+  int wordsAtLevel(int level) const { return static_cast<int>(level_count_[level - 1]); }  // level from 1
+  int dims() const { return dims_; }  // per word: 256, or pca_dims
+  /// One normalised VLAD per level (index 0 = level 1), each wordsAtLevel × dims floats.
+  /// Throws PlaceError on an empty descriptor set.
+  std::vector<std::vector<float>> aggregate(const Descriptors& d) const;
+  size_t memoryBytes() const { return (centres_.size() + pca_.size() + pca_mean_.size()) * sizeof(float); }
+
+  void write(ModelWriter& w) const;
+  static VladVocabulary read(ModelReader& r);
+  const VladParams& params() const { return params_; }
+
+ private:
+  VladParams params_;
+  int dims_ = Desc256::kBits;
+  std::vector<float> centres_;  // node × 256 (nodes breadth first, root excluded)
+  std::vector<uint32_t> first_child_, child_count_;  // per node + 1 (entry 0 = root)
+  std::vector<uint32_t> level_begin_, level_count_;  // node ranges per level
+  std::vector<float> pca_, pca_mean_;  // per node: dims × 256 whitened rotation, 256 mean
+  void residual(const float* x, uint32_t node, float* out) const;
+};
+
+/// Expands a descriptor to 256 floats of 0/1 (the thesis' "binary expansion").
+void expandBits(const Desc256& d, float* out);
+
+}  // namespace binloop

@@ -1,0 +1,35 @@
+#include "binloop/place/binary_descriptor.h"
+
+#include <cstring>
+#include <string>
+
+#include "binloop/place/place_error.h"
+
+namespace binloop {
+
+Desc256 descriptorFromBytes(const uint8_t* bytes) {
+  Desc256 d;
+  std::memcpy(d.w.data(), bytes, Desc256::kBytes);  // little-endian: byte i holds bits 8i..8i+7
+  return d;
+}
+
+void descriptorToBytes(const Desc256& d, uint8_t* bytes) { std::memcpy(bytes, d.w.data(), Desc256::kBytes); }
+
+Descriptors descriptorsFromMat(const cv::Mat& rows) {
+  if (rows.empty()) return {};
+  if (rows.depth() != CV_8U || rows.channels() != 1 || rows.cols != Desc256::kBytes)
+    throw PlaceError("descriptors must be 32-byte binary rows (CV_8U, 32 columns, as ORB gives); got " +
+                     std::to_string(rows.cols) + " columns of depth " + std::to_string(rows.depth()) + " with " +
+                     std::to_string(rows.channels()) + " channel(s)");
+  Descriptors out(rows.rows);
+  for (int r = 0; r < rows.rows; ++r) out[r] = descriptorFromBytes(rows.ptr<uint8_t>(r));
+  return out;
+}
+
+cv::Mat descriptorsToMat(const Descriptors& d) {
+  cv::Mat m(static_cast<int>(d.size()), Desc256::kBytes, CV_8U);
+  for (size_t r = 0; r < d.size(); ++r) descriptorToBytes(d[r], m.ptr<uint8_t>(static_cast<int>(r)));
+  return m;
+}
+
+}  // namespace binloop

@@ -1,0 +1,81 @@
+#include "binloop/place/place_recognizer.h"
+
+#include <unordered_set>
+
+#include "binloop/place/place_error.h"
+
+namespace binloop {
+
+std::string statusName(QueryStatus s) {
+  switch (s) {
+    case QueryStatus::kFound: return "found";
+    case QueryStatus::kUnknownKeyframe: return "unknown_keyframe";
+    case QueryStatus::kEmptyDatabase: return "empty_database";
+    case QueryStatus::kNoReference: return "no_reference";
+    case QueryStatus::kNoPreCandidates: return "no_pre_candidates";
+    case QueryStatus::kBelowReference: return "below_reference";
+  }
+  return "?";
+}
+
+double msSince(std::chrono::steady_clock::time_point start) {
+  return std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - start).count();
+}
+
+double PlaceRecognizer::add(KeyframeId id, const Descriptors& d) {
+  if (d.empty()) throw PlaceError(name() + ": keyframe " + std::to_string(id) + " has no descriptors");
+  if (known(id)) throw PlaceError(name() + ": keyframe " + std::to_string(id) + " was added before");
+  const auto t0 = std::chrono::steady_clock::now();
+  addSignature(id, d);
+  const double ms = msSince(t0);
+  position_[id] = order_.size();
+  order_.push_back(id);
+  if (keep_descriptors_) descriptors_[id] = d;
+  return ms;
+}
+
+QueryResult PlaceRecognizer::query(KeyframeId id, const QueryScope& scope) const {
+  const auto t0 = std::chrono::steady_clock::now();
+  QueryResult r;
+  if (!known(id)) {
+    r.status = QueryStatus::kUnknownKeyframe;
+    r.detail = "keyframe " + std::to_string(id) + " was never added";
+    return r;
+  }
+  std::unordered_set<KeyframeId> out(scope.reference.begin(), scope.reference.end());
+  out.insert(scope.ignore.begin(), scope.ignore.end());
+  out.insert(id);
+  size_t outside = 0;
+  for (KeyframeId k : order_) outside += out.count(k) == 0;
+  if (outside == 0) {
+    r.status = QueryStatus::kEmptyDatabase;
+    r.detail = "no keyframe outside the query's scope";
+  } else {
+    r = querySignature(id, scope, [&out](KeyframeId k) { return out.count(k) > 0; });
+  }
+  r.total_ms = msSince(t0);
+  return r;
+}
+
+const Descriptors& PlaceRecognizer::descriptors(KeyframeId id) const {
+  const auto it = descriptors_.find(id);
+  if (it == descriptors_.end()) throw PlaceError(name() + ": no descriptors kept for keyframe " + std::to_string(id));
+  return it->second;
+}
+
+void PlaceRecognizer::rebuildInto(PlaceRecognizer& other) const {
+  for (KeyframeId id : order_) other.add(id, descriptors(id));
+}
+
+std::vector<KeyframeId> PlaceRecognizer::group(KeyframeId id) const {
+  if (group_fn_) return group_fn_(id);
+  std::vector<KeyframeId> g;
+  const auto it = position_.find(id);
+  if (it == position_.end()) return g;
+  const size_t p = it->second;
+  for (size_t q = p >= 2 ? p - 2 : 0; q <= p + 2 && q < order_.size(); ++q)
+    if (q != p) g.push_back(order_[q]);
+  return g;
+}
+
+}  // namespace binloop

@@ -1,0 +1,33 @@
+// The factory: model name → recognizer with its model file loaded.
+#include "binloop/place/fabmap_recognizer.h"
+#include "binloop/place/hbow_recognizer.h"
+#include "binloop/place/hmvlad_recognizer.h"
+#include "binloop/place/place_error.h"
+#include "binloop/place/vlad_recognizer.h"
+#include "binloop/place/vladpq_recognizer.h"
+
+namespace binloop {
+
+const std::vector<std::string>& placeModelNames() {
+  static const std::vector<std::string> names{"hbow", "fabmap", "vlad", "hmvlad", "vladpq"};
+  return names;
+}
+
+std::unique_ptr<PlaceRecognizer> makePlaceRecognizer(const std::string& name, const RecognizerOptions& o) {
+  const ModelType type = modelTypeFromName(name);  // throws on an unknown name
+  if (o.model_file.empty()) throw PlaceError(name + ": no model file given");
+  switch (type) {
+    case ModelType::kHbow: return std::make_unique<HbowRecognizer>(HbowRecognizer::loadVocabulary(o.model_file));
+    case ModelType::kVlad: return std::make_unique<VladRecognizer>(VladRecognizer::loadVocabulary(o.model_file, type));
+    case ModelType::kHmvlad: return std::make_unique<HmvladRecognizer>(VladRecognizer::loadVocabulary(o.model_file, type));
+    case ModelType::kVladPq: return std::make_unique<VladPqRecognizer>(VladPqModel::load(o.model_file));
+    case ModelType::kFabmap: {
+      FabmapModel m = FabmapModel::load(o.model_file);
+      m.params.l2_offset = o.fabmap_l2_offset;
+      return std::make_unique<FabmapRecognizer>(std::move(m));
+    }
+  }
+  throw PlaceError("unknown model '" + name + "'");
+}
+
+}  // namespace binloop

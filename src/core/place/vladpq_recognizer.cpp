@@ -1,0 +1,106 @@
+#include "binloop/place/vladpq_recognizer.h"
+
+#include <algorithm>
+#include <limits>
+#include <sstream>
+
+#include "binloop/place/place_error.h"
+#include "binloop/place/vlad_recognizer.h"
+
+namespace binloop {
+
+VladPqModel VladPqModel::load(const std::string& path) {
+  ModelReader r(path);
+  r.expectType(ModelType::kVladPq);
+  VladPqModel m;
+  m.vlad = std::make_shared<VladVocabulary>(VladVocabulary::read(r));
+  m.pq = std::make_shared<PqCodebooks>(PqCodebooks::read(r));
+  r.expectEnd();
+  if (m.pq->words() != m.vlad->wordsAtLevel(m.vlad->levels()) || m.pq->dims() != m.vlad->dims())
+    throw PlaceError(path + ": PQ codebooks do not fit the VLAD vocabulary");
+  return m;
+}
+
+VladPqRecognizer::VladPqRecognizer(VladPqModel model, PqVerify verify) : model_(std::move(model)), verify_(verify) {
+  if (!model_.vlad || !model_.pq) throw PlaceError("vladpq: no model");
+  inverted_.resize(static_cast<size_t>(model_.pq->words()) * model_.pq->m());
+}
+
+void VladPqRecognizer::addSignature(KeyframeId id, const Descriptors& d) {
+  auto v = model_.vlad->aggregate(d).back();
+  sigs_[id] = binarizeSigns(v);
+  const PqCodes& c = codes_[id] = model_.pq->encode(v);
+  for (int w = 0; w < model_.pq->words(); ++w) inverted_[static_cast<size_t>(w) * model_.pq->m() + c[w]].push_back(id);
+  if (verify_ == PqVerify::kAdc) raw_[id] = std::move(v);
+}
+
+size_t VladPqRecognizer::indexBytesPerKeyframe() const {
+  if (sigs_.empty()) return 0;
+  const size_t words = static_cast<size_t>(model_.pq->words());
+  size_t b = sigs_.begin()->second.size() * sizeof(uint64_t) + words * (sizeof(uint16_t) + sizeof(KeyframeId));
+  if (verify_ == PqVerify::kAdc) b += words * model_.pq->dims() * sizeof(float);
+  return b;
+}
+
+double VladPqRecognizer::distance(KeyframeId q, KeyframeId k) const {
+  switch (verify_) {
+    case PqVerify::kHamming: return hammingBits(sigs_.at(q), sigs_.at(k));
+    case PqVerify::kSdc: return model_.pq->sdc(codes_.at(q), codes_.at(k));
+    case PqVerify::kAdc: return model_.pq->adc(raw_.at(q), codes_.at(k));
+  }
+  return 0;
+}
+
+QueryResult VladPqRecognizer::querySignature(KeyframeId id, const QueryScope& scope,
+                                             const std::function<bool(KeyframeId)>& excluded) const {
+  QueryResult r;
+  const PqCodes& qc = codes_.at(id);
+  auto t = std::chrono::steady_clock::now();
+  std::unordered_map<KeyframeId, int> shared;
+  for (int w = 0; w < model_.pq->words(); ++w)
+    for (KeyframeId k : inverted_[static_cast<size_t>(w) * model_.pq->m() + qc[w]])
+      if (k != id) shared[k]++;
+  r.timings.push_back({"inverted_index", msSince(t)});
+  t = std::chrono::steady_clock::now();
+  int refs = 0, max_ref_shared = 0;
+  double bar = std::numeric_limits<double>::max();
+  for (KeyframeId k : scope.reference) {
+    if (!known(k)) continue;
+    ++refs;
+    const auto it = shared.find(k);
+    max_ref_shared = std::max(max_ref_shared, it == shared.end() ? 0 : it->second);
+    bar = std::min(bar, distance(id, k));
+  }
+  r.timings.push_back({"reference", msSince(t)});
+  if (!refs) {
+    r.status = QueryStatus::kNoReference;
+    r.detail = "no reference keyframe in the database";
+    return r;
+  }
+  r.threshold = bar;
+  t = std::chrono::steady_clock::now();
+  size_t pre = 0;
+  for (const auto& [k, n] : shared) {
+    if (excluded(k) || n < std::max(1, max_ref_shared)) continue;
+    ++pre;
+    const double d = distance(id, k);
+    const Candidate c{k, -d, distanceConfidence(bar, d)};
+    if (d < bar)
+      r.candidates.push_back(c);
+    else if (!r.has_best_rejected || c.confidence > r.best_rejected.confidence)
+      r.has_best_rejected = true, r.best_rejected = c;
+  }
+  std::sort(r.candidates.begin(), r.candidates.end(), [](const Candidate& a, const Candidate& b) {
+    return a.score != b.score ? a.score > b.score : a.id < b.id;
+  });
+  r.timings.push_back({"verify", msSince(t)});
+  std::ostringstream detail;
+  detail << "references share up to " << max_ref_shared << " (word, code) pairs, bar " << bar << "; " << pre
+         << " pre-candidates, " << r.candidates.size() << " verified";
+  r.detail = detail.str();
+  r.status = pre == 0 ? QueryStatus::kNoPreCandidates
+             : r.candidates.empty() ? QueryStatus::kBelowReference : QueryStatus::kFound;
+  return r;
+}
+
+}  // namespace binloop

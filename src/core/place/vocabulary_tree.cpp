@@ -1,0 +1,214 @@
+#include "binloop/place/vocabulary_tree.h"
+
+#include <algorithm>
+#include <cmath>
+#include <deque>
+#include <string>
+
+#include "binloop/place/k_majority.h"
+#include "binloop/util/hash_random.h"
+
+namespace binloop {
+
+VocabularyTree VocabularyTree::train(const std::vector<Descriptors>& images, const VocabTreeParams& p,
+                                     const ProgressFn& progress) {
+  if (p.k < 2 || p.levels < 1) throw PlaceError("vocabulary tree needs k >= 2 and levels >= 1");
+  Descriptors data;
+  for (const auto& im : images) data.insert(data.end(), im.begin(), im.end());
+  const size_t min_needed = static_cast<size_t>(p.k) * 10;
+  if (data.size() < min_needed)
+    throw PlaceError("too few descriptors to train a k=" + std::to_string(p.k) + " vocabulary tree: " +
+                     std::to_string(data.size()) + " (need at least " + std::to_string(min_needed) + ")");
+  VocabularyTree t;
+  t.k_ = p.k;
+  t.levels_ = p.levels;
+  t.weighting_ = p.weighting;
+  // Breadth-first: each queue entry is a node waiting for its children, with its descriptors.
+  struct Pending {
+    uint32_t node;
+    int depth;
+    std::vector<uint32_t> idx;
+  };
+  t.desc_.push_back(Desc256{});
+  t.first_child_.push_back(0);
+  t.child_count_.push_back(0);
+  std::deque<Pending> queue;
+  {
+    std::vector<uint32_t> all(data.size());
+    for (size_t i = 0; i < all.size(); ++i) all[i] = static_cast<uint32_t>(i);
+    queue.push_back({0, 0, std::move(all)});
+  }
+  const size_t total_work = data.size() * static_cast<size_t>(p.levels);
+  size_t done_work = 0;
+  while (!queue.empty()) {
+    Pending cur = std::move(queue.front());
+    queue.pop_front();
+    KMajorityParams kp{p.k, p.max_iterations, hashCombine(p.seed, cur.node)};
+    KMajorityResult km = kMajority(data, cur.idx, kp);
+    const auto first = static_cast<uint32_t>(t.desc_.size());
+    t.first_child_[cur.node] = first;
+    t.child_count_[cur.node] = static_cast<uint32_t>(km.centres.size());
+    std::vector<std::vector<uint32_t>> members(km.centres.size());
+    for (size_t i = 0; i < cur.idx.size(); ++i) members[km.assignment[i]].push_back(cur.idx[i]);
+    for (size_t c = 0; c < km.centres.size(); ++c) {
+      t.desc_.push_back(km.centres[c]);
+      t.first_child_.push_back(0);
+      t.child_count_.push_back(0);
+      // A cluster of one descriptor cannot be split further: it stays a leaf above the bottom level.
+      if (cur.depth + 1 < p.levels && members[c].size() > 1)
+        queue.push_back({first + static_cast<uint32_t>(c), cur.depth + 1, std::move(members[c])});
+      else
+        done_work += members[c].size() * static_cast<size_t>(p.levels - cur.depth - 1);
+    }
+    done_work += cur.idx.size();
+    if (progress) progress(done_work, total_work);
+  }
+  t.indexWords();
+  if (t.words() < static_cast<size_t>(p.k))
+    throw PlaceError("degenerate vocabulary: only " + std::to_string(t.words()) + " distinct words from " +
+                     std::to_string(data.size()) + " descriptors");
+  t.computeIdf(images);
+  return t;
+}
+
+void VocabularyTree::indexWords() {
+  node_word_.assign(desc_.size(), UINT32_MAX);
+  word_node_.clear();
+  for (uint32_t n = 1; n < desc_.size(); ++n)
+    if (child_count_[n] == 0) {
+      node_word_[n] = static_cast<uint32_t>(word_node_.size());
+      word_node_.push_back(n);
+    }
+}
+
+void VocabularyTree::computeIdf(const std::vector<Descriptors>& images) {
+  std::vector<uint32_t> df(words(), 0), last_seen(words(), UINT32_MAX);
+  for (uint32_t im = 0; im < images.size(); ++im)
+    for (const auto& d : images[im]) {
+      const uint32_t w = wordOf(d);
+      if (last_seen[w] != im) last_seen[w] = im, df[w]++;
+    }
+  weight_.resize(words());
+  const double n = static_cast<double>(std::max<size_t>(1, images.size()));
+  for (size_t w = 0; w < words(); ++w) {
+    const bool uses_idf = weighting_ == Weighting::kTfIdf || weighting_ == Weighting::kIdf;
+    weight_[w] = uses_idf ? static_cast<float>(std::log(n / std::max<uint32_t>(1, df[w]))) : 1.0f;
+  }
+}
+
+VocabularyTree VocabularyTree::fromNodes(int k, int levels, Weighting w, const std::vector<InputNode>& in) {
+  if (in.empty()) throw PlaceError("vocabulary has no nodes");
+  std::vector<std::vector<uint32_t>> children(in.size());
+  for (uint32_t i = 1; i < in.size(); ++i) {
+    if (in[i].parent >= in.size() || in[i].parent == i)
+      throw PlaceError("vocabulary node " + std::to_string(i) + " has an invalid parent " + std::to_string(in[i].parent));
+    children[in[i].parent].push_back(i);
+  }
+  VocabularyTree t;
+  t.k_ = k;
+  t.levels_ = levels;
+  t.weighting_ = w;
+  std::vector<float> leaf_weight;
+  std::vector<uint32_t> order{0};  // input index of each output node, breadth first
+  t.desc_.push_back(Desc256{});
+  t.first_child_.push_back(0);
+  t.child_count_.push_back(0);
+  for (size_t pos = 0; pos < order.size(); ++pos) {
+    const auto& ch = children[order[pos]];
+    if (ch.size() > 0 && in[order[pos]].is_leaf && pos != 0)
+      throw PlaceError("vocabulary node " + std::to_string(order[pos]) + " is marked as a word but has children");
+    t.first_child_[pos] = static_cast<uint32_t>(order.size());
+    t.child_count_[pos] = static_cast<uint32_t>(ch.size());
+    for (uint32_t c : ch) {
+      order.push_back(c);
+      t.desc_.push_back(in[c].descriptor);
+      t.first_child_.push_back(0);
+      t.child_count_.push_back(0);
+    }
+    if (order.size() > in.size()) throw PlaceError("vocabulary nodes form a cycle");
+  }
+  if (order.size() != in.size())
+    throw PlaceError("vocabulary has " + std::to_string(in.size() - order.size()) + " nodes not reachable from the root");
+  t.indexWords();
+  t.weight_.resize(t.words());
+  for (size_t wd = 0; wd < t.words(); ++wd) t.weight_[wd] = in[order[t.word_node_[wd]]].weight;
+  if (t.words() == 0) throw PlaceError("vocabulary has no words");
+  return t;
+}
+
+uint32_t VocabularyTree::wordOf(const Desc256& d, int node_depth, uint32_t* path_node) const {
+  uint32_t n = 0;
+  int depth = 0;
+  while (child_count_[n] != 0) {
+    const uint32_t first = first_child_[n];
+    n = first + nearestCentre(d, &desc_[first], child_count_[n]);
+    if (++depth == node_depth && path_node) *path_node = n;
+  }
+  if (path_node && depth < node_depth) *path_node = n;  // a shallow leaf stands for its own subtree
+  return node_word_[n];
+}
+
+void VocabularyTree::transform(const Descriptors& d, BowVector* bow, FeatureVector* fv, int fv_depth) const {
+  std::vector<std::pair<uint32_t, uint32_t>> words(d.size());  // (word, feature)
+  std::vector<std::pair<uint32_t, uint32_t>> nodes;
+  if (fv) nodes.resize(d.size());
+  for (size_t i = 0; i < d.size(); ++i) {
+    uint32_t node = 0;
+    words[i] = {wordOf(d[i], fv_depth, fv ? &node : nullptr), static_cast<uint32_t>(i)};
+    if (fv) nodes[i] = {node, static_cast<uint32_t>(i)};
+  }
+  std::sort(words.begin(), words.end());
+  bow->clear();
+  const bool once = weighting_ == Weighting::kIdf || weighting_ == Weighting::kBinary;
+  for (size_t i = 0; i < words.size();) {
+    size_t j = i;
+    while (j < words.size() && words[j].first == words[i].first) ++j;
+    const float wgt = weight_[words[i].first];
+    if (wgt > 0) bow->push_back({words[i].first, once ? wgt : wgt * static_cast<float>(j - i)});
+    i = j;
+  }
+  normalizeL1(*bow);
+  if (fv) {
+    std::sort(nodes.begin(), nodes.end());
+    fv->clear();
+    for (const auto& [node, feat] : nodes) {
+      if (fv->empty() || fv->back().first != node) fv->push_back({node, {}});
+      fv->back().second.push_back(feat);
+    }
+  }
+}
+
+size_t VocabularyTree::memoryBytes() const {
+  return desc_.size() * (sizeof(Desc256) + 3 * sizeof(uint32_t)) + word_node_.size() * (sizeof(uint32_t) + sizeof(float));
+}
+
+void VocabularyTree::write(ModelWriter& w) const {
+  w.section("TDSC", desc_);
+  w.section("TFCH", first_child_);
+  w.section("TNCH", child_count_);
+  w.section("TWGT", weight_);
+}
+
+VocabularyTree VocabularyTree::read(ModelReader& r) {
+  VocabularyTree t;
+  t.k_ = static_cast<int>(r.header().k);
+  t.levels_ = static_cast<int>(r.header().levels);
+  t.weighting_ = r.header().weighting;
+  t.desc_ = r.section<Desc256>("TDSC");
+  t.first_child_ = r.section<uint32_t>("TFCH");
+  t.child_count_ = r.section<uint32_t>("TNCH");
+  t.weight_ = r.section<float>("TWGT");
+  const size_t n = t.desc_.size();
+  if (n == 0 || t.first_child_.size() != n || t.child_count_.size() != n)
+    throw PlaceError(r.path() + ": vocabulary tree sections disagree on the node count");
+  for (size_t i = 0; i < n; ++i)
+    if (t.child_count_[i] && (t.first_child_[i] <= i || t.first_child_[i] + t.child_count_[i] > n))
+      throw PlaceError(r.path() + ": vocabulary tree node " + std::to_string(i) + " points outside the tree");
+  t.indexWords();
+  if (t.weight_.size() != t.words())
+    throw PlaceError(r.path() + ": " + std::to_string(t.weight_.size()) + " word weights for " +
+                     std::to_string(t.words()) + " words");
+  return t;
+}
+
+}  // namespace binloop
