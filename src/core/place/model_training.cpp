@@ -53,7 +53,11 @@ ModelHeader trainModel(ModelType type, const std::vector<Descriptors>& images, c
       p.k = o.k ? o.k : 10;
       p.levels = o.levels ? o.levels : 6;
       p.seed = o.seed;
-      saveHbowModel(VocabularyTree::train(images, p, progress), h, out);
+      const VocabularyTree t = VocabularyTree::train(images, p, progress);
+      h.k = static_cast<uint32_t>(t.k());
+      h.levels = static_cast<uint32_t>(t.levels());
+      h.words = t.words();
+      saveHbowModel(t, h, out);
       return h;
     }
     case ModelType::kVlad:

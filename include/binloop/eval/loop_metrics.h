@@ -1,0 +1,39 @@
+#pragma once
+// Loop-detection metrics (SPEC "Evaluation definitions"): each query keyframe predicts at most one loop
+// (its best candidate, with a confidence); sweeping a threshold over the confidences gives the
+// precision-recall curve, its area, and the recall at 100 % precision.
+#include <set>
+#include <utility>
+#include <vector>
+
+namespace binloop {
+
+struct LoopPrediction {
+  int query = 0;
+  int candidate = -1;  // frame index; -1: no candidate at all
+  double confidence = 0;
+};
+
+struct PrPoint {
+  double threshold, precision, recall;
+};
+
+struct LoopMetrics {
+  std::vector<PrPoint> curve;  // one point per distinct confidence, descending
+  int positives = 0;           // queries with a ground-truth loop that can be found
+  double r_at_100p = 0;
+  double threshold_100p = 0;   // lowest confidence at which precision is still 1 (inf when none)
+  double auc = 0;              // area under the PR curve (precision summed over recall steps)
+  double precision_at_bar = 0, recall_at_bar = 0;  // at confidence 1 (the model's own bar)
+};
+
+/// `truth`: every (query, ref) ground-truth pair; `positive_queries`: queries that have at least one
+/// findable ref (ref stored before the query and outside its ignored window).
+LoopMetrics evaluateLoops(const std::vector<LoopPrediction>& predictions, const std::set<std::pair<int, int>>& truth,
+                          const std::set<int>& positive_queries);
+
+/// Of `queries`, how many have a correct prediction with confidence >= threshold.
+int foundAt(const std::vector<LoopPrediction>& predictions, const std::set<std::pair<int, int>>& truth,
+            const std::set<int>& queries, double threshold);
+
+}  // namespace binloop

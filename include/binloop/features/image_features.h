@@ -1,0 +1,27 @@
+#pragma once
+// ORB descriptors of many images at once, for training and evaluation: the images of a folder (a KITTI
+// sequence's image_0/, or any folder of png/jpg in natural order), extracted on several threads with the
+// result in image order whatever the thread timing.
+#include <string>
+#include <vector>
+
+#include "binloop/features/orb_extractor.h"
+#include "binloop/place/vocabulary_tree.h"
+
+namespace binloop {
+
+/// `dir`/image_0 when it exists (a KITTI-layout sequence), else the png/jpg files of `dir` in natural
+/// order (2.jpg before 10.jpg). Throws DataError when there are none.
+std::vector<std::string> listImages(const std::string& dir);
+
+struct ExtractOptions {
+  OrbParams orb;
+  int max_side = 0;  // > 0: larger images are scaled down so that their longer side is this
+  int threads = 2;
+};
+
+/// Throws DataError naming the first unreadable image.
+std::vector<Descriptors> extractDescriptors(const std::vector<std::string>& paths, const ExtractOptions& o,
+                                            const ProgressFn& progress = {});
+
+}  // namespace binloop

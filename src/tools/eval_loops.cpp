@@ -1,0 +1,221 @@
+// eval-loops: runs loop models over the same images and measures them against ground-truth loop pairs
+// (see README, "Evaluating loop detection").
+#include <algorithm>
+#include <chrono>
+#include <cstdio>
+#include <filesystem>
+#include <fstream>
+#include <iomanip>
+#include <iostream>
+#include <map>
+#include <set>
+#include <sstream>
+
+#include "binloop/eval/loop_metrics.h"
+#include "binloop/eval/pr_plot.h"
+#include "binloop/features/image_features.h"
+#include "binloop/io/data_error.h"
+#include "binloop/io/filesystem.h"
+#include "binloop/io/trajectory_io.h"
+#include "binloop/place/place_recognizer.h"
+#include "binloop/util/cli_args.h"
+#include "binloop/util/progress_bar.h"
+
+namespace fs = std::filesystem;
+using namespace binloop;
+
+namespace {
+
+double percentile(std::vector<double> v, double q) {
+  if (v.empty()) return 0;
+  std::sort(v.begin(), v.end());
+  return v[std::min(v.size() - 1, static_cast<size_t>(q * (v.size() - 1) + 0.5))];
+}
+
+struct ModelRun {
+  std::string name;
+  LoopMetrics metrics;
+  std::vector<LoopPrediction> predictions;
+  std::vector<double> signature_ms, query_ms;
+  size_t bytes_per_kf = 0;
+  int same_found = 0, reverse_found = 0, segments_found = 0;
+  std::string missed_segments;
+};
+
+}  // namespace
+
+int main(int argc, char** argv) {
+  CliArgs args("eval-loops", "eval-loops --sequence <dir> --gt <pairs.txt> --vocab-dir <dir> --out <dir> [options]");
+  args.option("sequence", "KITTI-layout sequence (image_0/ is used) or a folder of png/jpg images in natural order")
+      .option("gt", "ground-truth loop pairs, 'query ref' frame indices per line, # comments")
+      .option("models", "comma-separated models, or all", "all")
+      .option("vocab-dir", "folder holding <model>.bin for each model", "vocab/kitti08")
+      .option("out", "folder for the results")
+      .option("step", "keyframe every step-th frame", "1")
+      .option("window", "frames before a query that are never candidates (temporal neighbours)", "300")
+      .option("reference", "previous keyframes that set each query's bar (the covisible neighbours of SLAM)", "3")
+      .option("poses", "poses for same/reverse direction (default: <sequence>/poses.txt when present)")
+      .option("segment-gap", "frames between ground-truth queries that start a new revisit segment", "50")
+      .option("features", "ORB features per image", "1000")
+      .option("max-side", "scale larger images down to this longer side (0 = never)", "1024")
+      .option("fabmap-l2-offset", "offset added to the closest reference's L2 distance in fabmap's pre-filter", "0.05")
+      .option("threads", "feature extraction threads", "2");
+  return runTool("eval-loops", [&] {
+    if (!args.parse(argc, argv)) return 0;
+    for (const char* o : {"sequence", "gt", "out"})
+      if (!args.has(o)) throw CliError(std::string("--") + o + " is required");
+    const int step = static_cast<int>(args.integer("step")), window = static_cast<int>(args.integer("window"));
+    const int nref = static_cast<int>(args.integer("reference"));
+    if (step < 1 || window < 0 || nref < 1) throw CliError("--step and --reference must be >= 1, --window >= 0");
+    std::vector<std::string> models;
+    if (args.str("models") == "all") {
+      models = placeModelNames();
+    } else {
+      std::stringstream ss(args.str("models"));
+      for (std::string m; std::getline(ss, m, ',');) models.push_back(m);
+    }
+    for (const auto& m : models) modelTypeFromName(m);  // unknown names fail before any work
+    const auto images = listImages(args.str("sequence"));
+    const auto pairs = readIndexPairs(args.str("gt"));
+    std::vector<Pose3> poses;
+    const std::string poses_path = args.has("poses") ? args.str("poses") : (fs::path(args.str("sequence")) / "poses.txt").string();
+    if (fs::exists(poses_path)) poses = readKittiPoses(poses_path);
+    fs::create_directories(args.str("out"));
+
+    // Keyframes and the ground truth that can be found among them.
+    std::vector<int> kf_frames;
+    for (int f = 0; f < static_cast<int>(images.size()); f += step) kf_frames.push_back(f);
+    std::set<int> kf_set(kf_frames.begin(), kf_frames.end());
+    std::set<std::pair<int, int>> truth;
+    std::set<int> positives, same_dir, reverse_dir;
+    for (const auto& [q, r] : pairs) {
+      if (q < 0 || r < 0 || q >= static_cast<int>(images.size()) || r >= static_cast<int>(images.size()))
+        throw DataError(args.str("gt") + ": pair " + std::to_string(q) + " " + std::to_string(r) + " is outside the " +
+                        std::to_string(images.size()) + " images");
+      truth.insert({q, r});
+      if (!kf_set.count(q) || !kf_set.count(r) || r > q - window || r >= q) continue;
+      positives.insert(q);
+      if (poses.size() == images.size()) {
+        const bool reverse = poses[q].linear().col(2).dot(poses[r].linear().col(2)) < 0;
+        (reverse ? reverse_dir : same_dir).insert(q);
+      }
+    }
+    for (int q : reverse_dir) same_dir.erase(q);  // a query with both kinds counts as a reverse revisit
+    std::vector<std::set<int>> segments;
+    for (int q : positives) {
+      if (segments.empty() || q - *segments.back().rbegin() > args.integer("segment-gap")) segments.emplace_back();
+      segments.back().insert(q);
+    }
+
+    ExtractOptions eo;
+    eo.orb.features = static_cast<int>(args.integer("features"));
+    eo.max_side = static_cast<int>(args.integer("max-side"));
+    eo.threads = static_cast<int>(args.integer("threads"));
+    std::vector<std::string> kf_paths;
+    for (int f : kf_frames) kf_paths.push_back(images[f]);
+    std::vector<Descriptors> desc;
+    {
+      ProgressBar bar("ORB features", kf_paths.size());
+      desc = extractDescriptors(kf_paths, eo, [&](size_t d, size_t n) { bar.update(d, n); });
+    }
+    std::cout << images.size() << " images, " << kf_frames.size() << " keyframes (step " << step << "), "
+              << positives.size() << " keyframes with a findable loop in " << segments.size() << " segments ("
+              << same_dir.size() << " same direction, " << reverse_dir.size() << " reverse)\n";
+
+    std::vector<ModelRun> runs;
+    for (const auto& name : models) {
+      RecognizerOptions ro;
+      ro.model_file = (fs::path(args.str("vocab-dir")) / (name + ".bin")).string();
+      ro.fabmap_l2_offset = args.number("fabmap-l2-offset");
+      auto rec = makePlaceRecognizer(name, ro);
+      rec->setKeepDescriptors(false);
+      ModelRun run;
+      run.name = name;
+      std::ofstream qcsv(fs::path(args.str("out")) / ("queries_" + name + ".csv"));
+      qcsv << "query,status,candidate,confidence,correct,signature_ms,query_ms,detail\n";
+      ProgressBar bar(name, kf_frames.size());
+      for (size_t i = 0; i < kf_frames.size(); ++i) {
+        const int f = kf_frames[i];
+        LoopPrediction p{f, -1, 0};
+        if (desc[i].empty()) {  // a featureless frame cannot be a keyframe of any model
+          qcsv << f << ",no_features,,,,,,\n";
+          run.predictions.push_back(p);
+          continue;
+        }
+        run.signature_ms.push_back(rec->add(static_cast<KeyframeId>(f), desc[i]));
+        QueryScope scope;
+        for (size_t j = i; j-- > 0 && scope.reference.size() < static_cast<size_t>(nref);) scope.reference.push_back(kf_frames[j]);
+        for (size_t j = i; j-- > 0 && kf_frames[j] > f - window;) scope.ignore.push_back(kf_frames[j]);
+        const QueryResult r = rec->query(static_cast<KeyframeId>(f), scope);
+        run.query_ms.push_back(r.total_ms);
+        if (!r.candidates.empty()) {
+          p.candidate = static_cast<int>(r.candidates.front().id);
+          p.confidence = r.candidates.front().confidence;
+        } else if (r.has_best_rejected) {
+          p.candidate = static_cast<int>(r.best_rejected.id);
+          p.confidence = r.best_rejected.confidence;
+        }
+        run.predictions.push_back(p);
+        std::string detail = r.detail;
+        std::replace(detail.begin(), detail.end(), ',', ';');
+        qcsv << f << "," << statusName(r.status) << "," << (p.candidate >= 0 ? std::to_string(p.candidate) : "") << ","
+             << p.confidence << "," << (p.candidate >= 0 && truth.count({f, p.candidate}) ? 1 : 0) << ","
+             << run.signature_ms.back() << "," << r.total_ms << "," << detail << "\n";
+        bar.update(i + 1);
+      }
+      bar.finish();
+      run.bytes_per_kf = rec->indexBytesPerKeyframe();
+      run.metrics = evaluateLoops(run.predictions, truth, positives);
+      const double t = run.metrics.threshold_100p;
+      run.same_found = foundAt(run.predictions, truth, same_dir, t);
+      run.reverse_found = foundAt(run.predictions, truth, reverse_dir, t);
+      for (const auto& seg : segments) {
+        if (foundAt(run.predictions, truth, seg, t) > 0) {
+          run.segments_found++;
+        } else {
+          run.missed_segments += (run.missed_segments.empty() ? "" : " ") + std::to_string(*seg.begin()) + "-" +
+                                 std::to_string(*seg.rbegin());
+        }
+      }
+      std::ofstream pr(fs::path(args.str("out")) / ("pr_" + name + ".csv"));
+      pr << "threshold,precision,recall\n";
+      for (const auto& pt : run.metrics.curve) pr << pt.threshold << "," << pt.precision << "," << pt.recall << "\n";
+      runs.push_back(std::move(run));
+    }
+
+    std::vector<PrSeries> series;
+    for (const auto& r : runs) series.push_back({r.name, r.metrics.curve});
+    writePrPlot((fs::path(args.str("out")) / "pr.png").string(), fs::path(args.str("sequence")).filename().string(), series);
+    std::ofstream sum(fs::path(args.str("out")) / "summary.csv");
+    sum << "model,r_at_100p,auc,signature_ms_median,query_ms_median,bytes_per_kf,signature_ms_p95,query_ms_p95,"
+           "precision_at_bar,recall_at_bar,same_direction_r_at_100p,reverse_direction_r_at_100p,segments_found,segments,"
+           "positives,keyframes\n";
+    std::ostringstream table;
+    table << std::left << std::setw(8) << "model" << std::right << std::setw(8) << "R@100P" << std::setw(7) << "AUC"
+          << std::setw(9) << "same" << std::setw(9) << "reverse" << std::setw(10) << "segments" << std::setw(10)
+          << "sig ms" << std::setw(9) << "p95" << std::setw(10) << "query ms" << std::setw(9) << "p95" << std::setw(10)
+          << "B/kf" << "  P/R at bar\n";
+    for (const auto& r : runs) {
+      const auto& m = r.metrics;
+      const double same = same_dir.empty() ? 0 : double(r.same_found) / same_dir.size();
+      const double rev = reverse_dir.empty() ? 0 : double(r.reverse_found) / reverse_dir.size();
+      sum << r.name << "," << m.r_at_100p << "," << m.auc << "," << percentile(r.signature_ms, 0.5) << ","
+          << percentile(r.query_ms, 0.5) << "," << r.bytes_per_kf << "," << percentile(r.signature_ms, 0.95) << ","
+          << percentile(r.query_ms, 0.95) << "," << m.precision_at_bar << "," << m.recall_at_bar << ","
+          << (same_dir.empty() ? std::string("") : std::to_string(same)) << ","
+          << (reverse_dir.empty() ? std::string("") : std::to_string(rev)) << "," << r.segments_found << ","
+          << segments.size() << "," << m.positives << "," << kf_frames.size() << "\n";
+      char line[256];
+      std::snprintf(line, sizeof line, "%-8s%8.3f%7.3f%9s%9s%10s%10.3f%9.3f%10.4f%9.4f%10zu  %.2f/%.2f\n", r.name.c_str(),
+                    m.r_at_100p, m.auc, same_dir.empty() ? "-" : std::to_string(same).substr(0, 5).c_str(),
+                    reverse_dir.empty() ? "-" : std::to_string(rev).substr(0, 5).c_str(),
+                    (std::to_string(r.segments_found) + "/" + std::to_string(segments.size())).c_str(),
+                    percentile(r.signature_ms, 0.5), percentile(r.signature_ms, 0.95), percentile(r.query_ms, 0.5),
+                    percentile(r.query_ms, 0.95), r.bytes_per_kf, m.precision_at_bar, m.recall_at_bar);
+      table << line;
+      if (!r.missed_segments.empty()) table << "          missed at 100 % precision: segments " << r.missed_segments << "\n";
+    }
+    std::cout << table.str() << "results in " << args.str("out") << " (summary.csv, pr.png, pr_<model>.csv, queries_<model>.csv)\n";
+    return 0;
+  });
+}
