@@ -1,5 +1,6 @@
 #include "binloop/place/model_file.h"
 
+#include <algorithm>
 #include <cstdio>
 #include <filesystem>
 #include <memory>
@@ -112,13 +113,13 @@ ModelReader::ModelReader(const std::string& path) : path_(path) {
   const auto size = std::filesystem::file_size(path, ec);
   if (ec) throw PlaceError(path + ": cannot open model file");
   HeaderCodec c;
-  if (size < kHeaderBytes || std::fread(c.bytes, 1, kHeaderBytes, f.get()) != kHeaderBytes)
-    throw PlaceError(path + ": truncated model file (" + std::to_string(size) + " bytes, the header alone is 128)");
-  char magic[8];
-  for (char& m : magic) m = c.get<char>();
-  if (std::memcmp(magic, kMagic, 8) != 0)
+  const size_t got = std::fread(c.bytes, 1, kHeaderBytes, f.get());
+  if (std::memcmp(c.bytes, kMagic, std::min<size_t>(got, 8)) != 0 || got == 0)
     throw PlaceError(path + ": not a binloop model file (bad magic; DBoW2 vocabularies are converted with "
                             "'binloop train hbow --import <file>')");
+  if (size < kHeaderBytes || got != kHeaderBytes)
+    throw PlaceError(path + ": truncated model file (" + std::to_string(size) + " bytes, the header alone is 128)");
+  c.pos = 8;
   const auto version = c.get<uint32_t>();
   if (version != ModelHeader::kVersion)
     throw PlaceError(path + ": model file version " + std::to_string(version) + ", this build reads version " +

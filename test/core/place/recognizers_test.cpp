@@ -1,0 +1,107 @@
+// Every model on the same synthetic journey: 24 distinct places, then noisy revisits of places 4-11.
+// Each revisit must return its original place as the best candidate.
+#include <gtest/gtest.h>
+
+#include "binloop/place/fabmap_recognizer.h"
+#include "binloop/place/model_training.h"
+#include "binloop/place/place_recognizer.h"
+#include "place_test_data.h"
+#include "support/test_support.h"
+
+using namespace binloop;
+using namespace binloop::test;
+
+namespace {
+
+class Recognizers : public ::testing::TestWithParam<std::string> {
+ protected:
+  static void SetUpTestSuite() {
+    dir_ = new TempDir;
+    std::vector<Descriptors> training;
+    for (int p = 0; p < 60; ++p) training.push_back(randomPlace(100, p, 300));
+    // The journey's places are drawn from the training distribution but not the training images.
+    TrainOptions o;
+    o.words = 400;
+    o.fabmap_samples = 30;
+    for (const auto& m : placeModelNames()) {
+      TrainOptions om = o;
+      if (m == "hbow") om.k = 8, om.levels = 3;
+      if (m == "vladpq") om.pq_codes = 8;
+      trainModel(modelTypeFromName(m), training, om, *dir_ / (m + ".bin"));
+    }
+  }
+  static void TearDownTestSuite() { delete dir_; }
+  static TempDir* dir_;
+};
+TempDir* Recognizers::dir_ = nullptr;
+
+}  // namespace
+
+TEST_P(Recognizers, FindEachRevisitAtTheRightKeyframe) {
+  auto rec = makePlaceRecognizer(GetParam(), {*dir_ / (GetParam() + ".bin")});
+  KeyframeId id = 0;
+  for (int p = 0; p < 24; ++p) {
+    // Each place is seen twice in a row (two keyframes), as a moving camera would.
+    rec->add(id++, revisit(randomPlace(7, p), 1000 + p, 2, 0.95));
+    rec->add(id++, revisit(randomPlace(7, p), 2000 + p, 2, 0.95));
+  }
+  KeyframeId prev = id - 1;
+  for (int p = 4; p < 12; ++p) {
+    const KeyframeId q = id++;
+    rec->add(q, revisit(randomPlace(7, p), 3000 + p));
+    QueryScope scope;
+    scope.reference = {prev};
+    const QueryResult r = rec->query(q, scope);
+    ASSERT_EQ(r.status, QueryStatus::kFound) << GetParam() << " place " << p << ": " << r.detail;
+    const KeyframeId best = r.candidates.front().id;
+    EXPECT_TRUE(best == KeyframeId(2 * p) || best == KeyframeId(2 * p + 1))
+        << GetParam() << " place " << p << " matched keyframe " << best << " (" << r.detail << ")";
+    EXPECT_GE(r.candidates.front().confidence, 1.0);
+    EXPECT_FALSE(r.timings.empty());
+    prev = q;
+  }
+  EXPECT_GT(rec->indexBytesPerKeyframe(), 0u);
+}
+
+TEST_P(Recognizers, ReferenceSetsTheBar) {
+  // A query whose reference is its own twin: nothing else can beat that bar.
+  auto rec = makePlaceRecognizer(GetParam(), {*dir_ / (GetParam() + ".bin")});
+  for (int p = 0; p < 6; ++p) rec->add(p, randomPlace(7, p));
+  rec->add(100, revisit(randomPlace(7, 5), 9, 1, 0.99));
+  const QueryResult r = rec->query(100, {{5}, {}});
+  EXPECT_NE(r.status, QueryStatus::kFound) << GetParam() << ": " << r.detail;
+  EXPECT_TRUE(r.candidates.empty());
+  EXPECT_EQ(rec->query(100, {{}, {}}).status, QueryStatus::kNoReference);
+}
+
+TEST_P(Recognizers, RebuildsAnotherModelFromKeptDescriptors) {
+  auto rec = makePlaceRecognizer(GetParam(), {*dir_ / (GetParam() + ".bin")});
+  for (int p = 0; p < 4; ++p) rec->add(p, randomPlace(7, p));
+  auto other = makePlaceRecognizer("hbow", {*dir_ / "hbow.bin"});
+  rec->rebuildInto(*other);
+  EXPECT_EQ(other->size(), 4u);
+  EXPECT_EQ(other->keyframes(), rec->keyframes());
+}
+
+INSTANTIATE_TEST_SUITE_P(AllModels, Recognizers, ::testing::Values("hbow", "fabmap", "vlad", "hmvlad", "vladpq"),
+                         [](const auto& info) { return info.param; });
+
+TEST(Fabmap, FastLikelihoodEqualsTheDirectSum) {
+  TempDir dir;
+  std::vector<Descriptors> training;
+  for (int p = 0; p < 40; ++p) training.push_back(randomPlace(5, p, 200));
+  TrainOptions o;
+  o.words = 100;
+  trainModel(ModelType::kFabmap, training, o, dir / "f.bin");
+  FabmapRecognizer rec(FabmapModel::load(dir / "f.bin"));
+  FabmapRecognizer ref(FabmapModel::load(dir / "f.bin"));
+  rec.add(0, training[0]);
+  rec.add(1, training[1]);
+  rec.add(2, revisit(training[0], 3));
+  // Words present through the flat vocabulary of each keyframe, via a second recognizer's presence lists.
+  const double direct_same = rec.logLikelihood(2, 0), direct_other = rec.logLikelihood(2, 1);
+  EXPECT_GT(direct_same, direct_other);  // the revisit is likelier under its own place
+  const auto& voc = FabmapModel::load(dir / "f.bin").vocabulary;
+  EXPECT_NEAR(rec.logLikelihood(2, 0), rec.logLikelihoodDirect(voc->presence(rec.descriptors(2)), voc->presence(training[0])), 1e-3);
+  EXPECT_NEAR(rec.logLikelihood(2, 1), rec.logLikelihoodDirect(voc->presence(rec.descriptors(2)), voc->presence(training[1])), 1e-3);
+}

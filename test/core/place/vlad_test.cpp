@@ -1,0 +1,104 @@
+#include "binloop/place/vlad_vocabulary.h"
+
+#include <gtest/gtest.h>
+
+#include <cmath>
+
+#include "binloop/place/pq_codebooks.h"
+#include "place_test_data.h"
+#include "support/test_support.h"
+
+using namespace binloop;
+using namespace binloop::test;
+
+namespace {
+
+Desc256 bits(int from, int to) {
+  Desc256 d;
+  for (int b = from; b < to; ++b) d.setBit(b);
+  return d;
+}
+
+}  // namespace
+
+TEST(Vlad, TwoDescriptorsByHand) {
+  // One word trained on equal numbers of a and b sits halfway between them. a and b differ in 16 bits,
+  // so a's residual is ±0.5 on those bits and 0 elsewhere; normalised, ±1/4 (= 0.5 / (0.5·sqrt(16))).
+  const Desc256 a = bits(0, 24), b = bits(8, 32);  // differ in bits 0-7 and 24-31
+  VladParams p;
+  p.k = 1;
+  const VladVocabulary v = VladVocabulary::train({Descriptors(10, a), Descriptors(10, b)}, p);
+  const auto va = v.aggregate({a}).front();
+  ASSERT_EQ(va.size(), 256u);
+  for (int j = 0; j < 256; ++j) {
+    const double expected = (j < 8) ? 0.25 : (j >= 24 && j < 32) ? -0.25 : 0.0;
+    EXPECT_NEAR(va[j], expected, 1e-6) << j;  // power 0.5 then L2 keeps ±1/4 on 16 equal entries
+  }
+  const auto vab = v.aggregate({a, b}).front();
+  for (float x : vab) EXPECT_NEAR(x, 0.0, 1e-6);  // the two residuals cancel
+  const BinarySignature s = binarizeSigns(va);
+  EXPECT_EQ(s[0], 0xFFull);  // exactly the bits where a has 1 and the centre 0.5
+  EXPECT_THROW_WITH(v.aggregate({}), PlaceError, "empty descriptor set");
+}
+
+TEST(Vlad, HierarchicalVocabularyGivesOneSignaturePerLevel) {
+  std::vector<Descriptors> images;
+  for (int p = 0; p < 8; ++p) images.push_back(randomPlace(9, p, 100));
+  VladParams p;
+  p.k = 2;
+  p.levels = 2;
+  const VladVocabulary v = VladVocabulary::train(images, p);
+  ASSERT_EQ(v.levels(), 2);
+  EXPECT_EQ(v.wordsAtLevel(1), 2);
+  EXPECT_EQ(v.wordsAtLevel(2), 4);
+  const auto sig = v.aggregate(images[0]);
+  EXPECT_EQ(sig[0].size(), 2u * 256);
+  EXPECT_EQ(sig[1].size(), 4u * 256);
+  double n = 0;
+  for (float x : sig[1]) n += x * x;
+  EXPECT_NEAR(n, 1.0, 1e-5);
+}
+
+TEST(Vlad, LcsPcaWhitensResiduals) {
+  std::vector<Descriptors> images;
+  for (int p = 0; p < 20; ++p) images.push_back(randomPlace(4, p, 100));
+  VladParams p;
+  p.k = 2;
+  p.pca_dims = 32;
+  const VladVocabulary v = VladVocabulary::train(images, p);
+  EXPECT_EQ(v.dims(), 32);
+  EXPECT_EQ(v.aggregate(images[0]).front().size(), 64u);
+}
+
+TEST(ProductQuantization, SdcAndAdcMatchBruteForce) {
+  HashRng rng(11);
+  const int words = 3, dims = 5, m = 4;
+  std::vector<std::vector<float>> vlads(60, std::vector<float>(words * dims));
+  for (auto& v : vlads)
+    for (auto& x : v) x = static_cast<float>(rng.normal());
+  const PqCodebooks pq = PqCodebooks::train(vlads, words, dims, m, 1);
+  for (int t = 0; t < 10; ++t) {
+    const auto& a = vlads[t];
+    const auto& b = vlads[59 - t];
+    const PqCodes ca = pq.encode(a), cb = pq.encode(b);
+    double sdc = 0, adc = 0;
+    for (int w = 0; w < words; ++w) {
+      // Brute force: the nearest centroid by exhaustive search, then plain squared distances.
+      int best = 0;
+      double bd = 1e30;
+      for (int c = 0; c < m; ++c) {
+        double d = 0;
+        for (int j = 0; j < dims; ++j) d += std::pow(a[w * dims + j] - pq.centroid(w, c)[j], 2);
+        if (d < bd) bd = d, best = c;
+      }
+      EXPECT_EQ(ca[w], best);
+      for (int j = 0; j < dims; ++j) {
+        sdc += std::pow(pq.centroid(w, ca[w])[j] - pq.centroid(w, cb[w])[j], 2);
+        adc += std::pow(a[w * dims + j] - pq.centroid(w, cb[w])[j], 2);
+      }
+    }
+    EXPECT_NEAR(pq.sdc(ca, cb), sdc, 1e-4);
+    EXPECT_NEAR(pq.adc(a, cb), adc, 1e-4);
+  }
+  EXPECT_THROW_WITH(PqCodebooks::train({vlads[0], vlads[0]}, words, dims, m, 1), PlaceError, "degenerate PQ codebook");
+}
