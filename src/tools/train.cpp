@@ -27,7 +27,8 @@ int main(int argc, char** argv) {
       .option("max-side", "scale larger images down to this longer side (0 = never)", "1024")
       .option("max-descriptors", "descriptors sampled for flat and VLAD vocabularies", "200000")
       .option("seed", "training seed", "1")
-      .option("threads", "feature extraction threads", "2");
+      .option("threads", "feature extraction threads", "2")
+      .flag("skip-unreadable", "skip images that cannot be read as 8-bit (say which) instead of stopping");
   return binloop::runTool("train", [&] {
     if (!args.parse(argc, argv)) return 0;
     const auto type = binloop::modelTypeFromName(args.str("model"));
@@ -54,11 +55,15 @@ int main(int argc, char** argv) {
     eo.orb.features = static_cast<int>(args.integer("features"));
     eo.max_side = static_cast<int>(args.integer("max-side"));
     eo.threads = static_cast<int>(args.integer("threads"));
+    std::vector<std::string> skipped;
+    eo.skip_unreadable = args.has("skip-unreadable");
+    eo.skipped = &skipped;
     std::vector<binloop::Descriptors> images;
     {
       binloop::ProgressBar bar("ORB features", paths.size());
       images = binloop::extractDescriptors(paths, eo, [&](size_t d, size_t n) { bar.update(d, n); });
     }
+    for (const auto& s : skipped) std::cerr << "train: skipped " << s << "\n";
     binloop::TrainOptions o;
     o.k = static_cast<int>(args.integer("k"));
     o.levels = static_cast<int>(args.integer("levels"));

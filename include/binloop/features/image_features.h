@@ -18,6 +18,9 @@ struct ExtractOptions {
   OrbParams orb;
   int max_side = 0;  // > 0: larger images are scaled down so that their longer side is this
   int threads = 2;
+  /// Unreadable images (corrupt, 16-bit) give an empty set and a line in `skipped` instead of an error.
+  bool skip_unreadable = false;
+  std::vector<std::string>* skipped = nullptr;
 };
 
 /// Throws DataError naming the first unreadable image.

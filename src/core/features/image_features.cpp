@@ -39,6 +39,14 @@ std::vector<Descriptors> extractDescriptors(const std::vector<std::string>& path
           cv::resize(img, img, cv::Size(), s, s, cv::INTER_AREA);
         }
         out[i] = extractOrb(img, o.orb).descriptors;
+      } catch (const DataError& e) {
+        std::lock_guard<std::mutex> l(m);
+        if (o.skip_unreadable) {
+          if (o.skipped) o.skipped->push_back(e.what());
+        } else if (!error) {
+          error = std::current_exception();
+          next = paths.size();
+        }
       } catch (...) {
         std::lock_guard<std::mutex> l(m);
         if (!error) error = std::current_exception();

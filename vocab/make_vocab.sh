@@ -1,0 +1,42 @@
+#!/bin/bash
+# Re-makes the shipped vocabularies exactly as they were made (README, "Shipped vocabularies").
+#   vocab/kitti08/<model>.bin  — every model, trained on rendered KITTI route 08 only (every 8th frame,
+#                                1000 ORB features per frame), as the thesis trained on KITTI 08.
+#   vocab/photos/hbow.bin      — hbow for real images: the Debian photos (opencv-doc, python3-skimage,
+#                                one image per plasma-workspace-wallpapers wallpaper) plus every 16th frame
+#                                of rendered route 08, 2000 ORB features per image.
+# Needs ../shared/data/kitti/poses/08.txt for the route; takes about 15 minutes on 2 cores.
+set -euo pipefail
+source "$(dirname "$0")/../scripts/env.sh"
+cd "$BINLOOP_ROOT"
+work="${BINLOOP_VOCAB_WORK:-$BINLOOP_BUILD/vocab-work}"
+seq08="$work/render08"
+shared="${BINLOOP_SHARED_DATA:-$BINLOOP_ROOT/../shared/data}"
+if [ ! -f "$seq08/poses.txt" ]; then
+  scripts/binloop render --route "$shared/kitti/poses/08.txt" --times "$shared/kitti/times/08.txt" \
+    --calib kitti04 --out "$seq08" --force
+fi
+mkdir -p vocab/kitti08 vocab/photos
+for m in hbow fabmap vlad hmvlad vladpq; do
+  scripts/binloop train "$m" --images "$seq08" --every 8 --seed 1 --out "vocab/kitti08/$m.bin"
+done
+stage="$work/photos"
+rm -rf "$stage" && mkdir -p "$stage"
+i=0
+link() { ln -s "$1" "$stage/$(printf %04d $i).${1##*.}"; i=$((i + 1)); }
+for f in /usr/share/doc/opencv-doc/examples/data/*.{jpg,png} /usr/lib/python3/dist-packages/skimage/data/*.{jpg,png}; do
+  # skimage ships truncated.jpg on purpose (a broken file for its own tests)
+  [ -f "$f" ] && [ "$(basename "$f")" != truncated.jpg ] && link "$f"
+done
+for w in /usr/share/wallpapers/*/contents/images; do
+  # One picture per wallpaper: the first 1920-wide version, else the first file.
+  f=$(ls "$w"/1920x* 2>/dev/null | head -1 || true)
+  [ -n "$f" ] || f=$(ls "$w"/* | head -1)
+  link "$f"
+done
+n=0
+for f in "$seq08"/image_0/*.png; do
+  [ $((n % 16)) -eq 0 ] && link "$f"
+  n=$((n + 1))
+done
+scripts/binloop train hbow --images "$stage" --features 2000 --max-side 1024 --seed 1 --skip-unreadable --out vocab/photos/hbow.bin
