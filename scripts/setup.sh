@@ -14,7 +14,7 @@ PACKAGES=(
   # numerics and vision
   libopencv-dev libeigen3-dev libceres-dev libgtest-dev libgmock-dev libbenchmark-dev
   # real photographs used as texture banks and vocabulary training data
-  opencv-doc python3-skimage
+  opencv-doc python3-skimage plasma-workspace-wallpapers
 )
 
 SUDO=""
