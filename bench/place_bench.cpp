@@ -146,7 +146,12 @@ int main() {
   std::printf("\n| model (vocab/kitti08) | query vs %d keyframes, median ms | p95 ms | signature ms | index bytes/keyframe | goal ms |\n|---|---|---|---|---|---|\n", n);
   const std::map<std::string, double> goal{{"hbow", 1}, {"fabmap", 10}, {"vlad", 0.1}, {"hmvlad", 0.1}, {"vladpq", 0.1}};
   for (const auto& name : placeModelNames()) {
-    auto rec = makePlaceRecognizer(name, {vocab_dir + "/" + name + ".bin"});
+    const std::string model_file = vocab_dir + "/" + name + ".bin";
+    if (!fs::exists(model_file)) {
+      std::printf("| %s | (no %s: make it with vocab/make_vocab.sh) | | | | |\n", name.c_str(), model_file.c_str());
+      continue;
+    }
+    auto rec = makePlaceRecognizer(name, {model_file});
     rec->setKeepDescriptors(false);
     std::vector<double> sig;
     for (int i = 0; i < n; ++i) sig.push_back(rec->add(i, kfs[i]));
