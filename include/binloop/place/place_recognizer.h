@@ -85,6 +85,10 @@ class PlaceRecognizer {
   virtual QueryResult querySignature(KeyframeId id, const QueryScope& scope,
                                      const std::function<bool(KeyframeId)>& excluded) const = 0;
   std::vector<KeyframeId> group(KeyframeId id) const;
+  /// Files `c` as a candidate when it passes the bar, else keeps it if it is the best rejected so far.
+  static void offer(QueryResult& r, const Candidate& c, bool passes);
+  /// Best score first; equal scores by id, so that results do not depend on hash-map order.
+  static void sortCandidates(QueryResult& r);
   bool known(KeyframeId id) const { return position_.count(id) > 0; }
 
  private:

@@ -22,7 +22,8 @@ void checkScoring(int s, const std::string& path) {
   if (s != 0) throw PlaceError(path + ": DBoW2 scoring type " + std::to_string(s) + " is not supported (only L1, 0)");
 }
 
-Desc256 parseDescriptorBytes(const char* s, const std::string& where) {
+// Parses 32 decimal byte values; `rest` (optional) receives where parsing stopped.
+Desc256 parseDescriptorBytes(const char* s, const std::string& where, char** rest = nullptr) {
   uint8_t bytes[32];
   char* end = nullptr;
   for (int i = 0; i < 32; ++i) {
@@ -33,6 +34,7 @@ Desc256 parseDescriptorBytes(const char* s, const std::string& where) {
     bytes[i] = static_cast<uint8_t>(v);
     s = end;
   }
+  if (rest) *rest = end;
   return descriptorFromBytes(bytes);
 }
 
@@ -102,8 +104,7 @@ VocabularyTree importDbow2Text(const std::string& path) {
     const long leaf = std::strtol(s, &end, 10);
     if (end == s || (leaf != 0 && leaf != 1)) throw PlaceError(where + "is_leaf must be 0 or 1");
     s = end;
-    VocabularyTree::InputNode n{static_cast<uint32_t>(parent), parseDescriptorBytes(s, where + "node"), leaf == 1, 0.f};
-    for (int i = 0; i < 32; ++i) std::strtol(s, &s, 10);
+    VocabularyTree::InputNode n{static_cast<uint32_t>(parent), parseDescriptorBytes(s, where + "node", &s), leaf == 1, 0.f};
     const double weight = std::strtod(s, &end);
     if (end == s) throw PlaceError(where + "missing the node weight after the 32 descriptor bytes");
     n.weight = static_cast<float>(weight);

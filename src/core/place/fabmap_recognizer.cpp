@@ -206,14 +206,9 @@ QueryResult FabmapRecognizer::querySignature(KeyframeId id, const QueryScope& sc
   for (size_t j = 0; j < pre.size(); ++j) {
     const double p = post[refs.size() + j];
     const Candidate c{pre[j], p, p / std::max(bar, 1e-300)};
-    if (p > bar)
-      r.candidates.push_back(c);
-    else if (!r.has_best_rejected || c.confidence > r.best_rejected.confidence)
-      r.has_best_rejected = true, r.best_rejected = c;
+    offer(r, c, p > bar);
   }
-  std::sort(r.candidates.begin(), r.candidates.end(), [](const Candidate& a, const Candidate& b) {
-    return a.score != b.score ? a.score > b.score : a.id < b.id;
-  });
+  sortCandidates(r);
   r.timings.push_back({"posterior", msSince(t)});
   std::ostringstream detail;
   detail << pre.size() << " within L2 " << min_l2 << "+" << m_.params.l2_offset << "; best reference posterior " << bar

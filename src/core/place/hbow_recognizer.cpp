@@ -74,9 +74,8 @@ QueryResult HbowRecognizer::querySignature(KeyframeId id, const QueryScope& scop
     const double s = l1Score(q, bows_.at(k));
     if (s >= min_score) {
       scored[k] = s;
-    } else if (!r.has_best_rejected || s > r.best_rejected.score) {
-      r.has_best_rejected = true;
-      r.best_rejected = {k, s, s / std::max(min_score, 1e-9)};
+    } else {
+      offer(r, {k, s, s / std::max(min_score, 1e-9)}, false);
     }
   }
   r.timings.push_back({"score", msSince(t)});

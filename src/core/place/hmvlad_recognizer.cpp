@@ -50,12 +50,9 @@ QueryResult HmvladRecognizer::querySignature(KeyframeId id, const QueryScope& sc
   for (KeyframeId k : pre) {
     const int d = hammingBits(ql, long_.at(k));
     const Candidate c{k, -static_cast<double>(d), distanceConfidence(bar_long, d)};
-    if (d < bar_long)
-      r.candidates.push_back(c);
-    else if (!r.has_best_rejected || c.confidence > r.best_rejected.confidence)
-      r.has_best_rejected = true, r.best_rejected = c;
+    offer(r, c, d < bar_long);
   }
-  std::sort(r.candidates.begin(), r.candidates.end(), [](const Candidate& a, const Candidate& b) { return a.score > b.score; });
+  sortCandidates(r);
   r.timings.push_back({"long_verify", msSince(t)});
   std::ostringstream detail;
   detail << "bars " << bar_short << "/" << bar_long << " bits (short/long) from " << refs << " reference keyframes; "

@@ -1,5 +1,6 @@
 #include "binloop/place/place_recognizer.h"
 
+#include <algorithm>
 #include <unordered_set>
 
 #include "binloop/place/place_error.h"
@@ -65,6 +66,21 @@ const Descriptors& PlaceRecognizer::descriptors(KeyframeId id) const {
 
 void PlaceRecognizer::rebuildInto(PlaceRecognizer& other) const {
   for (KeyframeId id : order_) other.add(id, descriptors(id));
+}
+
+void PlaceRecognizer::offer(QueryResult& r, const Candidate& c, bool passes) {
+  if (passes) {
+    r.candidates.push_back(c);
+  } else if (!r.has_best_rejected || c.confidence > r.best_rejected.confidence) {
+    r.has_best_rejected = true;
+    r.best_rejected = c;
+  }
+}
+
+void PlaceRecognizer::sortCandidates(QueryResult& r) {
+  std::sort(r.candidates.begin(), r.candidates.end(), [](const Candidate& a, const Candidate& b) {
+    return a.score != b.score ? a.score > b.score : a.id < b.id;
+  });
 }
 
 std::vector<KeyframeId> PlaceRecognizer::group(KeyframeId id) const {

@@ -57,12 +57,9 @@ QueryResult VladRecognizer::querySignature(KeyframeId id, const QueryScope& scop
     if (excluded(k)) continue;
     const int d = hammingBits(q, *s);
     const Candidate c{k, -static_cast<double>(d), distanceConfidence(refs ? bar : 0, d)};
-    if (refs && d < bar)
-      r.candidates.push_back(c);
-    else if (!r.has_best_rejected || c.confidence > r.best_rejected.confidence)
-      r.has_best_rejected = true, r.best_rejected = c;
+    offer(r, c, refs && d < bar);
   }
-  std::sort(r.candidates.begin(), r.candidates.end(), [](const Candidate& a, const Candidate& b) { return a.score > b.score; });
+  sortCandidates(r);
   r.timings.push_back({"scan", msSince(t)});
   std::ostringstream detail;
   detail << "bar " << bar << " bits from " << refs << " reference keyframes; " << r.candidates.size() << " closer";

@@ -85,14 +85,9 @@ QueryResult VladPqRecognizer::querySignature(KeyframeId id, const QueryScope& sc
     ++pre;
     const double d = distance(id, k);
     const Candidate c{k, -d, distanceConfidence(bar, d)};
-    if (d < bar)
-      r.candidates.push_back(c);
-    else if (!r.has_best_rejected || c.confidence > r.best_rejected.confidence)
-      r.has_best_rejected = true, r.best_rejected = c;
+    offer(r, c, d < bar);
   }
-  std::sort(r.candidates.begin(), r.candidates.end(), [](const Candidate& a, const Candidate& b) {
-    return a.score != b.score ? a.score > b.score : a.id < b.id;
-  });
+  sortCandidates(r);
   r.timings.push_back({"verify", msSince(t)});
   std::ostringstream detail;
   detail << "references share up to " << max_ref_shared << " (word, code) pairs, bar " << bar << "; " << pre
