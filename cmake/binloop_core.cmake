@@ -19,6 +19,14 @@ add_library(binloop_core SHARED ${BINLOOP_CORE_SOURCES})
 target_include_directories(binloop_core PUBLIC ${BINLOOP_ROOT}/include ${OpenCV_INCLUDE_DIRS})
 target_link_libraries(binloop_core PUBLIC Eigen3::Eigen ${OpenCV_LIBS} Threads::Threads)
 target_compile_options(binloop_core PRIVATE ${BINLOOP_WARNINGS})
+# Hamming distances are four popcounts; without the POPCNT instruction GCC calls a bit-twiddling
+# helper instead, which made the vocabulary-tree descent ~3x slower. Every x86-64 CPU since 2008 has
+# it; other architectures (arm64) have their own and ignore this.
+include(CheckCXXCompilerFlag)
+check_cxx_compiler_flag(-mpopcnt BINLOOP_HAS_MPOPCNT)
+if(BINLOOP_HAS_MPOPCNT)
+  target_compile_options(binloop_core PUBLIC -mpopcnt)
+endif()
 
 # Where tests find ../shared/data; the environment variable BINLOOP_SHARED_DATA overrides it at run time.
 get_filename_component(BINLOOP_SHARED_DATA_DIR ${BINLOOP_ROOT}/../shared/data ABSOLUTE)

@@ -2,6 +2,7 @@
 # Builds and runs the benchmarks (bench/*.cpp); each prints markdown tables. Not part of the test suite.
 #   scripts/bench.sh            all
 #   scripts/bench.sh render     only bench/render_bench.cpp
+#   scripts/bench.sh place vocab   only bench/place_bench.cpp, passing it "vocab"
 set -euo pipefail
 source "$(dirname "${BASH_SOURCE[0]}")/env.sh"
 "$BINLOOP_ROOT/scripts/build.sh" --ros >/dev/null
@@ -9,5 +10,5 @@ for b in "$BINLOOP_WS"/devel/lib/binloop/bench/bench_*; do
   name=$(basename "$b")
   if [ $# -gt 0 ] && [[ "$name" != "bench_$1"* ]]; then continue; fi
   echo "== $name"
-  "$b" 2> >(grep -v 'libpng warning' >&2)
+  "$b" "${@:2}" 2> >(grep -v 'libpng warning' >&2)
 done

@@ -33,9 +33,13 @@ Desc256 bitwiseMajority(const Descriptors& data, const uint32_t* idx, size_t n);
 inline uint32_t nearestCentre(const Desc256& x, const Desc256* centres, size_t n, int* dist = nullptr) {
   uint32_t best = 0;
   int best_d = 257;
+  // Branch-free selection: which centre wins is unpredictable, and a mispredicted branch per level
+  // cost as much as the distances themselves in the vocabulary-tree descent.
   for (size_t c = 0; c < n; ++c) {
     const int d = hamming(x, centres[c]);
-    if (d < best_d) best_d = d, best = static_cast<uint32_t>(c);
+    const bool better = d < best_d;
+    best_d = better ? d : best_d;
+    best = better ? static_cast<uint32_t>(c) : best;
   }
   if (dist) *dist = best_d;
   return best;

@@ -71,6 +71,8 @@ class VocabularyTree {
   std::vector<uint32_t> word_node_;     // per word
   std::vector<float> weight_;           // per word
   void indexWords();
+  /// Words (and nodes at `fv_depth`, when fv_node is given) of n descriptors, descended together.
+  void descend(const Desc256* d, size_t n, int fv_depth, uint32_t* word, uint32_t* fv_node) const;
   void computeIdf(const std::vector<Descriptors>& images);
 };
 

@@ -3,9 +3,12 @@
 #include <gtest/gtest.h>
 
 #include <fstream>
+#include <map>
 
+#include "binloop/place/dbow2_import.h"
 #include "binloop/place/hbow_recognizer.h"
 #include "binloop/place/model_training.h"
+#include "binloop/util/hash_random.h"
 #include "place_test_data.h"
 #include "support/test_support.h"
 
@@ -95,4 +98,39 @@ TEST(VocabularyTree, TrainingIsSeededAndSurvivesSaveAndLoad) {
 TEST(VocabularyTree, RefusesTooFewDescriptors) {
   EXPECT_THROW_WITH(VocabularyTree::train({randomPlace(1, 0, 30)}, VocabTreeParams{10, 6}), PlaceError,
                     "too few descriptors to train a k=10 vocabulary tree: 30 (need at least 100)");
+}
+
+// transform() descends 16 descriptors at a time; it must give exactly what one-at-a-time wordOf gives,
+// including for leaves above the deepest level (DBoW2's small vocabulary has 692 of 729 possible words)
+// and a descriptor count that leaves a partial batch.
+TEST(VocabularyTree, BatchedTransformAgreesWithWordOf) {
+  const std::string voc = sharedData("vocab/dbow2_orb_small_voc.yml.gz");
+  BINLOOP_REQUIRE_DATA(voc);
+  const VocabularyTree t = importDbow2(voc);
+  HashRng rng(11);
+  Descriptors d(37);
+  for (auto& x : d)
+    for (auto& w : x.w) w = rng.next();
+  for (int depth : {0, 1, 2, 3, 5}) {
+    BowVector bow;
+    FeatureVector fv;
+    t.transform(d, &bow, &fv, depth);
+    std::map<uint32_t, std::vector<uint32_t>> expected_fv;
+    std::map<uint32_t, int> expected_count;
+    for (uint32_t i = 0; i < d.size(); ++i) {
+      uint32_t node = 0;
+      expected_count[t.wordOf(d[i], depth, &node)]++;
+      expected_fv[node].push_back(i);
+    }
+    ASSERT_EQ(fv.size(), expected_fv.size()) << "depth " << depth;
+    for (const auto& [node, feats] : fv) {
+      EXPECT_EQ(feats, expected_fv[node]) << "depth " << depth;
+    }
+    std::map<uint32_t, int> got;
+    for (const auto& e : bow) got[e.word] = 1;
+    for (const auto& [w, c] : expected_count) {
+      if (t.weight(w) <= 0) continue;  // zero-weight words are dropped from the BoW vector
+      EXPECT_TRUE(got.count(w)) << "word " << w;
+    }
+  }
 }
