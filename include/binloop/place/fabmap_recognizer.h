@@ -47,9 +47,8 @@ class FabmapRecognizer : public PlaceRecognizer {
   double logLikelihoodDirect(const std::vector<uint32_t>& query, const std::vector<uint32_t>& place) const;
 
  protected:
-  void addSignature(KeyframeId id, const Descriptors& d) override;
-  QueryResult querySignature(KeyframeId id, const QueryScope& scope,
-                             const std::function<bool(KeyframeId)>& excluded) const override;
+  void addSignature(Slot slot, const Descriptors& d) override;
+  QueryResult querySignature(const SlotScope& scope) const override;
 
  private:
   FabmapModel m_;
@@ -57,8 +56,8 @@ class FabmapRecognizer : public PlaceRecognizer {
   // same for the mean-field average place, [i][zq][zp].
   std::vector<std::array<float, 8>> log_term_;
   std::vector<std::array<float, 4>> log_avg_;
-  std::unordered_map<KeyframeId, std::vector<uint32_t>> words_;
-  std::vector<std::vector<KeyframeId>> inverted_;
+  std::vector<std::vector<uint32_t>> words_;  // per slot: the words it saw
+  std::vector<std::vector<Slot>> inverted_;   // per word
   struct QueryTables {
     double base = 0;            // sum over words of the term for a place that saw none of them
     std::vector<float> delta;   // per word: term(seen) - term(not seen)

@@ -5,7 +5,6 @@
 // score at least the bar, (4) accumulates each survivor's score with its group's and returns the best
 // keyframe of every group whose sum reaches 75 % of the best sum.
 #include <memory>
-#include <unordered_map>
 
 #include "binloop/place/place_recognizer.h"
 #include "binloop/place/vocabulary_tree.h"
@@ -18,17 +17,16 @@ class HbowRecognizer : public PlaceRecognizer {
   static std::shared_ptr<const VocabularyTree> loadVocabulary(const std::string& path);
   std::string name() const override { return "hbow"; }
   size_t indexBytesPerKeyframe() const override;
-  const BowVector& bow(KeyframeId id) const { return bows_.at(id); }
+  const BowVector& bow(KeyframeId id) const { return bows_[slotOf(id)]; }
 
  protected:
-  void addSignature(KeyframeId id, const Descriptors& d) override;
-  QueryResult querySignature(KeyframeId id, const QueryScope& scope,
-                             const std::function<bool(KeyframeId)>& excluded) const override;
+  void addSignature(Slot slot, const Descriptors& d) override;
+  QueryResult querySignature(const SlotScope& scope) const override;
 
  private:
   std::shared_ptr<const VocabularyTree> voc_;
-  std::unordered_map<KeyframeId, BowVector> bows_;
-  std::vector<std::vector<KeyframeId>> inverted_;  // per word
+  std::vector<BowVector> bows_;             // per slot
+  std::vector<std::vector<Slot>> inverted_;  // per word
 };
 
 }  // namespace binloop

@@ -3,7 +3,6 @@
 // vocabulary tree. The short (first-level) signature rejects: only keyframes closer than every reference
 // keyframe in short bits go on. The long (last-level) signature verifies the same way.
 #include <memory>
-#include <unordered_map>
 
 #include "binloop/place/place_recognizer.h"
 #include "binloop/place/vlad_vocabulary.h"
@@ -17,14 +16,12 @@ class HmvladRecognizer : public PlaceRecognizer {
   size_t indexBytesPerKeyframe() const override;
 
  protected:
-  void addSignature(KeyframeId id, const Descriptors& d) override;
-  QueryResult querySignature(KeyframeId id, const QueryScope& scope,
-                             const std::function<bool(KeyframeId)>& excluded) const override;
+  void addSignature(Slot slot, const Descriptors& d) override;
+  QueryResult querySignature(const SlotScope& scope) const override;
 
  private:
   std::shared_ptr<const VladVocabulary> voc_;
-  std::unordered_map<KeyframeId, BinarySignature> short_, long_;
-  std::vector<std::pair<KeyframeId, const BinarySignature*>> scan_;  // short signatures in insertion order
+  std::vector<BinarySignature> short_, long_;  // per slot
 };
 
 }  // namespace binloop

@@ -80,10 +80,26 @@ class PlaceRecognizer {
   void setKeepDescriptors(bool keep) { keep_descriptors_ = keep; }
 
  protected:
-  virtual void addSignature(KeyframeId id, const Descriptors& d) = 0;
-  /// Called with a known id; `excluded` is true for ids that may not be candidates.
-  virtual QueryResult querySignature(KeyframeId id, const QueryScope& scope,
-                                     const std::function<bool(KeyframeId)>& excluded) const = 0;
+  /// A keyframe's position in add order. Models keep signatures in vectors indexed by slot, so a query
+  /// scans contiguous memory and tests exclusion with one array lookup instead of a hash per keyframe.
+  using Slot = uint32_t;
+  /// What a model's query works with, resolved once by query(): the query's slot, the slots of the
+  /// reference keyframes that are in the database, how many the scope named, and per slot whether it
+  /// may not be a candidate (the query itself, its reference and ignored keyframes).
+  struct SlotScope {
+    Slot query = 0;
+    std::vector<Slot> reference;
+    size_t reference_named = 0;
+    std::vector<char> excluded;
+  };
+  /// Stores the signature of the keyframe that will get `slot` (== size() before the add). Must leave
+  /// the model unchanged when it throws.
+  virtual void addSignature(Slot slot, const Descriptors& d) = 0;
+  virtual QueryResult querySignature(const SlotScope& scope) const = 0;
+  KeyframeId idAt(Slot s) const { return order_[s]; }
+  /// Throws PlaceError for an id that was never added.
+  Slot slotOf(KeyframeId id) const;
+  bool findSlot(KeyframeId id, Slot* s) const;
   std::vector<KeyframeId> group(KeyframeId id) const;
   /// Files `c` as a candidate when it passes the bar, else keeps it if it is the best rejected so far.
   static void offer(QueryResult& r, const Candidate& c, bool passes);
@@ -93,7 +109,7 @@ class PlaceRecognizer {
 
  private:
   std::vector<KeyframeId> order_;
-  std::unordered_map<KeyframeId, size_t> position_;
+  std::unordered_map<KeyframeId, Slot> position_;
   std::unordered_map<KeyframeId, Descriptors> descriptors_;
   GroupFn group_fn_;
   bool keep_descriptors_ = true;

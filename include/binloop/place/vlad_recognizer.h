@@ -3,16 +3,15 @@
 // distance. The bar is the smallest distance between the query and its reference keyframes; every other
 // keyframe closer than that is a candidate. No pre-filter: this is the thesis' baseline.
 #include <memory>
-#include <unordered_map>
 
 #include "binloop/place/place_recognizer.h"
 #include "binloop/place/vlad_vocabulary.h"
 
 namespace binloop {
 
-/// Smallest Hamming distance from `q` to the signatures of the known reference keyframes, or -1.
-int closestReference(const BinarySignature& q, const std::vector<KeyframeId>& refs,
-                     const std::unordered_map<KeyframeId, BinarySignature>& sigs, int* count = nullptr);
+/// Smallest Hamming distance from `q` to the signatures (per slot) of the reference slots, or -1.
+int closestReference(const BinarySignature& q, const std::vector<uint32_t>& ref_slots,
+                     const std::vector<BinarySignature>& sigs);
 /// Confidence of a distance against a bar: bar / distance (>= 1 when it beats the bar).
 inline double distanceConfidence(double bar, double dist) { return (bar + 1.0) / (dist + 1.0); }
 
@@ -24,14 +23,12 @@ class VladRecognizer : public PlaceRecognizer {
   size_t indexBytesPerKeyframe() const override;
 
  protected:
-  void addSignature(KeyframeId id, const Descriptors& d) override;
-  QueryResult querySignature(KeyframeId id, const QueryScope& scope,
-                             const std::function<bool(KeyframeId)>& excluded) const override;
+  void addSignature(Slot slot, const Descriptors& d) override;
+  QueryResult querySignature(const SlotScope& scope) const override;
 
  private:
   std::shared_ptr<const VladVocabulary> voc_;
-  std::unordered_map<KeyframeId, BinarySignature> sigs_;
-  std::vector<std::pair<KeyframeId, const BinarySignature*>> scan_;  // insertion order, for a linear scan
+  std::vector<BinarySignature> sigs_;  // per slot
 };
 
 }  // namespace binloop

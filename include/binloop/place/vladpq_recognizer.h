@@ -6,7 +6,6 @@
 // pass — see ARCHITECTURE notes); they are verified like `vlad`, by binarized-VLAD Hamming distance below
 // the closest reference, or by SDC/ADC distance when chosen.
 #include <memory>
-#include <unordered_map>
 
 #include "binloop/place/place_recognizer.h"
 #include "binloop/place/pq_codebooks.h"
@@ -29,18 +28,18 @@ class VladPqRecognizer : public PlaceRecognizer {
   size_t indexBytesPerKeyframe() const override;
 
  protected:
-  void addSignature(KeyframeId id, const Descriptors& d) override;
-  QueryResult querySignature(KeyframeId id, const QueryScope& scope,
-                             const std::function<bool(KeyframeId)>& excluded) const override;
+  void addSignature(Slot slot, const Descriptors& d) override;
+  QueryResult querySignature(const SlotScope& scope) const override;
 
  private:
   VladPqModel model_;
   PqVerify verify_;
-  std::unordered_map<KeyframeId, BinarySignature> sigs_;
-  std::unordered_map<KeyframeId, PqCodes> codes_;
-  std::unordered_map<KeyframeId, std::vector<float>> raw_;  // only kept for ADC
-  std::vector<std::vector<KeyframeId>> inverted_;            // per (word, code)
-  double distance(KeyframeId q, KeyframeId k) const;
+  // Per slot:
+  std::vector<BinarySignature> sigs_;
+  std::vector<PqCodes> codes_;
+  std::vector<std::vector<float>> raw_;  // only kept for ADC
+  std::vector<std::vector<Slot>> inverted_;  // per (word, code)
+  double distance(Slot q, Slot k) const;
 };
 
 }  // namespace binloop

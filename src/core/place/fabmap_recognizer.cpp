@@ -118,7 +118,7 @@ double FabmapRecognizer::placeLogLik(const QueryTables& t, const std::vector<uin
 }
 
 double FabmapRecognizer::logLikelihood(KeyframeId query, KeyframeId k) const {
-  return placeLogLik(tables(words_.at(query)), words_.at(k));
+  return placeLogLik(tables(words_[slotOf(query)]), words_[slotOf(k)]);
 }
 
 double FabmapRecognizer::logLikelihoodDirect(const std::vector<uint32_t>& query, const std::vector<uint32_t>& place) const {
@@ -131,45 +131,43 @@ double FabmapRecognizer::logLikelihoodDirect(const std::vector<uint32_t>& query,
   return s;
 }
 
-void FabmapRecognizer::addSignature(KeyframeId id, const Descriptors& d) {
-  auto& w = words_[id] = m_.vocabulary->presence(d);
-  for (uint32_t x : w) inverted_[x].push_back(id);
+void FabmapRecognizer::addSignature(Slot slot, const Descriptors& d) {
+  words_.push_back(m_.vocabulary->presence(d));
+  for (uint32_t x : words_.back()) inverted_[x].push_back(slot);
 }
 
 size_t FabmapRecognizer::indexBytesPerKeyframe() const {
   if (words_.empty()) return 0;
   size_t n = 0;
-  for (const auto& [id, w] : words_) n += w.size();
+  for (const auto& w : words_) n += w.size();
   return n * (sizeof(uint32_t) + sizeof(KeyframeId)) / words_.size();  // presence list + inverted entries
 }
 
-QueryResult FabmapRecognizer::querySignature(KeyframeId id, const QueryScope& scope,
-                                             const std::function<bool(KeyframeId)>& excluded) const {
+QueryResult FabmapRecognizer::querySignature(const SlotScope& scope) const {
   QueryResult r;
-  const auto& q = words_.at(id);
+  const Slot id = scope.query;
+  const auto& q = words_[id];
   auto t = std::chrono::steady_clock::now();
-  std::unordered_map<KeyframeId, int> common;
+  std::vector<int> common(words_.size(), 0);
+  std::vector<Slot> touched;
   for (uint32_t w : q)
-    for (KeyframeId k : inverted_[w])
-      if (k != id) common[k]++;
-  auto l2 = [&](KeyframeId k) {
-    const auto it = common.find(k);
-    const double c = it == common.end() ? 0 : it->second;
-    return std::sqrt(std::max(0.0, 2.0 - 2.0 * c / std::sqrt(double(q.size()) * words_.at(k).size())));
+    for (Slot k : inverted_[w])
+      if (k != id && common[k]++ == 0) touched.push_back(k);
+  std::sort(touched.begin(), touched.end());
+  auto l2 = [&](Slot k) {
+    return std::sqrt(std::max(0.0, 2.0 - 2.0 * common[k] / std::sqrt(double(q.size()) * words_[k].size())));
   };
-  std::vector<KeyframeId> refs;
+  const std::vector<Slot>& refs = scope.reference;
   double min_l2 = std::numeric_limits<double>::max();
-  for (KeyframeId k : scope.reference)
-    if (known(k)) refs.push_back(k), min_l2 = std::min(min_l2, l2(k));
+  for (Slot k : refs) min_l2 = std::min(min_l2, l2(k));
   if (refs.empty()) {
     r.status = QueryStatus::kNoReference;
     r.detail = "no reference keyframe in the database";
     return r;
   }
-  std::vector<KeyframeId> pre;
-  for (const auto& [k, c] : common)
-    if (!excluded(k) && l2(k) < min_l2 + m_.params.l2_offset) pre.push_back(k);
-  std::sort(pre.begin(), pre.end());
+  std::vector<Slot> pre;
+  for (Slot k : touched)
+    if (!scope.excluded[k] && l2(k) < min_l2 + m_.params.l2_offset) pre.push_back(k);
   r.timings.push_back({"l2_prefilter", msSince(t)});
   if (pre.empty()) {
     r.status = QueryStatus::kNoPreCandidates;
@@ -180,8 +178,8 @@ QueryResult FabmapRecognizer::querySignature(KeyframeId id, const QueryScope& sc
   t = std::chrono::steady_clock::now();
   const QueryTables tab = tables(q);
   std::vector<double> loglik;  // references, then pre-candidates, then the new place
-  for (KeyframeId k : refs) loglik.push_back(placeLogLik(tab, words_.at(k)));
-  for (KeyframeId k : pre) loglik.push_back(placeLogLik(tab, words_.at(k)));
+  for (Slot k : refs) loglik.push_back(placeLogLik(tab, words_[k]));
+  for (Slot k : pre) loglik.push_back(placeLogLik(tab, words_[k]));
   const size_t places = loglik.size();
   double new_place = tab.avg;
   if (m_.params.sampled_evidence && !m_.samples.empty()) {
@@ -205,7 +203,7 @@ QueryResult FabmapRecognizer::querySignature(KeyframeId id, const QueryScope& sc
   r.threshold = bar;
   for (size_t j = 0; j < pre.size(); ++j) {
     const double p = post[refs.size() + j];
-    const Candidate c{pre[j], p, p / std::max(bar, 1e-300)};
+    const Candidate c{idAt(pre[j]), p, p / std::max(bar, 1e-300)};
     offer(r, c, p > bar);
   }
   sortCandidates(r);

@@ -21,66 +21,75 @@ std::shared_ptr<const VocabularyTree> HbowRecognizer::loadVocabulary(const std::
   return t;
 }
 
-void HbowRecognizer::addSignature(KeyframeId id, const Descriptors& d) {
-  BowVector& b = bows_[id];
+void HbowRecognizer::addSignature(Slot slot, const Descriptors& d) {
+  BowVector b;
   voc_->transform(d, &b);
-  for (const auto& e : b) inverted_[e.word].push_back(id);
+  for (const auto& e : b) inverted_[e.word].push_back(slot);
+  bows_.push_back(std::move(b));
 }
 
 size_t HbowRecognizer::indexBytesPerKeyframe() const {
   if (bows_.empty()) return 0;
   size_t entries = 0;
-  for (const auto& [id, b] : bows_) entries += b.size();
+  for (const auto& b : bows_) entries += b.size();
   // BoW entry (word + weight) and one inverted-index entry per word of each keyframe.
-  return entries * (sizeof(BowEntry) + sizeof(KeyframeId)) / bows_.size();
+  return entries * (sizeof(BowEntry) + sizeof(Slot)) / bows_.size();
 }
 
-QueryResult HbowRecognizer::querySignature(KeyframeId id, const QueryScope& scope,
-                                           const std::function<bool(KeyframeId)>& excluded) const {
+QueryResult HbowRecognizer::querySignature(const SlotScope& scope) const {
   QueryResult r;
-  const BowVector& q = bows_.at(id);
+  const BowVector& q = bows_[scope.query];
   auto t = std::chrono::steady_clock::now();
   double min_score = std::numeric_limits<double>::max();
-  int refs = 0;
-  for (KeyframeId k : scope.reference)
-    if (known(k)) min_score = std::min(min_score, l1Score(q, bows_.at(k))), ++refs;
+  for (Slot k : scope.reference) min_score = std::min(min_score, l1Score(q, bows_[k]));
+  const size_t refs = scope.reference.size();
   r.timings.push_back({"reference", msSince(t)});
   if (refs == 0) {
     r.status = QueryStatus::kNoReference;
-    r.detail = "none of the " + std::to_string(scope.reference.size()) + " reference keyframes is in the database";
+    r.detail = "none of the " + std::to_string(scope.reference_named) + " reference keyframes is in the database";
     return r;
   }
   r.threshold = min_score;
 
   t = std::chrono::steady_clock::now();
-  std::unordered_map<KeyframeId, int> common;
+  // Common words per keyframe in a dense array; exclusion is tested once per keyframe, not per entry.
+  std::vector<uint32_t> common(bows_.size(), 0);
+  std::vector<Slot> touched;
   for (const auto& e : q)
-    for (KeyframeId k : inverted_[e.word])
-      if (!excluded(k)) common[k]++;
-  int max_common = 0;
-  for (const auto& [k, n] : common) max_common = std::max(max_common, n);
-  const int min_common = static_cast<int>(0.8f * max_common);
+    for (Slot k : inverted_[e.word])
+      if (common[k]++ == 0) touched.push_back(k);
+  std::sort(touched.begin(), touched.end());  // results must not depend on the order words were visited
+  size_t sharing = 0;
+  uint32_t max_common = 0;
+  for (Slot k : touched) {
+    if (scope.excluded[k]) continue;
+    ++sharing;
+    max_common = std::max(max_common, common[k]);
+  }
+  const uint32_t min_common = static_cast<uint32_t>(0.8f * max_common);
   r.timings.push_back({"common_words", msSince(t)});
-  if (common.empty()) {
+  if (sharing == 0) {
     r.status = QueryStatus::kNoPreCandidates;
     r.detail = "no keyframe outside the scope shares a word with the query";
     return r;
   }
 
   t = std::chrono::steady_clock::now();
-  std::unordered_map<KeyframeId, double> scored;
-  for (const auto& [k, n] : common) {
-    if (n <= min_common) continue;
-    const double s = l1Score(q, bows_.at(k));
+  std::vector<double> score(bows_.size(), -1);  // L1 scores are in [0, 1]; -1 = not scored
+  std::vector<Slot> scored;
+  for (Slot k : touched) {
+    if (scope.excluded[k] || common[k] <= min_common) continue;
+    const double s = l1Score(q, bows_[k]);
     if (s >= min_score) {
-      scored[k] = s;
+      score[k] = s;
+      scored.push_back(k);
     } else {
-      offer(r, {k, s, s / std::max(min_score, 1e-9)}, false);
+      offer(r, {idAt(k), s, s / std::max(min_score, 1e-9)}, false);
     }
   }
   r.timings.push_back({"score", msSince(t)});
   std::ostringstream detail;
-  detail << "bar " << min_score << " from " << refs << " reference keyframes; " << common.size()
+  detail << "bar " << min_score << " from " << refs << " reference keyframes; " << sharing
          << " share words (max " << max_common << "); " << scored.size() << " reach the bar";
   r.detail = detail.str();
   if (scored.empty()) {
@@ -91,29 +100,29 @@ QueryResult HbowRecognizer::querySignature(KeyframeId id, const QueryScope& scop
   t = std::chrono::steady_clock::now();
   struct Group {
     double acc, best;
-    KeyframeId best_id;
+    Slot best_slot;
   };
   std::vector<Group> groups;
   double best_acc = 0;
-  for (const auto& [k, s] : scored) {
-    Group g{s, s, k};
-    for (KeyframeId n : group(k)) {
-      const auto it = scored.find(n);
-      if (it == scored.end()) continue;
-      g.acc += it->second;
-      if (it->second > g.best) g.best = it->second, g.best_id = n;
+  for (Slot k : scored) {
+    Group g{score[k], score[k], k};
+    for (KeyframeId n : group(idAt(k))) {
+      Slot ns;
+      if (!findSlot(n, &ns) || score[ns] < 0) continue;
+      g.acc += score[ns];
+      if (score[ns] > g.best) g.best = score[ns], g.best_slot = ns;
     }
     best_acc = std::max(best_acc, g.acc);
     groups.push_back(g);
   }
-  std::sort(groups.begin(), groups.end(), [](const Group& a, const Group& b) { return a.acc > b.acc; });
+  std::stable_sort(groups.begin(), groups.end(), [](const Group& a, const Group& b) { return a.acc > b.acc; });
   const double retain = 0.75 * best_acc;
-  std::vector<KeyframeId> seen;
+  std::vector<Slot> seen;
   for (const Group& g : groups) {
     if (g.acc < retain) break;
-    if (std::find(seen.begin(), seen.end(), g.best_id) != seen.end()) continue;
-    seen.push_back(g.best_id);
-    r.candidates.push_back({g.best_id, g.acc, g.best / std::max(min_score, 1e-9)});
+    if (std::find(seen.begin(), seen.end(), g.best_slot) != seen.end()) continue;
+    seen.push_back(g.best_slot);
+    r.candidates.push_back({idAt(g.best_slot), g.acc, g.best / std::max(min_score, 1e-9)});
   }
   r.timings.push_back({"group", msSince(t)});
   r.status = QueryStatus::kFound;

@@ -13,26 +13,24 @@ HmvladRecognizer::HmvladRecognizer(std::shared_ptr<const VladVocabulary> voc) : 
   if (voc_->levels() < 2) throw PlaceError("hmvlad needs a vocabulary of at least 2 levels, this one has 1");
 }
 
-void HmvladRecognizer::addSignature(KeyframeId id, const Descriptors& d) {
+void HmvladRecognizer::addSignature(Slot, const Descriptors& d) {
   const auto levels = voc_->aggregate(d);
-  auto& s = short_[id] = binarizeSigns(levels.front());
-  long_[id] = binarizeSigns(levels.back());
-  scan_.emplace_back(id, &s);
+  short_.push_back(binarizeSigns(levels.front()));
+  long_.push_back(binarizeSigns(levels.back()));
 }
 
 size_t HmvladRecognizer::indexBytesPerKeyframe() const {
   if (short_.empty()) return 0;
-  return (short_.begin()->second.size() + long_.begin()->second.size()) * sizeof(uint64_t) + sizeof(KeyframeId);
+  return (short_.front().size() + long_.front().size()) * sizeof(uint64_t);
 }
 
-QueryResult HmvladRecognizer::querySignature(KeyframeId id, const QueryScope& scope,
-                                             const std::function<bool(KeyframeId)>& excluded) const {
+QueryResult HmvladRecognizer::querySignature(const SlotScope& scope) const {
   QueryResult r;
-  const BinarySignature& qs = short_.at(id);
-  const BinarySignature& ql = long_.at(id);
+  const BinarySignature& qs = short_[scope.query];
+  const BinarySignature& ql = long_[scope.query];
   auto t = std::chrono::steady_clock::now();
-  int refs = 0;
-  const int bar_short = closestReference(qs, scope.reference, short_, &refs);
+  const size_t refs = scope.reference.size();
+  const int bar_short = closestReference(qs, scope.reference, short_);
   const int bar_long = closestReference(ql, scope.reference, long_);
   r.threshold = bar_long;
   r.timings.push_back({"reference", msSince(t)});
@@ -42,14 +40,14 @@ QueryResult HmvladRecognizer::querySignature(KeyframeId id, const QueryScope& sc
     return r;
   }
   t = std::chrono::steady_clock::now();
-  std::vector<KeyframeId> pre;
-  for (const auto& [k, s] : scan_)
-    if (!excluded(k) && hammingBits(qs, *s) < bar_short) pre.push_back(k);
+  std::vector<Slot> pre;
+  for (Slot k = 0; k < short_.size(); ++k)
+    if (!scope.excluded[k] && hammingBits(qs, short_[k]) < bar_short) pre.push_back(k);
   r.timings.push_back({"short_reject", msSince(t)});
   t = std::chrono::steady_clock::now();
-  for (KeyframeId k : pre) {
-    const int d = hammingBits(ql, long_.at(k));
-    const Candidate c{k, -static_cast<double>(d), distanceConfidence(bar_long, d)};
+  for (Slot k : pre) {
+    const int d = hammingBits(ql, long_[k]);
+    const Candidate c{idAt(k), -static_cast<double>(d), distanceConfidence(bar_long, d)};
     offer(r, c, d < bar_long);
   }
   sortCandidates(r);

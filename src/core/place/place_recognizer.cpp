@@ -1,7 +1,6 @@
 #include "binloop/place/place_recognizer.h"
 
 #include <algorithm>
-#include <unordered_set>
 
 #include "binloop/place/place_error.h"
 
@@ -27,9 +26,9 @@ double PlaceRecognizer::add(KeyframeId id, const Descriptors& d) {
   if (d.empty()) throw PlaceError(name() + ": keyframe " + std::to_string(id) + " has no descriptors");
   if (known(id)) throw PlaceError(name() + ": keyframe " + std::to_string(id) + " was added before");
   const auto t0 = std::chrono::steady_clock::now();
-  addSignature(id, d);
+  addSignature(static_cast<Slot>(order_.size()), d);
   const double ms = msSince(t0);
-  position_[id] = order_.size();
+  position_[id] = static_cast<Slot>(order_.size());
   order_.push_back(id);
   if (keep_descriptors_) descriptors_[id] = d;
   return ms;
@@ -43,16 +42,28 @@ QueryResult PlaceRecognizer::query(KeyframeId id, const QueryScope& scope) const
     r.detail = "keyframe " + std::to_string(id) + " was never added";
     return r;
   }
-  std::unordered_set<KeyframeId> out(scope.reference.begin(), scope.reference.end());
-  out.insert(scope.ignore.begin(), scope.ignore.end());
-  out.insert(id);
+  SlotScope s;
+  s.query = position_.at(id);
+  s.excluded.assign(order_.size(), 0);
+  s.excluded[s.query] = 1;
+  s.reference_named = scope.reference.size();
+  for (KeyframeId k : scope.reference) {
+    Slot slot;
+    if (!findSlot(k, &slot) || s.excluded[slot]) continue;  // unknown, the query itself, or named twice
+    s.excluded[slot] = 1;
+    s.reference.push_back(slot);
+  }
+  for (KeyframeId k : scope.ignore) {
+    Slot slot;
+    if (findSlot(k, &slot)) s.excluded[slot] = 1;
+  }
   size_t outside = 0;
-  for (KeyframeId k : order_) outside += out.count(k) == 0;
+  for (char e : s.excluded) outside += !e;
   if (outside == 0) {
     r.status = QueryStatus::kEmptyDatabase;
     r.detail = "no keyframe outside the query's scope";
   } else {
-    r = querySignature(id, scope, [&out](KeyframeId k) { return out.count(k) > 0; });
+    r = querySignature(s);
   }
   r.total_ms = msSince(t0);
   return r;
@@ -81,6 +92,19 @@ void PlaceRecognizer::sortCandidates(QueryResult& r) {
   std::sort(r.candidates.begin(), r.candidates.end(), [](const Candidate& a, const Candidate& b) {
     return a.score != b.score ? a.score > b.score : a.id < b.id;
   });
+}
+
+PlaceRecognizer::Slot PlaceRecognizer::slotOf(KeyframeId id) const {
+  Slot s;
+  if (!findSlot(id, &s)) throw PlaceError(name() + ": keyframe " + std::to_string(id) + " was never added");
+  return s;
+}
+
+bool PlaceRecognizer::findSlot(KeyframeId id, Slot* s) const {
+  const auto it = position_.find(id);
+  if (it == position_.end()) return false;
+  *s = it->second;
+  return true;
 }
 
 std::vector<KeyframeId> PlaceRecognizer::group(KeyframeId id) const {

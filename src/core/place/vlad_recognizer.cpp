@@ -7,17 +7,13 @@
 
 namespace binloop {
 
-int closestReference(const BinarySignature& q, const std::vector<KeyframeId>& refs,
-                     const std::unordered_map<KeyframeId, BinarySignature>& sigs, int* count) {
-  int best = -1, n = 0;
-  for (KeyframeId k : refs) {
-    const auto it = sigs.find(k);
-    if (it == sigs.end()) continue;
-    const int d = hammingBits(q, it->second);
+int closestReference(const BinarySignature& q, const std::vector<uint32_t>& ref_slots,
+                     const std::vector<BinarySignature>& sigs) {
+  int best = -1;
+  for (uint32_t k : ref_slots) {
+    const int d = hammingBits(q, sigs[k]);
     if (best < 0 || d < best) best = d;
-    ++n;
   }
-  if (count) *count = n;
   return best;
 }
 
@@ -33,30 +29,27 @@ std::shared_ptr<const VladVocabulary> VladRecognizer::loadVocabulary(const std::
   return v;
 }
 
-void VladRecognizer::addSignature(KeyframeId id, const Descriptors& d) {
-  auto levels = voc_->aggregate(d);
-  auto& s = sigs_[id] = binarizeSigns(levels.back());
-  scan_.emplace_back(id, &s);
+void VladRecognizer::addSignature(Slot, const Descriptors& d) {
+  sigs_.push_back(binarizeSigns(voc_->aggregate(d).back()));
 }
 
 size_t VladRecognizer::indexBytesPerKeyframe() const {
-  return sigs_.empty() ? 0 : sigs_.begin()->second.size() * sizeof(uint64_t) + sizeof(KeyframeId);
+  return sigs_.empty() ? 0 : sigs_.front().size() * sizeof(uint64_t);
 }
 
-QueryResult VladRecognizer::querySignature(KeyframeId id, const QueryScope& scope,
-                                           const std::function<bool(KeyframeId)>& excluded) const {
+QueryResult VladRecognizer::querySignature(const SlotScope& scope) const {
   QueryResult r;
-  const BinarySignature& q = sigs_.at(id);
+  const BinarySignature& q = sigs_[scope.query];
   auto t = std::chrono::steady_clock::now();
-  int refs = 0;
-  const int bar = closestReference(q, scope.reference, sigs_, &refs);
+  const size_t refs = scope.reference.size();
+  const int bar = closestReference(q, scope.reference, sigs_);
   r.threshold = bar;
   r.timings.push_back({"reference", msSince(t)});
   t = std::chrono::steady_clock::now();
-  for (const auto& [k, s] : scan_) {
-    if (excluded(k)) continue;
-    const int d = hammingBits(q, *s);
-    const Candidate c{k, -static_cast<double>(d), distanceConfidence(refs ? bar : 0, d)};
+  for (Slot k = 0; k < sigs_.size(); ++k) {
+    if (scope.excluded[k]) continue;
+    const int d = hammingBits(q, sigs_[k]);
+    const Candidate c{idAt(k), -static_cast<double>(d), distanceConfidence(refs ? bar : 0, d)};
     offer(r, c, refs && d < bar);
   }
   sortCandidates(r);

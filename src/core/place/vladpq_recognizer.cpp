@@ -26,49 +26,52 @@ VladPqRecognizer::VladPqRecognizer(VladPqModel model, PqVerify verify) : model_(
   inverted_.resize(static_cast<size_t>(model_.pq->words()) * model_.pq->m());
 }
 
-void VladPqRecognizer::addSignature(KeyframeId id, const Descriptors& d) {
+void VladPqRecognizer::addSignature(Slot slot, const Descriptors& d) {
   auto v = model_.vlad->aggregate(d).back();
-  sigs_[id] = binarizeSigns(v);
-  const PqCodes& c = codes_[id] = model_.pq->encode(v);
-  for (int w = 0; w < model_.pq->words(); ++w) inverted_[static_cast<size_t>(w) * model_.pq->m() + c[w]].push_back(id);
-  if (verify_ == PqVerify::kAdc) raw_[id] = std::move(v);
+  BinarySignature sig = binarizeSigns(v);
+  PqCodes codes = model_.pq->encode(v);
+  sigs_.push_back(std::move(sig));
+  codes_.push_back(std::move(codes));
+  const PqCodes& c = codes_.back();
+  for (int w = 0; w < model_.pq->words(); ++w) inverted_[static_cast<size_t>(w) * model_.pq->m() + c[w]].push_back(slot);
+  raw_.push_back(verify_ == PqVerify::kAdc ? std::move(v) : std::vector<float>{});
 }
 
 size_t VladPqRecognizer::indexBytesPerKeyframe() const {
   if (sigs_.empty()) return 0;
   const size_t words = static_cast<size_t>(model_.pq->words());
-  size_t b = sigs_.begin()->second.size() * sizeof(uint64_t) + words * (sizeof(uint16_t) + sizeof(KeyframeId));
+  size_t b = sigs_.front().size() * sizeof(uint64_t) + words * (sizeof(uint16_t) + sizeof(Slot));
   if (verify_ == PqVerify::kAdc) b += words * model_.pq->dims() * sizeof(float);
   return b;
 }
 
-double VladPqRecognizer::distance(KeyframeId q, KeyframeId k) const {
+double VladPqRecognizer::distance(Slot q, Slot k) const {
   switch (verify_) {
-    case PqVerify::kHamming: return hammingBits(sigs_.at(q), sigs_.at(k));
-    case PqVerify::kSdc: return model_.pq->sdc(codes_.at(q), codes_.at(k));
-    case PqVerify::kAdc: return model_.pq->adc(raw_.at(q), codes_.at(k));
+    case PqVerify::kHamming: return hammingBits(sigs_[q], sigs_[k]);
+    case PqVerify::kSdc: return model_.pq->sdc(codes_[q], codes_[k]);
+    case PqVerify::kAdc: return model_.pq->adc(raw_[q], codes_[k]);
   }
   return 0;
 }
 
-QueryResult VladPqRecognizer::querySignature(KeyframeId id, const QueryScope& scope,
-                                             const std::function<bool(KeyframeId)>& excluded) const {
+QueryResult VladPqRecognizer::querySignature(const SlotScope& scope) const {
   QueryResult r;
-  const PqCodes& qc = codes_.at(id);
+  const Slot id = scope.query;
+  const PqCodes& qc = codes_[id];
   auto t = std::chrono::steady_clock::now();
-  std::unordered_map<KeyframeId, int> shared;
+  std::vector<int> shared(sigs_.size(), 0);
+  std::vector<Slot> touched;
   for (int w = 0; w < model_.pq->words(); ++w)
-    for (KeyframeId k : inverted_[static_cast<size_t>(w) * model_.pq->m() + qc[w]])
-      if (k != id) shared[k]++;
+    for (Slot k : inverted_[static_cast<size_t>(w) * model_.pq->m() + qc[w]])
+      if (k != id && shared[k]++ == 0) touched.push_back(k);
+  std::sort(touched.begin(), touched.end());
   r.timings.push_back({"inverted_index", msSince(t)});
   t = std::chrono::steady_clock::now();
-  int refs = 0, max_ref_shared = 0;
+  const size_t refs = scope.reference.size();
+  int max_ref_shared = 0;
   double bar = std::numeric_limits<double>::max();
-  for (KeyframeId k : scope.reference) {
-    if (!known(k)) continue;
-    ++refs;
-    const auto it = shared.find(k);
-    max_ref_shared = std::max(max_ref_shared, it == shared.end() ? 0 : it->second);
+  for (Slot k : scope.reference) {
+    max_ref_shared = std::max(max_ref_shared, shared[k]);
     bar = std::min(bar, distance(id, k));
   }
   r.timings.push_back({"reference", msSince(t)});
@@ -80,11 +83,11 @@ QueryResult VladPqRecognizer::querySignature(KeyframeId id, const QueryScope& sc
   r.threshold = bar;
   t = std::chrono::steady_clock::now();
   size_t pre = 0;
-  for (const auto& [k, n] : shared) {
-    if (excluded(k) || n < std::max(1, max_ref_shared)) continue;
+  for (Slot k : touched) {
+    if (scope.excluded[k] || shared[k] < std::max(1, max_ref_shared)) continue;
     ++pre;
     const double d = distance(id, k);
-    const Candidate c{k, -d, distanceConfidence(bar, d)};
+    const Candidate c{idAt(k), -d, distanceConfidence(bar, d)};
     offer(r, c, d < bar);
   }
   sortCandidates(r);
