@@ -13,6 +13,7 @@
 
 #include "binloop/eval/loop_metrics.h"
 #include "binloop/eval/pr_plot.h"
+#include "binloop/eval/temporal_consistency.h"
 #include "binloop/features/image_features.h"
 #include "binloop/io/data_error.h"
 #include "binloop/io/filesystem.h"
@@ -55,9 +56,11 @@ int main(int argc, char** argv) {
       .option("window", "frames before a query that are never candidates (temporal neighbours)", "300")
       .option("reference", "previous keyframes that set each query's bar (the covisible neighbours of SLAM)", "3")
       .option("poses", "poses for same/reverse direction (default: <sequence>/poses.txt when present)")
+      .option("consistency", "also score each model behind ORB-SLAM2's consistency check over this many consecutive keyframes (0 = off)", "3")
       .option("segment-gap", "frames between ground-truth queries that start a new revisit segment", "50")
       .option("features", "ORB features per image", "1000")
       .option("max-side", "scale larger images down to this longer side (0 = never)", "1024")
+      .option("grid-cell", "spread ORB features over a grid of cells this many pixels wide (0 = strongest first)", "0")
       .option("fabmap-l2-offset", "offset added to the closest reference's L2 distance in fabmap's pre-filter", "0.05")
       .option("threads", "feature extraction threads", "2");
   return runTool("eval-loops", [&] {
@@ -66,7 +69,9 @@ int main(int argc, char** argv) {
       if (!args.has(o)) throw CliError(std::string("--") + o + " is required");
     const int step = static_cast<int>(args.integer("step")), window = static_cast<int>(args.integer("window"));
     const int nref = static_cast<int>(args.integer("reference"));
-    if (step < 1 || window < 0 || nref < 1) throw CliError("--step and --reference must be >= 1, --window >= 0");
+    const int consistency = static_cast<int>(args.integer("consistency"));
+    if (step < 1 || window < 0 || nref < 1 || consistency < 0)
+      throw CliError("--step and --reference must be >= 1, --window and --consistency >= 0");
     std::vector<std::string> models;
     if (args.str("models") == "all") {
       models = placeModelNames();
@@ -110,6 +115,7 @@ int main(int argc, char** argv) {
     ExtractOptions eo;
     eo.orb.features = static_cast<int>(args.integer("features"));
     eo.max_side = static_cast<int>(args.integer("max-side"));
+    eo.orb.grid_cell_px = static_cast<int>(args.integer("grid-cell"));
     eo.threads = static_cast<int>(args.integer("threads"));
     std::vector<std::string> kf_paths;
     for (int f : kf_frames) kf_paths.push_back(images[f]);
@@ -123,6 +129,24 @@ int main(int argc, char** argv) {
               << same_dir.size() << " same direction, " << reverse_dir.size() << " reverse)\n";
 
     std::vector<ModelRun> runs;
+    // Metrics of one run's predictions, its missed segments, and its PR curve file.
+    auto score = [&](ModelRun& run) {
+      run.metrics = evaluateLoops(run.predictions, truth, positives);
+      const double t = run.metrics.threshold_100p;
+      run.same_found = foundAt(run.predictions, truth, same_dir, t);
+      run.reverse_found = foundAt(run.predictions, truth, reverse_dir, t);
+      for (const auto& seg : segments) {
+        if (foundAt(run.predictions, truth, seg, t) > 0) {
+          run.segments_found++;
+        } else {
+          run.missed_segments += (run.missed_segments.empty() ? "" : " ") + std::to_string(*seg.begin()) + "-" +
+                                 std::to_string(*seg.rbegin());
+        }
+      }
+      std::ofstream pr(fs::path(args.str("out")) / ("pr_" + run.name + ".csv"));
+      pr << "threshold,precision,recall\n";
+      for (const auto& pt : run.metrics.curve) pr << pt.threshold << "," << pt.precision << "," << pt.recall << "\n";
+    };
     for (const auto& name : models) {
       RecognizerOptions ro;
       ro.model_file = (fs::path(args.str("vocab-dir")) / (name + ".bin")).string();
@@ -133,6 +157,7 @@ int main(int argc, char** argv) {
       run.name = name;
       std::ofstream qcsv(fs::path(args.str("out")) / ("queries_" + name + ".csv"));
       qcsv << "query,status,candidate,confidence,correct,signature_ms,query_ms,detail\n";
+      std::vector<QueryOffers> offers;
       ProgressBar bar(name, kf_frames.size());
       for (size_t i = 0; i < kf_frames.size(); ++i) {
         const int f = kf_frames[i];
@@ -140,6 +165,7 @@ int main(int argc, char** argv) {
         if (desc[i].empty()) {  // a featureless frame cannot be a keyframe of any model
           qcsv << f << ",no_features,,,,,,\n";
           run.predictions.push_back(p);
+          offers.push_back({f, {}});
           continue;
         }
         run.signature_ms.push_back(rec->add(static_cast<KeyframeId>(f), desc[i]));
@@ -156,6 +182,10 @@ int main(int argc, char** argv) {
           p.confidence = r.best_rejected.confidence;
         }
         run.predictions.push_back(p);
+        offers.push_back({f, {}});
+        for (const auto& c : r.candidates) offers.back().offers.emplace_back(static_cast<int>(c.id), c.confidence);
+        if (r.has_best_rejected)
+          offers.back().offers.emplace_back(static_cast<int>(r.best_rejected.id), r.best_rejected.confidence);
         std::string detail = r.detail;
         std::replace(detail.begin(), detail.end(), ',', ';');
         qcsv << f << "," << statusName(r.status) << "," << (p.candidate >= 0 ? std::to_string(p.candidate) : "") << ","
@@ -165,22 +195,18 @@ int main(int argc, char** argv) {
       }
       bar.finish();
       run.bytes_per_kf = rec->indexBytesPerKeyframe();
-      run.metrics = evaluateLoops(run.predictions, truth, positives);
-      const double t = run.metrics.threshold_100p;
-      run.same_found = foundAt(run.predictions, truth, same_dir, t);
-      run.reverse_found = foundAt(run.predictions, truth, reverse_dir, t);
-      for (const auto& seg : segments) {
-        if (foundAt(run.predictions, truth, seg, t) > 0) {
-          run.segments_found++;
-        } else {
-          run.missed_segments += (run.missed_segments.empty() ? "" : " ") + std::to_string(*seg.begin()) + "-" +
-                                 std::to_string(*seg.rbegin());
-        }
+      score(run);
+      runs.push_back(run);
+      if (consistency > 0) {
+        // Groups are a keyframe and the two on each side; two groups overlap within 4 keyframes.
+        ModelRun c = run;
+        c.name = name + "+c" + std::to_string(consistency);
+        c.predictions = consistentPredictions(offers, consistency, 4 * step);
+        c.same_found = c.reverse_found = c.segments_found = 0;
+        c.missed_segments.clear();
+        score(c);
+        runs.push_back(std::move(c));
       }
-      std::ofstream pr(fs::path(args.str("out")) / ("pr_" + name + ".csv"));
-      pr << "threshold,precision,recall\n";
-      for (const auto& pt : run.metrics.curve) pr << pt.threshold << "," << pt.precision << "," << pt.recall << "\n";
-      runs.push_back(std::move(run));
     }
 
     std::vector<PrSeries> series;
@@ -191,7 +217,7 @@ int main(int argc, char** argv) {
            "precision_at_bar,recall_at_bar,same_direction_r_at_100p,reverse_direction_r_at_100p,segments_found,segments,"
            "positives,keyframes\n";
     std::ostringstream table;
-    table << std::left << std::setw(8) << "model" << std::right << std::setw(8) << "R@100P" << std::setw(7) << "AUC"
+    table << std::left << std::setw(10) << "model" << std::right << std::setw(8) << "R@100P" << std::setw(7) << "AUC"
           << std::setw(9) << "same" << std::setw(9) << "reverse" << std::setw(10) << "segments" << std::setw(10)
           << "sig ms" << std::setw(9) << "p95" << std::setw(10) << "query ms" << std::setw(9) << "p95" << std::setw(10)
           << "B/kf" << "  P/R at bar\n";
@@ -206,14 +232,14 @@ int main(int argc, char** argv) {
           << (reverse_dir.empty() ? std::string("") : std::to_string(rev)) << "," << r.segments_found << ","
           << segments.size() << "," << m.positives << "," << kf_frames.size() << "\n";
       char line[256];
-      std::snprintf(line, sizeof line, "%-8s%8.3f%7.3f%9s%9s%10s%10.3f%9.3f%10.4f%9.4f%10zu  %.2f/%.2f\n", r.name.c_str(),
+      std::snprintf(line, sizeof line, "%-10s%8.3f%7.3f%9s%9s%10s%10.3f%9.3f%10.4f%9.4f%10zu  %.2f/%.2f\n", r.name.c_str(),
                     m.r_at_100p, m.auc, same_dir.empty() ? "-" : std::to_string(same).substr(0, 5).c_str(),
                     reverse_dir.empty() ? "-" : std::to_string(rev).substr(0, 5).c_str(),
                     (std::to_string(r.segments_found) + "/" + std::to_string(segments.size())).c_str(),
                     percentile(r.signature_ms, 0.5), percentile(r.signature_ms, 0.95), percentile(r.query_ms, 0.5),
                     percentile(r.query_ms, 0.95), r.bytes_per_kf, m.precision_at_bar, m.recall_at_bar);
       table << line;
-      if (!r.missed_segments.empty()) table << "          missed at 100 % precision: segments " << r.missed_segments << "\n";
+      if (!r.missed_segments.empty()) table << "            missed at 100 % precision: segments " << r.missed_segments << "\n";
     }
     std::cout << table.str() << "results in " << args.str("out") << " (summary.csv, pr.png, pr_<model>.csv, queries_<model>.csv)\n";
     return 0;

@@ -25,6 +25,7 @@ int main(int argc, char** argv) {
       .option("pca", "VLAD LCS-PCA dimensions per word (0 = off)", "0")
       .option("features", "ORB features per image", "1000")
       .option("max-side", "scale larger images down to this longer side (0 = never)", "1024")
+      .option("grid-cell", "spread ORB features over a grid of cells this many pixels wide (0 = strongest first)", "0")
       .option("max-descriptors", "descriptors sampled for flat and VLAD vocabularies", "200000")
       .option("seed", "training seed", "1")
       .option("threads", "feature extraction threads", "2")
@@ -54,6 +55,7 @@ int main(int argc, char** argv) {
     binloop::ExtractOptions eo;
     eo.orb.features = static_cast<int>(args.integer("features"));
     eo.max_side = static_cast<int>(args.integer("max-side"));
+    eo.orb.grid_cell_px = static_cast<int>(args.integer("grid-cell"));
     eo.threads = static_cast<int>(args.integer("threads"));
     std::vector<std::string> skipped;
     eo.skip_unreadable = args.has("skip-unreadable");

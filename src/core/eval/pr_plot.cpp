@@ -24,9 +24,10 @@ void writePrPlot(const std::string& path, const std::string& title, const std::v
   cv::putText(img, "recall", px(0.45, 0) + cv::Point(0, 45), cv::FONT_HERSHEY_SIMPLEX, 0.5, {0, 0, 0});
   cv::putText(img, "precision", cv::Point(5, t - 10), cv::FONT_HERSHEY_SIMPLEX, 0.5, {0, 0, 0});
   cv::putText(img, title, cv::Point(l + 80, t - 15), cv::FONT_HERSHEY_SIMPLEX, 0.55, {0, 0, 0});
-  const cv::Scalar colours[] = {{180, 119, 31}, {14, 127, 255}, {44, 160, 44}, {40, 39, 214}, {189, 103, 148}, {75, 86, 140}};
+  const cv::Scalar colours[] = {{180, 119, 31}, {14, 127, 255}, {44, 160, 44}, {40, 39, 214}, {189, 103, 148},
+                                {75, 86, 140}, {194, 119, 227}, {127, 127, 127}, {34, 189, 188}, {207, 190, 23}};
   for (size_t s = 0; s < series.size(); ++s) {
-    const cv::Scalar c = colours[s % 6];
+    const cv::Scalar c = colours[s % 10];
     cv::Point prev = px(0, 1);
     for (const auto& p : series[s].curve) {
       const cv::Point q = px(p.recall, p.precision);
