@@ -2,7 +2,8 @@
 # Set-up, build, and the main job on a built-in default:
 #   scripts/demo.sh                    renders a stereo sequence with a loop (KITTI route 06 when
 #                                      ../shared/data is there, else the built-in block loop), turns it
-#                                      into a ROS bag and shows what the bag holds
+#                                      into a ROS bag, shows what the bag holds, and runs all five loop
+#                                      models over it (eval-loops; ground truth from the poses)
 #   scripts/demo.sh <kitti_seq_dir>    the same with your own KITTI odometry sequence (no rendering)
 # Output goes to .build/demo/ (git-ignored).
 set -euo pipefail
@@ -32,6 +33,22 @@ fi
 
 "$bl" kitti2bag "$seq" "$out/demo.bag" --force
 rosbag info "$out/demo.bag"
+
+# Loop detection. hbow's vocabulary (21 MB) is not tracked; it is made once from rendered route 08.
+models=fabmap,vlad,hmvlad,vladpq
+if [ ! -f "$BINLOOP_ROOT/vocab/kitti08/hbow.bin" ] && [ -f "$BINLOOP_ROOT/../shared/data/kitti/poses/08.txt" ]; then
+  echo "demo: making the hbow vocabularies once (renders route 08, about 6 minutes): vocab/make_vocab.sh hbow"
+  "$BINLOOP_ROOT/vocab/make_vocab.sh" hbow 2> >(grep -v 'libpng warning' >&2)
+fi
+[ -f "$BINLOOP_ROOT/vocab/kitti08/hbow.bin" ] && models="hbow,$models"
 echo
-echo "demo: done. Sequence (KITTI layout): $seq   bag: $out/demo.bag"
+if [ -f "$seq/poses.txt" ]; then
+  echo "demo: loop detection with $models (vocabularies trained on rendered route 08)"
+  (cd "$BINLOOP_ROOT" && "$bl" eval-loops --sequence "$seq" --models "$models" --vocab-dir vocab/kitti08 \
+    --window 150 --out "$out/loops") 2> >(grep -v 'libpng warning' >&2)
+else
+  echo "demo: $seq has no poses.txt, so there is no ground truth to score loop detection against"
+fi
+echo
+echo "demo: done. Sequence (KITTI layout): $seq   bag: $out/demo.bag   loops: $out/loops/ (summary.csv, pr.png)"
 echo "      play it with: roscore & rosbag play $out/demo.bag"

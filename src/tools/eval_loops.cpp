@@ -11,6 +11,7 @@
 #include <set>
 #include <sstream>
 
+#include "binloop/eval/loop_ground_truth.h"
 #include "binloop/eval/loop_metrics.h"
 #include "binloop/eval/pr_plot.h"
 #include "binloop/eval/temporal_consistency.h"
@@ -48,7 +49,8 @@ struct ModelRun {
 int main(int argc, char** argv) {
   CliArgs args("eval-loops", "eval-loops --sequence <dir> --gt <pairs.txt> --vocab-dir <dir> --out <dir> [options]");
   args.option("sequence", "KITTI-layout sequence (image_0/ is used) or a folder of png/jpg images in natural order")
-      .option("gt", "ground-truth loop pairs, 'query ref' frame indices per line, # comments")
+      .option("gt", "ground-truth loop pairs, 'query ref' frame indices per line, # comments (default: from the poses)")
+      .option("gt-radius", "without --gt: frames within this many metres (poses) are loops", "6")
       .option("models", "comma-separated models, or all", "all")
       .option("vocab-dir", "folder holding <model>.bin for each model", "vocab/kitti08")
       .option("out", "folder for the results")
@@ -60,12 +62,12 @@ int main(int argc, char** argv) {
       .option("segment-gap", "frames between ground-truth queries that start a new revisit segment", "50")
       .option("features", "ORB features per image", "1000")
       .option("max-side", "scale larger images down to this longer side (0 = never)", "1024")
-      .option("grid-cell", "spread ORB features over a grid of cells this many pixels wide (0 = strongest first)", "0")
+      .option("grid-cell", "spread ORB features over a grid of cells this many pixels wide (0 = strongest first)", "64")
       .option("fabmap-l2-offset", "offset added to the closest reference's L2 distance in fabmap's pre-filter", "0.05")
       .option("threads", "feature extraction threads", "2");
   return runTool("eval-loops", [&] {
     if (!args.parse(argc, argv)) return 0;
-    for (const char* o : {"sequence", "gt", "out"})
+    for (const char* o : {"sequence", "out"})
       if (!args.has(o)) throw CliError(std::string("--") + o + " is required");
     const int step = static_cast<int>(args.integer("step")), window = static_cast<int>(args.integer("window"));
     const int nref = static_cast<int>(args.integer("reference"));
@@ -81,10 +83,18 @@ int main(int argc, char** argv) {
     }
     for (const auto& m : models) modelTypeFromName(m);  // unknown names fail before any work
     const auto images = listImages(args.str("sequence"));
-    const auto pairs = readIndexPairs(args.str("gt"));
     std::vector<Pose3> poses;
     const std::string poses_path = args.has("poses") ? args.str("poses") : (fs::path(args.str("sequence")) / "poses.txt").string();
     if (fs::exists(poses_path)) poses = readKittiPoses(poses_path);
+    std::vector<std::pair<int, int>> pairs;
+    if (args.has("gt")) {
+      pairs = readIndexPairs(args.str("gt"));
+    } else if (poses.size() == images.size()) {
+      pairs = loopPairsFromPoses(poses, args.number("gt-radius"), window);
+      std::cout << "ground truth: frames within " << args.number("gt-radius") << " m of each other in " << poses_path << "\n";
+    } else {
+      throw CliError("--gt is required when there are no poses for every image (" + poses_path + ")");
+    }
     fs::create_directories(args.str("out"));
 
     // Keyframes and the ground truth that can be found among them.
@@ -95,7 +105,7 @@ int main(int argc, char** argv) {
     std::set<int> positives, same_dir, reverse_dir;
     for (const auto& [q, r] : pairs) {
       if (q < 0 || r < 0 || q >= static_cast<int>(images.size()) || r >= static_cast<int>(images.size()))
-        throw DataError(args.str("gt") + ": pair " + std::to_string(q) + " " + std::to_string(r) + " is outside the " +
+        throw DataError((args.has("gt") ? args.str("gt") : poses_path) + ": pair " + std::to_string(q) + " " + std::to_string(r) + " is outside the " +
                         std::to_string(images.size()) + " images");
       truth.insert({q, r});
       if (!kf_set.count(q) || !kf_set.count(r) || r > q - window || r >= q) continue;

@@ -25,7 +25,7 @@ int main(int argc, char** argv) {
       .option("pca", "VLAD LCS-PCA dimensions per word (0 = off)", "0")
       .option("features", "ORB features per image", "1000")
       .option("max-side", "scale larger images down to this longer side (0 = never)", "1024")
-      .option("grid-cell", "spread ORB features over a grid of cells this many pixels wide (0 = strongest first)", "0")
+      .option("grid-cell", "spread ORB features over a grid of cells this many pixels wide (0 = strongest first)", "64")
       .option("max-descriptors", "descriptors sampled for flat and VLAD vocabularies", "200000")
       .option("seed", "training seed", "1")
       .option("threads", "feature extraction threads", "2")

@@ -1,24 +1,9 @@
 // kitti2bag as a user runs it: exit codes and the exact lines printed.
-#include <array>
-#include <cstdio>
-#include <memory>
-
 #include "support/test_support.h"
 
 namespace {
-struct Run {
-  int code;
-  std::string out;  // stdout and stderr together
-};
-Run run(const std::string& args) {
-  const std::string cmd = std::string(BINLOOP_TOOL_DIR) + "/kitti2bag " + args + " 2>&1";
-  std::unique_ptr<FILE, int (*)(FILE*)> p(popen(cmd.c_str(), "r"), pclose);
-  std::string out;
-  std::array<char, 4096> buf{};
-  size_t n;
-  while ((n = fread(buf.data(), 1, buf.size(), p.get())) > 0) out.append(buf.data(), n);
-  const int status = pclose(p.release());
-  return {WEXITSTATUS(status), out};
+binloop::test::CommandResult run(const std::string& args) {
+  return binloop::test::runCommand(std::string(BINLOOP_TOOL_DIR) + "/kitti2bag " + args);
 }
 }  // namespace
 

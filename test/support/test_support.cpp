@@ -1,5 +1,9 @@
 #include "support/test_support.h"
 
+#include <sys/wait.h>
+
+#include <array>
+#include <cstdio>
 #include <cstdlib>
 #include <filesystem>
 #include <fstream>
@@ -44,6 +48,17 @@ void copyTree(const std::string& from, const std::string& to) {
   for (auto& e : fs::recursive_directory_iterator(to))
     fs::permissions(e.path(), fs::perms::owner_write, fs::perm_options::add);
   fs::permissions(to, fs::perms::owner_write, fs::perm_options::add);
+}
+
+CommandResult runCommand(const std::string& command) {
+  FILE* p = popen((command + " 2>&1").c_str(), "r");
+  if (!p) return {-1, "cannot run " + command};
+  std::string out;
+  std::array<char, 4096> buf{};
+  size_t n;
+  while ((n = fread(buf.data(), 1, buf.size(), p)) > 0) out.append(buf.data(), n);
+  const int status = pclose(p);
+  return {WIFEXITED(status) ? WEXITSTATUS(status) : -1, out};
 }
 
 }  // namespace binloop::test

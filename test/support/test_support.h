@@ -28,6 +28,13 @@ void writeText(const std::string& path, const std::string& text);
 /// Copies a file or a folder tree.
 void copyTree(const std::string& from, const std::string& to);
 
+/// Runs a shell command as a user would; its exit code and its stdout and stderr together.
+struct CommandResult {
+  int code;
+  std::string out;
+};
+CommandResult runCommand(const std::string& command);
+
 }  // namespace binloop::test
 
 /// Skips the test (never passes it) when a file from ../shared/data is not there.

@@ -15,10 +15,10 @@ struct OrbParams {
   float scale_factor = 1.2f;
   int levels = 8;
   int fast_threshold = 20;
-  /// Spread the features over a grid of cells this wide (pixels of the full image); 0 keeps OpenCV's
+  /// Spread the features over a grid of cells this wide (pixels of the image given); 0 keeps OpenCV's
   /// strongest-first choice. ORB-SLAM2 spreads its features the same way, for the same reason: place
   /// recognition and tracking both need features from the whole image, not from its busiest texture.
-  int grid_cell_px = 0;
+  int grid_cell_px = 64;
   int candidates_factor = 4;  // with a grid: detect this many times `features`, then spread
 };
 

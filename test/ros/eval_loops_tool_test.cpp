@@ -1,0 +1,59 @@
+// eval-loops as a user runs it: the summary it writes for a real image pair, and one clear line for bad input.
+#include <algorithm>
+#include <fstream>
+#include <sstream>
+
+#include "support/test_support.h"
+
+namespace {
+binloop::test::CommandResult run(const std::string& args) {
+  return binloop::test::runCommand(std::string(BINLOOP_TOOL_DIR) + "/eval-loops " + args);
+}
+std::string readAll(const std::string& path) {
+  std::ifstream f(path);
+  std::stringstream s;
+  s << f.rdbuf();
+  return s.str();
+}
+}  // namespace
+
+// TUM desk 1 and 10 (indices 0 and 9) view the same desk. The tracked kitti08 VLAD-family models are
+// street-trained, so this checks the tool's outputs, not the models' accuracy on desks.
+TEST(EvalLoopsTool, WritesSummaryCurvesAndQueriesForAPlainImageFolder) {
+  const std::string desk = binloop::test::sharedData("tum_desk");
+  BINLOOP_REQUIRE_DATA(desk);
+  const std::string vocab = std::string(BINLOOP_ROOT_DIR) + "/vocab/kitti08";
+  BINLOOP_REQUIRE_DATA(vocab + "/vlad.bin");
+  binloop::test::TempDir tmp;
+  binloop::test::writeText(tmp / "gt.txt", "# desk 10 revisits desk 1\n9 0\n");
+  const auto r = run("--sequence " + desk + " --gt " + (tmp / "gt.txt") + " --models vlad,vladpq --vocab-dir " + vocab +
+                     " --window 0 --reference 1 --consistency 2 --out " + (tmp / "out"));
+  ASSERT_EQ(r.code, 0) << r.out;
+  EXPECT_NE(r.out.find("10 images, 10 keyframes (step 1), 1 keyframes with a findable loop in 1 segments"), std::string::npos) << r.out;
+  const std::string summary = readAll(tmp / "out/summary.csv");
+  EXPECT_EQ(summary.rfind("model,r_at_100p,auc,signature_ms_median,query_ms_median,bytes_per_kf,", 0), 0u) << summary;
+  for (const char* row : {"\nvlad,", "\nvlad+c2,", "\nvladpq,", "\nvladpq+c2,"})
+    EXPECT_NE(summary.find(row), std::string::npos) << row << " missing from\n" << summary;
+  for (const char* f : {"pr.png", "pr_vlad.csv", "pr_vlad+c2.csv", "queries_vlad.csv", "queries_vladpq.csv"})
+    EXPECT_TRUE(binloop::test::exists(tmp / ("out/" + std::string(f)))) << f;
+  // Ten queries, one line each, after the header.
+  const std::string q = readAll(tmp / "out/queries_vlad.csv");
+  EXPECT_EQ(std::count(q.begin(), q.end(), '\n'), 11) << q;
+}
+
+TEST(EvalLoopsTool, BadInputGivesOneClearLine) {
+  const std::string desk = binloop::test::sharedData("tum_desk");
+  BINLOOP_REQUIRE_DATA(desk);
+  binloop::test::TempDir tmp;
+  const auto no_gt = run("--sequence " + desk + " --out " + (tmp / "o"));
+  EXPECT_EQ(no_gt.code, 2) << no_gt.out;
+  EXPECT_NE(no_gt.out.find("eval-loops: --gt is required when there are no poses for every image"), std::string::npos)
+      << no_gt.out;
+  binloop::test::writeText(tmp / "gt.txt", "9 0\n12 3\n");
+  const auto outside = run("--sequence " + desk + " --gt " + (tmp / "gt.txt") + " --models vlad --out " + (tmp / "o"));
+  EXPECT_EQ(outside.code, 1) << outside.out;
+  EXPECT_NE(outside.out.find("pair 12 3 is outside the 10 images"), std::string::npos) << outside.out;
+  const auto model = run("--sequence " + desk + " --gt " + (tmp / "gt.txt") + " --models hbow,sift --out " + (tmp / "o"));
+  EXPECT_NE(model.code, 0);
+  EXPECT_NE(model.out.find("sift"), std::string::npos) << model.out;
+}
