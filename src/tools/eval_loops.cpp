@@ -64,6 +64,7 @@ int main(int argc, char** argv) {
       .option("max-side", "scale larger images down to this longer side (0 = never)", "1024")
       .option("grid-cell", "spread ORB features over a grid of cells this many pixels wide (0 = strongest first)", "64")
       .option("fabmap-l2-offset", "offset added to the closest reference's L2 distance in fabmap's pre-filter", "0.05")
+      .option("hbow-min-bar", "hbow's bar never goes below this L1 score", "0.005")
       .option("threads", "feature extraction threads", "2");
   return runTool("eval-loops", [&] {
     if (!args.parse(argc, argv)) return 0;
@@ -161,6 +162,7 @@ int main(int argc, char** argv) {
       RecognizerOptions ro;
       ro.model_file = (fs::path(args.str("vocab-dir")) / (name + ".bin")).string();
       ro.fabmap_l2_offset = args.number("fabmap-l2-offset");
+      ro.hbow_min_bar = args.number("hbow-min-bar");
       auto rec = makePlaceRecognizer(name, ro);
       rec->setKeepDescriptors(false);
       ModelRun run;

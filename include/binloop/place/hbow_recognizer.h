@@ -4,6 +4,11 @@
 // through the inverted index and keeps those with more than 80 % of the best count, (3) keeps those that
 // score at least the bar, (4) accumulates each survivor's score with its group's and returns the best
 // keyframe of every group whose sum reaches 75 % of the best sum.
+//
+// One addition to ORB-SLAM2: the bar never goes below `min_bar`. A view with no stable structure (open
+// ground, sky, motion blur) shares almost no words even with its own neighbours; a bar near 0 would let
+// any keyframe through with a huge score/bar confidence. ORB-SLAM2 never meets this because its
+// covisible neighbours share map points, hence words, by construction.
 #include <memory>
 
 #include "binloop/place/place_recognizer.h"
@@ -13,7 +18,7 @@ namespace binloop {
 
 class HbowRecognizer : public PlaceRecognizer {
  public:
-  explicit HbowRecognizer(std::shared_ptr<const VocabularyTree> voc);
+  explicit HbowRecognizer(std::shared_ptr<const VocabularyTree> voc, double min_bar = 0.005);
   static std::shared_ptr<const VocabularyTree> loadVocabulary(const std::string& path);
   std::string name() const override { return "hbow"; }
   size_t indexBytesPerKeyframe() const override;
@@ -25,6 +30,7 @@ class HbowRecognizer : public PlaceRecognizer {
 
  private:
   std::shared_ptr<const VocabularyTree> voc_;
+  double min_bar_;
   std::vector<BowVector> bows_;             // per slot
   std::vector<std::vector<Slot>> inverted_;  // per word
 };

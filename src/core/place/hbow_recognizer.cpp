@@ -8,7 +8,8 @@
 
 namespace binloop {
 
-HbowRecognizer::HbowRecognizer(std::shared_ptr<const VocabularyTree> voc) : voc_(std::move(voc)) {
+HbowRecognizer::HbowRecognizer(std::shared_ptr<const VocabularyTree> voc, double min_bar)
+    : voc_(std::move(voc)), min_bar_(min_bar) {
   if (!voc_) throw PlaceError("hbow: no vocabulary");
   inverted_.resize(voc_->words());
 }
@@ -49,6 +50,8 @@ QueryResult HbowRecognizer::querySignature(const SlotScope& scope) const {
     r.detail = "none of the " + std::to_string(scope.reference_named) + " reference keyframes is in the database";
     return r;
   }
+  const double reference_score = min_score;
+  min_score = std::max(min_score, min_bar_);
   r.threshold = min_score;
 
   t = std::chrono::steady_clock::now();
@@ -89,7 +92,9 @@ QueryResult HbowRecognizer::querySignature(const SlotScope& scope) const {
   }
   r.timings.push_back({"score", msSince(t)});
   std::ostringstream detail;
-  detail << "bar " << min_score << " from " << refs << " reference keyframes; " << sharing
+  detail << "bar " << min_score;
+  if (reference_score < min_score) detail << " (floor; the references scored " << reference_score << ")";
+  detail << " from " << refs << " reference keyframes; " << sharing
          << " share words (max " << max_common << "); " << scored.size() << " reach the bar";
   r.detail = detail.str();
   if (scored.empty()) {

@@ -17,7 +17,7 @@ std::unique_ptr<PlaceRecognizer> makePlaceRecognizer(const std::string& name, co
   const ModelType type = modelTypeFromName(name);  // throws on an unknown name
   if (o.model_file.empty()) throw PlaceError(name + ": no model file given");
   switch (type) {
-    case ModelType::kHbow: return std::make_unique<HbowRecognizer>(HbowRecognizer::loadVocabulary(o.model_file));
+    case ModelType::kHbow: return std::make_unique<HbowRecognizer>(HbowRecognizer::loadVocabulary(o.model_file), o.hbow_min_bar);
     case ModelType::kVlad: return std::make_unique<VladRecognizer>(VladRecognizer::loadVocabulary(o.model_file, type));
     case ModelType::kHmvlad: return std::make_unique<HmvladRecognizer>(VladRecognizer::loadVocabulary(o.model_file, type));
     case ModelType::kVladPq: return std::make_unique<VladPqRecognizer>(VladPqModel::load(o.model_file));

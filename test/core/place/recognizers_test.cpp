@@ -3,6 +3,7 @@
 #include <gtest/gtest.h>
 
 #include "binloop/place/fabmap_recognizer.h"
+#include "binloop/place/hbow_recognizer.h"
 #include "binloop/place/model_training.h"
 #include "binloop/place/place_recognizer.h"
 #include "place_test_data.h"
@@ -104,4 +105,35 @@ TEST(Fabmap, FastLikelihoodEqualsTheDirectSum) {
   const auto& voc = FabmapModel::load(dir / "f.bin").vocabulary;
   EXPECT_NEAR(rec.logLikelihood(2, 0), rec.logLikelihoodDirect(voc->presence(rec.descriptors(2)), voc->presence(training[0])), 1e-3);
   EXPECT_NEAR(rec.logLikelihood(2, 1), rec.logLikelihoodDirect(voc->presence(rec.descriptors(2)), voc->presence(training[1])), 1e-3);
+}
+
+// hbow's bar never drops below its floor: a query whose reference shares nothing with it (open ground, sky)
+// must not pass every keyframe with a huge score/bar ratio.
+TEST(Hbow, BarNeverDropsBelowTheFloor) {
+  TempDir dir;
+  std::vector<Descriptors> training;
+  for (int p = 0; p < 40; ++p) training.push_back(randomPlace(5, p, 200));
+  TrainOptions o;
+  o.k = 8;
+  o.levels = 3;
+  trainModel(ModelType::kHbow, training, o, dir / "h.bin");
+  const auto voc = HbowRecognizer::loadVocabulary(dir / "h.bin");
+  for (const double floor : {0.0, 0.99}) {
+    HbowRecognizer rec(voc, floor);
+    rec.add(0, randomPlace(7, 0));
+    rec.add(1, randomPlace(7, 1));
+    rec.add(2, Descriptors(50, Desc256{}));  // the reference: one word, shared with nothing
+    rec.add(3, revisit(randomPlace(7, 0), 3));
+    const QueryResult r = rec.query(3, {{2}, {}});
+    if (floor == 0.0) {
+      ASSERT_EQ(r.status, QueryStatus::kFound) << r.detail;
+      EXPECT_EQ(r.candidates.front().id, 0u);
+    } else {
+      EXPECT_EQ(r.status, QueryStatus::kBelowReference) << r.detail;
+      EXPECT_DOUBLE_EQ(r.threshold, 0.99);
+      EXPECT_NE(r.detail.find("floor"), std::string::npos) << r.detail;
+      ASSERT_TRUE(r.has_best_rejected);
+      EXPECT_LT(r.best_rejected.confidence, 1.0);
+    }
+  }
 }
