@@ -15,6 +15,7 @@
 #include "binloop/eval/loop_metrics.h"
 #include "binloop/eval/pr_plot.h"
 #include "binloop/eval/temporal_consistency.h"
+#include "binloop/features/extract_options_cli.h"
 #include "binloop/features/image_features.h"
 #include "binloop/io/data_error.h"
 #include "binloop/io/filesystem.h"
@@ -60,12 +61,9 @@ int main(int argc, char** argv) {
       .option("poses", "poses for same/reverse direction (default: <sequence>/poses.txt when present)")
       .option("consistency", "also score each model behind ORB-SLAM2's consistency check over this many consecutive keyframes (0 = off)", "3")
       .option("segment-gap", "frames between ground-truth queries that start a new revisit segment", "50")
-      .option("features", "ORB features per image", "1000")
-      .option("max-side", "scale larger images down to this longer side (0 = never)", "1024")
-      .option("grid-cell", "spread ORB features over a grid of cells this many pixels wide (0 = strongest first)", "64")
       .option("fabmap-l2-offset", "offset added to the closest reference's L2 distance in fabmap's pre-filter", "0.05")
-      .option("hbow-min-bar", "hbow's bar never goes below this L1 score", "0.005")
-      .option("threads", "feature extraction threads", "2");
+      .option("hbow-min-bar", "hbow's bar never goes below this L1 score", "0.005");
+  declareExtractOptions(args);
   return runTool("eval-loops", [&] {
     if (!args.parse(argc, argv)) return 0;
     for (const char* o : {"sequence", "out"})
@@ -123,11 +121,7 @@ int main(int argc, char** argv) {
       segments.back().insert(q);
     }
 
-    ExtractOptions eo;
-    eo.orb.features = static_cast<int>(args.integer("features"));
-    eo.max_side = static_cast<int>(args.integer("max-side"));
-    eo.orb.grid_cell_px = static_cast<int>(args.integer("grid-cell"));
-    eo.threads = static_cast<int>(args.integer("threads"));
+    const ExtractOptions eo = extractOptionsFrom(args);
     std::vector<std::string> kf_paths;
     for (int f : kf_frames) kf_paths.push_back(images[f]);
     std::vector<Descriptors> desc;
@@ -143,6 +137,8 @@ int main(int argc, char** argv) {
     // Metrics of one run's predictions, its missed segments, and its PR curve file.
     auto score = [&](ModelRun& run) {
       run.metrics = evaluateLoops(run.predictions, truth, positives);
+      run.segments_found = 0;
+      run.missed_segments.clear();
       const double t = run.metrics.threshold_100p;
       run.same_found = foundAt(run.predictions, truth, same_dir, t);
       run.reverse_found = foundAt(run.predictions, truth, reverse_dir, t);
@@ -214,8 +210,6 @@ int main(int argc, char** argv) {
         ModelRun c = run;
         c.name = name + "+c" + std::to_string(consistency);
         c.predictions = consistentPredictions(offers, consistency, 4 * step);
-        c.same_found = c.reverse_found = c.segments_found = 0;
-        c.missed_segments.clear();
         score(c);
         runs.push_back(std::move(c));
       }

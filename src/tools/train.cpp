@@ -3,6 +3,7 @@
 #include <chrono>
 #include <iostream>
 
+#include "binloop/features/extract_options_cli.h"
 #include "binloop/features/image_features.h"
 #include "binloop/place/dbow2_import.h"
 #include "binloop/place/model_training.h"
@@ -23,13 +24,10 @@ int main(int argc, char** argv) {
       .option("words", "fabmap flat vocabulary size", "10000")
       .option("pq-codes", "vladpq codebook size per word", "32")
       .option("pca", "VLAD LCS-PCA dimensions per word (0 = off)", "0")
-      .option("features", "ORB features per image", "1000")
-      .option("max-side", "scale larger images down to this longer side (0 = never)", "1024")
-      .option("grid-cell", "spread ORB features over a grid of cells this many pixels wide (0 = strongest first)", "64")
       .option("max-descriptors", "descriptors sampled for flat and VLAD vocabularies", "200000")
       .option("seed", "training seed", "1")
-      .option("threads", "feature extraction threads", "2")
       .flag("skip-unreadable", "skip images that cannot be read as 8-bit (say which) instead of stopping");
+  binloop::declareExtractOptions(args);
   return binloop::runTool("train", [&] {
     if (!args.parse(argc, argv)) return 0;
     const auto type = binloop::modelTypeFromName(args.str("model"));
@@ -52,11 +50,7 @@ int main(int argc, char** argv) {
       const auto files = binloop::listImages(dir);
       for (size_t i = 0; i < files.size(); i += every) paths.push_back(files[i]);
     }
-    binloop::ExtractOptions eo;
-    eo.orb.features = static_cast<int>(args.integer("features"));
-    eo.max_side = static_cast<int>(args.integer("max-side"));
-    eo.orb.grid_cell_px = static_cast<int>(args.integer("grid-cell"));
-    eo.threads = static_cast<int>(args.integer("threads"));
+    binloop::ExtractOptions eo = binloop::extractOptionsFrom(args);
     std::vector<std::string> skipped;
     eo.skip_unreadable = args.has("skip-unreadable");
     eo.skipped = &skipped;

@@ -18,8 +18,6 @@ using FeatureVector = std::vector<std::pair<uint32_t, std::vector<uint32_t>>>;
 
 /// DBoW2's L1 score of two L1-normalised vectors: 1 - |a - b|_1 / 2, in [0, 1].
 double l1Score(const BowVector& a, const BowVector& b);
-/// Euclidean distance between the two vectors after L2 normalisation (FAB-MAP's pre-filter).
-double l2Distance(const BowVector& a, const BowVector& b);
 void normalizeL1(BowVector& v);
 
 }  // namespace binloop

@@ -21,24 +21,6 @@ double l1Score(const BowVector& a, const BowVector& b) {
   return -0.5 * s;
 }
 
-double l2Distance(const BowVector& a, const BowVector& b) {
-  double na = 0, nb = 0, dot = 0;
-  for (const auto& e : a) na += double(e.value) * e.value;
-  for (const auto& e : b) nb += double(e.value) * e.value;
-  if (na <= 0 || nb <= 0) return std::sqrt(2.0);
-  for (size_t i = 0, j = 0; i < a.size() && j < b.size();) {
-    if (a[i].word < b[j].word) {
-      ++i;
-    } else if (b[j].word < a[i].word) {
-      ++j;
-    } else {
-      dot += double(a[i].value) * b[j].value;
-      ++i, ++j;
-    }
-  }
-  return std::sqrt(std::max(0.0, 2.0 - 2.0 * dot / std::sqrt(na * nb)));
-}
-
 void normalizeL1(BowVector& v) {
   double n = 0;
   for (const auto& e : v) n += std::fabs(e.value);

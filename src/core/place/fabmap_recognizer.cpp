@@ -6,6 +6,7 @@
 #include <sstream>
 
 #include "binloop/place/place_error.h"
+#include "binloop/place/slot_counter.h"
 
 namespace binloop {
 
@@ -148,12 +149,9 @@ QueryResult FabmapRecognizer::querySignature(const SlotScope& scope) const {
   const Slot id = scope.query;
   const auto& q = words_[id];
   auto t = std::chrono::steady_clock::now();
-  std::vector<int> common(words_.size(), 0);
-  std::vector<Slot> touched;
-  for (uint32_t w : q)
-    for (Slot k : inverted_[w])
-      if (k != id && common[k]++ == 0) touched.push_back(k);
-  std::sort(touched.begin(), touched.end());
+  SlotCounter common(words_.size());
+  for (uint32_t w : q) common.add(inverted_[w]);
+  const std::vector<Slot>& touched = common.touched();  // the query itself too; scope.excluded drops it
   auto l2 = [&](Slot k) {
     return std::sqrt(std::max(0.0, 2.0 - 2.0 * common[k] / std::sqrt(double(q.size()) * words_[k].size())));
   };

@@ -5,6 +5,7 @@
 #include <sstream>
 
 #include "binloop/place/place_error.h"
+#include "binloop/place/slot_counter.h"
 
 namespace binloop {
 
@@ -56,12 +57,9 @@ QueryResult HbowRecognizer::querySignature(const SlotScope& scope) const {
 
   t = std::chrono::steady_clock::now();
   // Common words per keyframe in a dense array; exclusion is tested once per keyframe, not per entry.
-  std::vector<uint32_t> common(bows_.size(), 0);
-  std::vector<Slot> touched;
-  for (const auto& e : q)
-    for (Slot k : inverted_[e.word])
-      if (common[k]++ == 0) touched.push_back(k);
-  std::sort(touched.begin(), touched.end());  // results must not depend on the order words were visited
+  SlotCounter common(bows_.size());
+  for (const auto& e : q) common.add(inverted_[e.word]);
+  const std::vector<Slot>& touched = common.touched();
   size_t sharing = 0;
   uint32_t max_common = 0;
   for (Slot k : touched) {

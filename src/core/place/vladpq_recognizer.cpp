@@ -5,6 +5,7 @@
 #include <sstream>
 
 #include "binloop/place/place_error.h"
+#include "binloop/place/slot_counter.h"
 #include "binloop/place/vlad_recognizer.h"
 
 namespace binloop {
@@ -59,16 +60,13 @@ QueryResult VladPqRecognizer::querySignature(const SlotScope& scope) const {
   const Slot id = scope.query;
   const PqCodes& qc = codes_[id];
   auto t = std::chrono::steady_clock::now();
-  std::vector<int> shared(sigs_.size(), 0);
-  std::vector<Slot> touched;
-  for (int w = 0; w < model_.pq->words(); ++w)
-    for (Slot k : inverted_[static_cast<size_t>(w) * model_.pq->m() + qc[w]])
-      if (k != id && shared[k]++ == 0) touched.push_back(k);
-  std::sort(touched.begin(), touched.end());
+  SlotCounter shared(sigs_.size());
+  for (int w = 0; w < model_.pq->words(); ++w) shared.add(inverted_[static_cast<size_t>(w) * model_.pq->m() + qc[w]]);
+  const std::vector<Slot>& touched = shared.touched();  // the query itself too; scope.excluded drops it
   r.timings.push_back({"inverted_index", msSince(t)});
   t = std::chrono::steady_clock::now();
   const size_t refs = scope.reference.size();
-  int max_ref_shared = 0;
+  uint32_t max_ref_shared = 0;
   double bar = std::numeric_limits<double>::max();
   for (Slot k : scope.reference) {
     max_ref_shared = std::max(max_ref_shared, shared[k]);
@@ -84,7 +82,7 @@ QueryResult VladPqRecognizer::querySignature(const SlotScope& scope) const {
   t = std::chrono::steady_clock::now();
   size_t pre = 0;
   for (Slot k : touched) {
-    if (scope.excluded[k] || shared[k] < std::max(1, max_ref_shared)) continue;
+    if (scope.excluded[k] || shared[k] < std::max(1u, max_ref_shared)) continue;
     ++pre;
     const double d = distance(id, k);
     const Candidate c{idAt(k), -d, distanceConfidence(bar, d)};
