@@ -32,10 +32,8 @@ using Descriptors = std::vector<Desc256>;
 /// Rows of a CV_8U matrix with 32 columns (OpenCV's ORB output). Throws PlaceError naming the size
 /// or type found otherwise; an empty matrix gives an empty set.
 Descriptors descriptorsFromMat(const cv::Mat& rows);
-cv::Mat descriptorsToMat(const Descriptors& d);
 
 /// From 32 raw bytes, in OpenCV's order.
 Desc256 descriptorFromBytes(const uint8_t* bytes);
-void descriptorToBytes(const Desc256& d, uint8_t* bytes);
 
 }  // namespace binloop

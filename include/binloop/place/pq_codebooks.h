@@ -26,7 +26,6 @@ class PqCodebooks {
   int dims() const { return dims_; }
   int m() const { return m_; }
   const float* centroid(int word, int code) const { return &codebooks_[(static_cast<size_t>(word) * m_ + code) * dims_]; }
-  size_t memoryBytes() const { return (codebooks_.size() + sdc_table_.size()) * sizeof(float); }
 
   void write(ModelWriter& w) const;
   static PqCodebooks read(ModelReader& r);

@@ -44,7 +44,6 @@ class VladVocabulary {
   /// One normalised VLAD per level (index 0 = level 1), each wordsAtLevel × dims floats.
   /// Throws PlaceError on an empty descriptor set.
   std::vector<std::vector<float>> aggregate(const Descriptors& d) const;
-  size_t memoryBytes() const { return (centres_.size() + pca_.size() + pca_mean_.size()) * sizeof(float); }
 
   void write(ModelWriter& w) const;
   static VladVocabulary read(ModelReader& r);

@@ -56,7 +56,6 @@ class VocabularyTree {
   Weighting weighting() const { return weighting_; }
   float weight(uint32_t word) const { return weight_[word]; }
   const Desc256& wordDescriptor(uint32_t word) const { return desc_[word_node_[word]]; }
-  size_t memoryBytes() const;
 
   void write(ModelWriter& w) const;
   static VocabularyTree read(ModelReader& r);

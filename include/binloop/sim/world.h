@@ -59,7 +59,6 @@ class World {
   /// Ground texture index at world (x, z).
   int groundMaterial(double x, double z) const;
   const WorldParams& params() const { return params_; }
-  size_t routeSamples() const { return route_.size(); }
 
  private:
   TextureBank bank_;

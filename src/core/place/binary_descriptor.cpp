@@ -13,8 +13,6 @@ Desc256 descriptorFromBytes(const uint8_t* bytes) {
   return d;
 }
 
-void descriptorToBytes(const Desc256& d, uint8_t* bytes) { std::memcpy(bytes, d.w.data(), Desc256::kBytes); }
-
 Descriptors descriptorsFromMat(const cv::Mat& rows) {
   if (rows.empty()) return {};
   if (rows.depth() != CV_8U || rows.channels() != 1 || rows.cols != Desc256::kBytes)
@@ -24,12 +22,6 @@ Descriptors descriptorsFromMat(const cv::Mat& rows) {
   Descriptors out(rows.rows);
   for (int r = 0; r < rows.rows; ++r) out[r] = descriptorFromBytes(rows.ptr<uint8_t>(r));
   return out;
-}
-
-cv::Mat descriptorsToMat(const Descriptors& d) {
-  cv::Mat m(static_cast<int>(d.size()), Desc256::kBytes, CV_8U);
-  for (size_t r = 0; r < d.size(); ++r) descriptorToBytes(d[r], m.ptr<uint8_t>(static_cast<int>(r)));
-  return m;
 }
 
 }  // namespace binloop

@@ -216,10 +216,6 @@ void VocabularyTree::transform(const Descriptors& d, BowVector* bow, FeatureVect
   }
 }
 
-size_t VocabularyTree::memoryBytes() const {
-  return desc_.size() * (sizeof(Desc256) + 3 * sizeof(uint32_t)) + word_node_.size() * (sizeof(uint32_t) + sizeof(float));
-}
-
 void VocabularyTree::write(ModelWriter& w) const {
   w.section("TDSC", desc_);
   w.section("TFCH", first_child_);
