@@ -6,9 +6,12 @@
 set -euo pipefail
 source "$(dirname "${BASH_SOURCE[0]}")/env.sh"
 "$BINLOOP_ROOT/scripts/build.sh" --ros >/dev/null
+cd "$BINLOOP_ROOT"  # benchmarks find vocab/ and ../shared/data from the repository root
 for b in "$BINLOOP_WS"/devel/lib/binloop/bench/bench_*; do
   name=$(basename "$b")
   if [ $# -gt 0 ] && [[ "$name" != "bench_$1"* ]]; then continue; fi
   echo "== $name"
-  "$b" "${@:2}" 2> >(grep -v 'libpng warning' >&2)
+  short="${name#bench_}"
+  # Each benchmark may write its headline numbers here, to compare runs (e.g. .build/bench/place.json).
+  BINLOOP_BENCH_JSON="$BINLOOP_BUILD/bench/${short%_bench}.json" "$b" "${@:2}" 2> >(grep -v 'libpng warning' >&2)
 done

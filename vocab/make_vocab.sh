@@ -2,12 +2,14 @@
 # Re-makes the shipped vocabularies exactly as they were made (README, "Shipped vocabularies").
 #   vocab/kitti08/<model>.bin  — every model, trained on rendered KITTI route 08 only (every 8th frame,
 #                                1000 ORB features per frame), as the thesis trained on KITTI 08.
-#   vocab/photos/hbow.bin      — hbow for real images: the Debian photos (opencv-doc, python3-skimage,
-#                                one image per plasma-workspace-wallpapers wallpaper) plus every 16th frame
-#                                of rendered route 08, 2000 ORB features per image.
+#   vocab/photos/<model>.bin   — every model for real images: the Debian photos (opencv-doc, python3-skimage,
+#                                one image per plasma-workspace-wallpapers wallpaper) except those of the
+#                                real-image loop sets (data/loop_sets/*.txt), plus every 16th frame of
+#                                rendered route 08, 2000 ORB features per image.
 # Needs ../shared/data/kitti/poses/08.txt for the route; takes about 15 minutes on 2 cores.
 # The hbow files (21-25 MB) are too large to track and are made here; the other four are tracked.
 # `vocab/make_vocab.sh hbow` makes only the two hbow files (render of 08 plus under a minute of training).
+# `vocab/make_vocab.sh photos` makes only vocab/photos/.
 set -euo pipefail
 source "$(dirname "$0")/../scripts/env.sh"
 cd "$BINLOOP_ROOT"
@@ -21,7 +23,9 @@ fi
 mkdir -p vocab/kitti08 vocab/photos
 models="hbow fabmap vlad hmvlad vladpq"
 [ "${1:-}" = hbow ] && models=hbow
-for m in $models; do
+kitti_models="$models"
+[ "${1:-}" = photos ] && kitti_models=""
+for m in $kitti_models; do
   # hmvlad: 4 and 16 words instead of the thesis' 2 and 4. With 2 words the short signature rejected true
   # revisits and hmvlad found 2 of the 4 revisit segments of rendered route 00; with 4 it finds all 4.
   extra=""
@@ -31,7 +35,12 @@ done
 stage="$work/photos"
 rm -rf "$stage" && mkdir -p "$stage"
 i=0
-link() { ln -s "$1" "$stage/$(printf %04d $i).${1##*.}"; i=$((i + 1)); }
+# Images of the real-image loop sets are evaluation data: never train on them.
+held_out=$(cat data/loop_sets/*.txt | sed 's/#.*//' | tr -s ' \t' '\n' | grep '/' || true)
+link() {
+  if grep -qxF "$1" <<<"$held_out"; then return; fi
+  ln -s "$1" "$stage/$(printf %04d $i).${1##*.}"; i=$((i + 1))
+}
 for f in /usr/share/doc/opencv-doc/examples/data/*.{jpg,png} /usr/lib/python3/dist-packages/skimage/data/*.{jpg,png}; do
   # skimage ships truncated.jpg on purpose (a broken file for its own tests)
   [ -f "$f" ] && [ "$(basename "$f")" != truncated.jpg ] && link "$f"
@@ -47,4 +56,10 @@ for f in "$seq08"/image_0/*.png; do
   [ $((n % 16)) -eq 0 ] && link "$f"
   n=$((n + 1))
 done
-scripts/binloop train hbow --images "$stage" --features 2000 --max-side 1024 --seed 1 --skip-unreadable --out vocab/photos/hbow.bin
+echo "make_vocab: $i training images for vocab/photos (loop-set images left out)"
+for m in $models; do
+  extra=""
+  [ "$m" = hmvlad ] && extra="--k 4"
+  scripts/binloop train "$m" --images "$stage" --features 2000 --max-side 1024 --seed 1 --skip-unreadable $extra \
+    --out "vocab/photos/$m.bin"
+done

@@ -62,7 +62,8 @@ int main(int argc, char** argv) {
       .option("consistency", "also score each model behind ORB-SLAM2's consistency check over this many consecutive keyframes (0 = off)", "3")
       .option("segment-gap", "frames between ground-truth queries that start a new revisit segment", "50")
       .option("fabmap-l2-offset", "offset added to the closest reference's L2 distance in fabmap's pre-filter", "0.05")
-      .option("hbow-min-bar", "hbow's bar never goes below this L1 score", "0.005");
+      .option("hbow-min-bar", "hbow's bar never goes below this L1 score", "0.005")
+      .option("dump-ranked", "also write ranked_<model>.csv: each query's bar and its N best keyframes by raw score", "0");
   declareExtractOptions(args);
   return runTool("eval-loops", [&] {
     if (!args.parse(argc, argv)) return 0;
@@ -166,6 +167,12 @@ int main(int argc, char** argv) {
       std::ofstream qcsv(fs::path(args.str("out")) / ("queries_" + name + ".csv"));
       qcsv << "query,status,candidate,confidence,correct,signature_ms,query_ms,detail\n";
       std::vector<QueryOffers> offers;
+      const auto dump_ranked = static_cast<size_t>(std::max(0L, args.integer("dump-ranked")));
+      std::ofstream rcsv;
+      if (dump_ranked) {
+        rcsv.open(fs::path(args.str("out")) / ("ranked_" + name + ".csv"));
+        rcsv << "query,status,threshold,ranked\n";
+      }
       ProgressBar bar(name, kf_frames.size());
       for (size_t i = 0; i < kf_frames.size(); ++i) {
         const int f = kf_frames[i];
@@ -180,20 +187,24 @@ int main(int argc, char** argv) {
         QueryScope scope;
         for (size_t j = i; j-- > 0 && scope.reference.size() < static_cast<size_t>(nref);) scope.reference.push_back(kf_frames[j]);
         for (size_t j = i; j-- > 0 && kf_frames[j] > f - window;) scope.ignore.push_back(kf_frames[j]);
+        scope.max_ranked = dump_ranked;
         const QueryResult r = rec->query(static_cast<KeyframeId>(f), scope);
+        if (dump_ranked) {
+          rcsv << f << "," << statusName(r.status) << "," << r.threshold << ",";
+          for (size_t c = 0; c < r.ranked.size(); ++c) rcsv << (c ? ";" : "") << r.ranked[c].id << ":" << r.ranked[c].score;
+          rcsv << "\n";
+        }
         run.query_ms.push_back(r.total_ms);
-        if (!r.candidates.empty()) {
-          p.candidate = static_cast<int>(r.candidates.front().id);
-          p.confidence = r.candidates.front().confidence;
-        } else if (r.has_best_rejected) {
-          p.candidate = static_cast<int>(r.best_rejected.id);
-          p.confidence = r.best_rejected.confidence;
+        if (const Candidate* best = r.best()) {
+          p.candidate = static_cast<int>(best->id);
+          p.confidence = best->confidence;
+          p.passed = !r.candidates.empty();
         }
         run.predictions.push_back(p);
         offers.push_back({f, {}});
-        for (const auto& c : r.candidates) offers.back().offers.emplace_back(static_cast<int>(c.id), c.confidence);
+        for (const auto& c : r.candidates) offers.back().offers.push_back({static_cast<int>(c.id), c.confidence, true});
         if (r.has_best_rejected)
-          offers.back().offers.emplace_back(static_cast<int>(r.best_rejected.id), r.best_rejected.confidence);
+          offers.back().offers.push_back({static_cast<int>(r.best_rejected.id), r.best_rejected.confidence, false});
         std::string detail = r.detail;
         std::replace(detail.begin(), detail.end(), ',', ';');
         qcsv << f << "," << statusName(r.status) << "," << (p.candidate >= 0 ? std::to_string(p.candidate) : "") << ","

@@ -12,6 +12,7 @@ struct LoopPrediction {
   int query = 0;
   int candidate = -1;  // frame index; -1: no candidate at all
   double confidence = 0;
+  bool passed = false;  // the candidate beat the model's own bar (a candidate, not the best rejected)
 };
 
 struct PrPoint {
@@ -24,7 +25,7 @@ struct LoopMetrics {
   double r_at_100p = 0;
   double threshold_100p = 0;   // lowest confidence at which precision is still 1 (inf when none)
   double auc = 0;              // area under the PR curve (precision summed over recall steps)
-  double precision_at_bar = 0, recall_at_bar = 0;  // at confidence 1 (the model's own bar)
+  double precision_at_bar = 0, recall_at_bar = 0;  // of the predictions that passed the model's own bar
 };
 
 /// `truth`: every (query, ref) ground-truth pair; `positive_queries`: queries that have at least one

@@ -11,16 +11,24 @@
 
 namespace binloop {
 
-/// Everything one query offered: its candidates and best rejected keyframe, as (frame, confidence).
+/// One keyframe a query offered: a candidate (passed the model's bar) or its best rejected keyframe.
+struct Offer {
+  int frame = 0;
+  double confidence = 0;
+  bool passed = false;
+};
+
+/// Everything one query offered.
 struct QueryOffers {
   int query = 0;
-  std::vector<std::pair<int, double>> offers;
+  std::vector<Offer> offers;
 };
 
 /// `queries` are consecutive keyframes in order. A chain has `chain` links (ORB-SLAM2: 3); two candidates
 /// are consistent when their frames are at most `max_gap` apart (groups of ±2 keyframes overlap when the
 /// candidates are 4 keyframes apart). Returns one prediction per query: the end of its strongest chain, with
-/// the chain's weakest confidence, or no candidate when no chain reaches that long.
+/// the chain's weakest confidence, or no candidate when no chain reaches that long. A prediction has
+/// `passed` set when a chain of the same strength exists among offers that all passed their bar.
 std::vector<LoopPrediction> consistentPredictions(const std::vector<QueryOffers>& queries, int chain, int max_gap);
 
 }  // namespace binloop

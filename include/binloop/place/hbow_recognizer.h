@@ -31,8 +31,14 @@ class HbowRecognizer : public PlaceRecognizer {
  private:
   std::shared_ptr<const VocabularyTree> voc_;
   double min_bar_;
-  std::vector<BowVector> bows_;             // per slot
-  std::vector<std::vector<Slot>> inverted_;  // per word
+  /// One inverted-index entry: a keyframe that has the word, with the word's weight in its BoW vector,
+  /// so that a query gets every keyframe's L1 score from the index alone, with no vector merges.
+  struct Posting {
+    Slot slot;
+    float weight;
+  };
+  std::vector<BowVector> bows_;                 // per slot
+  std::vector<std::vector<Posting>> inverted_;  // per word
 };
 
 }  // namespace binloop

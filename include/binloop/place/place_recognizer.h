@@ -21,6 +21,9 @@ using KeyframeId = uint32_t;
 struct QueryScope {
   std::vector<KeyframeId> reference;  // set the bar; never candidates
   std::vector<KeyframeId> ignore;     // never candidates
+  /// When > 0, the result also lists (in `ranked`) up to this many keyframes outside the scope by the
+  /// model's raw score, passed or not: for logs and for studies of how to rank loops.
+  size_t max_ranked = 0;
 };
 
 enum class QueryStatus {
@@ -55,6 +58,12 @@ struct QueryResult {
   Candidate best_rejected;
   std::vector<StepTime> timings;
   double total_ms = 0;
+  /// Only with QueryScope::max_ranked > 0: the best keyframes the model scored, by raw score, best first.
+  std::vector<Candidate> ranked;
+  /// The query's prediction: the first candidate, else the best rejected keyframe, else none.
+  const Candidate* best() const {
+    return !candidates.empty() ? &candidates.front() : has_best_rejected ? &best_rejected : nullptr;
+  }
 };
 
 class PlaceRecognizer {
@@ -91,6 +100,7 @@ class PlaceRecognizer {
     std::vector<Slot> reference;
     size_t reference_named = 0;
     std::vector<char> excluded;
+    size_t max_ranked = 0;
   };
   /// Stores the signature of the keyframe that will get `slot` (== size() before the add). Must leave
   /// the model unchanged when it throws.
@@ -105,6 +115,8 @@ class PlaceRecognizer {
   static void offer(QueryResult& r, const Candidate& c, bool passes);
   /// Best score first; equal scores by id, so that results do not depend on hash-map order.
   static void sortCandidates(QueryResult& r);
+  /// Keeps the `n` best of `all` (by score, ties by id) as r.ranked.
+  static void keepRanked(QueryResult& r, std::vector<Candidate> all, size_t n);
   bool known(KeyframeId id) const { return position_.count(id) > 0; }
 
  private:

@@ -4,9 +4,12 @@
 // turned into an L1-normalised BowVector by walking each descriptor down the tree.
 //
 // Nodes are stored breadth first with each node's children contiguous, so a level of the descent is a
-// scan over k adjacent descriptors.
+// scan over k adjacent descriptors. The node arrays are views: into vectors the tree owns (trained or
+// imported), or straight into a mapped model file, so that loading a 1M-word tree copies nothing.
+// Copies of a tree share those arrays (they are never modified).
 #include <cstdint>
 #include <functional>
+#include <memory>
 #include <vector>
 
 #include "binloop/place/binary_descriptor.h"
@@ -50,7 +53,7 @@ class VocabularyTree {
   void transform(const Descriptors& d, BowVector* bow, FeatureVector* fv = nullptr, int fv_depth = 2) const;
 
   size_t words() const { return word_node_.size(); }
-  size_t nodes() const { return desc_.size(); }
+  size_t nodes() const { return desc_.size; }
   int k() const { return k_; }
   int levels() const { return levels_; }
   Weighting weighting() const { return weighting_; }
@@ -63,16 +66,20 @@ class VocabularyTree {
  private:
   int k_ = 0, levels_ = 0;
   Weighting weighting_ = Weighting::kTfIdf;
-  std::vector<Desc256> desc_;           // per node (root's is unused)
-  std::vector<uint32_t> first_child_;   // per node
-  std::vector<uint32_t> child_count_;   // per node, 0 for leaves
-  std::vector<uint32_t> node_word_;     // per node, UINT32_MAX for inner nodes
-  std::vector<uint32_t> word_node_;     // per word
-  std::vector<float> weight_;           // per word
+  struct Owned;  // the arrays of a tree built in memory
+  std::shared_ptr<const void> storage_;  // what the views below point into
+  SectionView<Desc256> desc_;            // per node (root's is unused)
+  SectionView<uint32_t> first_child_;    // per node
+  SectionView<uint32_t> child_count_;    // per node, 0 for leaves
+  SectionView<float> weight_;            // per word
+  std::vector<uint32_t> node_word_;      // per node, UINT32_MAX for inner nodes
+  std::vector<uint32_t> word_node_;      // per word
+  /// Takes the arrays of a tree built in memory (train, fromNodes) and indexes its words.
+  void adopt(std::shared_ptr<Owned> owned);
   void indexWords();
   /// Words (and nodes at `fv_depth`, when fv_node is given) of n descriptors, descended together.
   void descend(const Desc256* d, size_t n, int fv_depth, uint32_t* word, uint32_t* fv_node) const;
-  void computeIdf(const std::vector<Descriptors>& images);
+  std::vector<float> computeIdf(const std::vector<Descriptors>& images) const;
 };
 
 }  // namespace binloop

@@ -22,7 +22,7 @@ LoopMetrics evaluateLoops(const std::vector<LoopPrediction>& predictions, const 
     for (; j < p.size() && p[j]->confidence == p[i]->confidence; ++j) {
       const bool ok = truth.count({p[j]->query, p[j]->candidate}) > 0;
       ok ? ++tp : ++fp;
-      if (p[j]->confidence >= 1.0) ok ? ++tp_bar : ++fp_bar;
+      if (p[j]->passed) ok ? ++tp_bar : ++fp_bar;
     }
     const double precision = double(tp) / (tp + fp);
     const double recall = m.positives ? double(tp) / m.positives : 0;

@@ -164,14 +164,22 @@ QueryResult FabmapRecognizer::querySignature(const SlotScope& scope) const {
     return r;
   }
   std::vector<Slot> pre;
-  for (Slot k : touched)
-    if (!scope.excluded[k] && l2(k) < min_l2 + m_.params.l2_offset) pre.push_back(k);
+  int nearest = -1;  // the keyframe nearest in L2, kept when none is within the gate
+  for (Slot k : touched) {
+    if (scope.excluded[k]) continue;
+    if (l2(k) < min_l2 + m_.params.l2_offset) pre.push_back(k);
+    if (nearest < 0 || l2(k) < l2(nearest)) nearest = static_cast<int>(k);
+  }
   r.timings.push_back({"l2_prefilter", msSince(t)});
-  if (pre.empty()) {
+  // With none within the gate, the nearest keyframe is still scored, as the best rejected: a query always
+  // names the model's best keyframe, so that evaluations can rank it.
+  const bool gated_out = pre.empty();
+  if (gated_out && nearest < 0) {
     r.status = QueryStatus::kNoPreCandidates;
-    r.detail = "no keyframe within L2 " + std::to_string(min_l2) + " + " + std::to_string(m_.params.l2_offset);
+    r.detail = "no keyframe outside the scope shares a word with the query";
     return r;
   }
+  if (gated_out) pre.push_back(static_cast<Slot>(nearest));
 
   t = std::chrono::steady_clock::now();
   const QueryTables tab = tables(q);
@@ -199,18 +207,26 @@ QueryResult FabmapRecognizer::querySignature(const SlotScope& scope) const {
   double bar = 0;
   for (size_t i = 0; i < refs.size(); ++i) bar = std::max(bar, post[i]);
   r.threshold = bar;
+  std::vector<Candidate> all;
   for (size_t j = 0; j < pre.size(); ++j) {
     const double p = post[refs.size() + j];
     const Candidate c{idAt(pre[j]), p, p / std::max(bar, 1e-300)};
-    offer(r, c, p > bar);
+    offer(r, c, !gated_out && p > bar);
+    if (scope.max_ranked) all.push_back(c);
   }
   sortCandidates(r);
+  if (scope.max_ranked) keepRanked(r, std::move(all), scope.max_ranked);
   r.timings.push_back({"posterior", msSince(t)});
   std::ostringstream detail;
   detail << pre.size() << " within L2 " << min_l2 << "+" << m_.params.l2_offset << "; best reference posterior " << bar
          << ", new place " << post[places] << "; " << r.candidates.size() << " beat it";
   r.detail = detail.str();
   r.status = r.candidates.empty() ? QueryStatus::kBelowReference : QueryStatus::kFound;
+  if (gated_out) {
+    r.status = QueryStatus::kNoPreCandidates;
+    r.detail = "no keyframe within L2 " + std::to_string(min_l2) + " + " + std::to_string(m_.params.l2_offset) +
+               "; the nearest is at " + std::to_string(l2(pre.front()));
+  }
   return r;
 }
 

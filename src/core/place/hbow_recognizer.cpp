@@ -1,11 +1,11 @@
 #include "binloop/place/hbow_recognizer.h"
 
 #include <algorithm>
+#include <cmath>
 #include <limits>
 #include <sstream>
 
 #include "binloop/place/place_error.h"
-#include "binloop/place/slot_counter.h"
 
 namespace binloop {
 
@@ -26,7 +26,7 @@ std::shared_ptr<const VocabularyTree> HbowRecognizer::loadVocabulary(const std::
 void HbowRecognizer::addSignature(Slot slot, const Descriptors& d) {
   BowVector b;
   voc_->transform(d, &b);
-  for (const auto& e : b) inverted_[e.word].push_back(slot);
+  for (const auto& e : b) inverted_[e.word].push_back({slot, e.value});
   bows_.push_back(std::move(b));
 }
 
@@ -34,18 +34,34 @@ size_t HbowRecognizer::indexBytesPerKeyframe() const {
   if (bows_.empty()) return 0;
   size_t entries = 0;
   for (const auto& b : bows_) entries += b.size();
-  // BoW entry (word + weight) and one inverted-index entry per word of each keyframe.
-  return entries * (sizeof(BowEntry) + sizeof(Slot)) / bows_.size();
+  // BoW entry (word + weight) and one inverted-index entry (slot + weight) per word of each keyframe.
+  return entries * (sizeof(BowEntry) + sizeof(Posting)) / bows_.size();
 }
 
 QueryResult HbowRecognizer::querySignature(const SlotScope& scope) const {
   QueryResult r;
   const BowVector& q = bows_[scope.query];
   auto t = std::chrono::steady_clock::now();
+  // One pass over the query's inverted lists gives every keyframe's common-word count and its L1 score:
+  // DBoW2's score 1 - |a - b|_1 / 2 of L1-normalised vectors is sum over common words of
+  // (|a_w| + |b_w| - |a_w - b_w|) / 2, and words that only one vector has add nothing.
+  std::vector<uint32_t> common(bows_.size(), 0);
+  std::vector<double> score(bows_.size(), 0);
+  std::vector<Slot> touched;
+  for (const auto& e : q) {
+    const double a = e.value;
+    for (const Posting& p : inverted_[e.word]) {
+      if (common[p.slot]++ == 0) touched.push_back(p.slot);
+      score[p.slot] += 0.5 * (std::fabs(a) + std::fabs(p.weight) - std::fabs(a - p.weight));
+    }
+  }
+  std::sort(touched.begin(), touched.end());  // results never depend on the order lists came in
+  r.timings.push_back({"inverted_index", msSince(t)});
+
+  t = std::chrono::steady_clock::now();
   double min_score = std::numeric_limits<double>::max();
-  for (Slot k : scope.reference) min_score = std::min(min_score, l1Score(q, bows_[k]));
+  for (Slot k : scope.reference) min_score = std::min(min_score, score[k]);
   const size_t refs = scope.reference.size();
-  r.timings.push_back({"reference", msSince(t)});
   if (refs == 0) {
     r.status = QueryStatus::kNoReference;
     r.detail = "none of the " + std::to_string(scope.reference_named) + " reference keyframes is in the database";
@@ -54,12 +70,6 @@ QueryResult HbowRecognizer::querySignature(const SlotScope& scope) const {
   const double reference_score = min_score;
   min_score = std::max(min_score, min_bar_);
   r.threshold = min_score;
-
-  t = std::chrono::steady_clock::now();
-  // Common words per keyframe in a dense array; exclusion is tested once per keyframe, not per entry.
-  SlotCounter common(bows_.size());
-  for (const auto& e : q) common.add(inverted_[e.word]);
-  const std::vector<Slot>& touched = common.touched();
   size_t sharing = 0;
   uint32_t max_common = 0;
   for (Slot k : touched) {
@@ -68,27 +78,31 @@ QueryResult HbowRecognizer::querySignature(const SlotScope& scope) const {
     max_common = std::max(max_common, common[k]);
   }
   const uint32_t min_common = static_cast<uint32_t>(0.8f * max_common);
-  r.timings.push_back({"common_words", msSince(t)});
+  if (scope.max_ranked > 0) {
+    std::vector<Candidate> all;
+    for (Slot k : touched)
+      if (!scope.excluded[k]) all.push_back({idAt(k), score[k], score[k] / min_score});
+    keepRanked(r, std::move(all), scope.max_ranked);
+  }
   if (sharing == 0) {
     r.status = QueryStatus::kNoPreCandidates;
     r.detail = "no keyframe outside the scope shares a word with the query";
+    r.timings.push_back({"select", msSince(t)});
     return r;
   }
-
-  t = std::chrono::steady_clock::now();
-  std::vector<double> score(bows_.size(), -1);  // L1 scores are in [0, 1]; -1 = not scored
   std::vector<Slot> scored;
   for (Slot k : touched) {
-    if (scope.excluded[k] || common[k] <= min_common) continue;
-    const double s = l1Score(q, bows_[k]);
-    if (s >= min_score) {
-      score[k] = s;
+    if (scope.excluded[k]) continue;
+    if (common[k] > min_common && score[k] >= min_score) {
       scored.push_back(k);
     } else {
-      offer(r, {idAt(k), s, s / std::max(min_score, 1e-9)}, false);
+      offer(r, {idAt(k), score[k], score[k] / min_score}, false);
     }
   }
-  r.timings.push_back({"score", msSince(t)});
+  // Only keyframes that reached the bar take part in group accumulation (-1: did not).
+  std::vector<double> passed(bows_.size(), -1);
+  for (Slot k : scored) passed[k] = score[k];
+  r.timings.push_back({"select", msSince(t)});
   std::ostringstream detail;
   detail << "bar " << min_score;
   if (reference_score < min_score) detail << " (floor; the references scored " << reference_score << ")";
@@ -108,12 +122,12 @@ QueryResult HbowRecognizer::querySignature(const SlotScope& scope) const {
   std::vector<Group> groups;
   double best_acc = 0;
   for (Slot k : scored) {
-    Group g{score[k], score[k], k};
+    Group g{passed[k], passed[k], k};
     for (KeyframeId n : group(idAt(k))) {
       Slot ns;
-      if (!findSlot(n, &ns) || score[ns] < 0) continue;
-      g.acc += score[ns];
-      if (score[ns] > g.best) g.best = score[ns], g.best_slot = ns;
+      if (!findSlot(n, &ns) || passed[ns] < 0) continue;
+      g.acc += passed[ns];
+      if (passed[ns] > g.best) g.best = passed[ns], g.best_slot = ns;
     }
     best_acc = std::max(best_acc, g.acc);
     groups.push_back(g);

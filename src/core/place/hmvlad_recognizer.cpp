@@ -41,8 +41,14 @@ QueryResult HmvladRecognizer::querySignature(const SlotScope& scope) const {
   }
   t = std::chrono::steady_clock::now();
   std::vector<Slot> pre;
-  for (Slot k = 0; k < short_.size(); ++k)
-    if (!scope.excluded[k] && hammingBits(qs, short_[k]) < bar_short) pre.push_back(k);
+  int closest_short = -1;  // the keyframe nearest by the short signature, verified even when it fails it
+  int closest_short_d = 0;
+  for (Slot k = 0; k < short_.size(); ++k) {
+    if (scope.excluded[k]) continue;
+    const int d = hammingBits(qs, short_[k]);
+    if (d < bar_short) pre.push_back(k);
+    if (closest_short < 0 || d < closest_short_d) closest_short = static_cast<int>(k), closest_short_d = d;
+  }
   r.timings.push_back({"short_reject", msSince(t)});
   t = std::chrono::steady_clock::now();
   for (Slot k : pre) {
@@ -50,7 +56,22 @@ QueryResult HmvladRecognizer::querySignature(const SlotScope& scope) const {
     const Candidate c{idAt(k), -static_cast<double>(d), distanceConfidence(bar_long, d)};
     offer(r, c, d < bar_long);
   }
+  if (closest_short >= 0 && closest_short_d >= bar_short) {
+    // Nothing passed the short signature, or this one did not: it still stands as the best rejected, so
+    // that a query always names the model's nearest keyframe.
+    const int d = hammingBits(ql, long_[closest_short]);
+    offer(r, {idAt(closest_short), -static_cast<double>(d), distanceConfidence(bar_long, d)}, false);
+  }
   sortCandidates(r);
+  if (scope.max_ranked) {
+    std::vector<Candidate> all;
+    for (Slot k = 0; k < long_.size(); ++k) {
+      if (scope.excluded[k]) continue;
+      const int d = hammingBits(ql, long_[k]);
+      all.push_back({idAt(k), -static_cast<double>(d), distanceConfidence(bar_long, d)});
+    }
+    keepRanked(r, std::move(all), scope.max_ranked);
+  }
   r.timings.push_back({"long_verify", msSince(t)});
   std::ostringstream detail;
   detail << "bars " << bar_short << "/" << bar_long << " bits (short/long) from " << refs << " reference keyframes; "

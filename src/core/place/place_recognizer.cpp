@@ -47,6 +47,7 @@ QueryResult PlaceRecognizer::query(KeyframeId id, const QueryScope& scope) const
   s.excluded.assign(order_.size(), 0);
   s.excluded[s.query] = 1;
   s.reference_named = scope.reference.size();
+  s.max_ranked = scope.max_ranked;
   for (KeyframeId k : scope.reference) {
     Slot slot;
     if (!findSlot(k, &slot) || s.excluded[slot]) continue;  // unknown, the query itself, or named twice
@@ -92,6 +93,16 @@ void PlaceRecognizer::sortCandidates(QueryResult& r) {
   std::sort(r.candidates.begin(), r.candidates.end(), [](const Candidate& a, const Candidate& b) {
     return a.score != b.score ? a.score > b.score : a.id < b.id;
   });
+}
+
+void PlaceRecognizer::keepRanked(QueryResult& r, std::vector<Candidate> all, size_t n) {
+  const auto better = [](const Candidate& a, const Candidate& b) {
+    return a.score != b.score ? a.score > b.score : a.id < b.id;
+  };
+  n = std::min(n, all.size());
+  std::partial_sort(all.begin(), all.begin() + static_cast<std::ptrdiff_t>(n), all.end(), better);
+  all.resize(n);
+  r.ranked = std::move(all);
 }
 
 PlaceRecognizer::Slot PlaceRecognizer::slotOf(KeyframeId id) const {

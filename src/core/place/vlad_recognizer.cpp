@@ -46,13 +46,16 @@ QueryResult VladRecognizer::querySignature(const SlotScope& scope) const {
   r.threshold = bar;
   r.timings.push_back({"reference", msSince(t)});
   t = std::chrono::steady_clock::now();
+  std::vector<Candidate> all;
   for (Slot k = 0; k < sigs_.size(); ++k) {
     if (scope.excluded[k]) continue;
     const int d = hammingBits(q, sigs_[k]);
     const Candidate c{idAt(k), -static_cast<double>(d), distanceConfidence(refs ? bar : 0, d)};
     offer(r, c, refs && d < bar);
+    if (scope.max_ranked) all.push_back(c);
   }
   sortCandidates(r);
+  if (scope.max_ranked) keepRanked(r, std::move(all), scope.max_ranked);
   r.timings.push_back({"scan", msSince(t)});
   std::ostringstream detail;
   detail << "bar " << bar << " bits from " << refs << " reference keyframes; " << r.candidates.size() << " closer";

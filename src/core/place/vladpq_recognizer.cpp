@@ -81,14 +81,27 @@ QueryResult VladPqRecognizer::querySignature(const SlotScope& scope) const {
   r.threshold = bar;
   t = std::chrono::steady_clock::now();
   size_t pre = 0;
+  std::vector<Candidate> all;
+  int most_shared = -1;  // the keyframe sharing most pairs among those the pre-filter drops
   for (Slot k : touched) {
-    if (scope.excluded[k] || shared[k] < std::max(1u, max_ref_shared)) continue;
+    if (scope.excluded[k]) continue;
+    if (shared[k] < std::max(1u, max_ref_shared)) {
+      if (most_shared < 0 || shared[k] > shared[most_shared]) most_shared = static_cast<int>(k);
+      continue;
+    }
     ++pre;
     const double d = distance(id, k);
     const Candidate c{idAt(k), -d, distanceConfidence(bar, d)};
     offer(r, c, d < bar);
+    if (scope.max_ranked) all.push_back(c);
+  }
+  if (most_shared >= 0 && !r.has_best_rejected && r.candidates.empty()) {
+    // Nothing passed the pre-filter: the keyframe closest to passing stands as the best rejected.
+    const double d = distance(id, most_shared);
+    offer(r, {idAt(most_shared), -d, distanceConfidence(bar, d)}, false);
   }
   sortCandidates(r);
+  if (scope.max_ranked) keepRanked(r, std::move(all), scope.max_ranked);
   r.timings.push_back({"verify", msSince(t)});
   std::ostringstream detail;
   detail << "references share up to " << max_ref_shared << " (word, code) pairs, bar " << bar << "; " << pre

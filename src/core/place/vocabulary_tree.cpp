@@ -10,6 +10,21 @@
 
 namespace binloop {
 
+struct VocabularyTree::Owned {
+  std::vector<Desc256> desc;
+  std::vector<uint32_t> first_child, child_count;
+  std::vector<float> weight;
+};
+
+void VocabularyTree::adopt(std::shared_ptr<Owned> o) {
+  desc_ = {o->desc.data(), o->desc.size()};
+  first_child_ = {o->first_child.data(), o->first_child.size()};
+  child_count_ = {o->child_count.data(), o->child_count.size()};
+  weight_ = {o->weight.data(), o->weight.size()};
+  storage_ = std::move(o);
+  indexWords();
+}
+
 VocabularyTree VocabularyTree::train(const std::vector<Descriptors>& images, const VocabTreeParams& p,
                                      const ProgressFn& progress) {
   if (p.k < 2 || p.levels < 1) throw PlaceError("vocabulary tree needs k >= 2 and levels >= 1");
@@ -23,15 +38,16 @@ VocabularyTree VocabularyTree::train(const std::vector<Descriptors>& images, con
   t.k_ = p.k;
   t.levels_ = p.levels;
   t.weighting_ = p.weighting;
+  auto o = std::make_shared<Owned>();
   // Breadth-first: each queue entry is a node waiting for its children, with its descriptors.
   struct Pending {
     uint32_t node;
     int depth;
     std::vector<uint32_t> idx;
   };
-  t.desc_.push_back(Desc256{});
-  t.first_child_.push_back(0);
-  t.child_count_.push_back(0);
+  o->desc.push_back(Desc256{});
+  o->first_child.push_back(0);
+  o->child_count.push_back(0);
   std::deque<Pending> queue;
   {
     std::vector<uint32_t> all(data.size());
@@ -45,15 +61,15 @@ VocabularyTree VocabularyTree::train(const std::vector<Descriptors>& images, con
     queue.pop_front();
     KMajorityParams kp{p.k, p.max_iterations, hashCombine(p.seed, cur.node)};
     KMajorityResult km = kMajority(data, cur.idx, kp);
-    const auto first = static_cast<uint32_t>(t.desc_.size());
-    t.first_child_[cur.node] = first;
-    t.child_count_[cur.node] = static_cast<uint32_t>(km.centres.size());
+    const auto first = static_cast<uint32_t>(o->desc.size());
+    o->first_child[cur.node] = first;
+    o->child_count[cur.node] = static_cast<uint32_t>(km.centres.size());
     std::vector<std::vector<uint32_t>> members(km.centres.size());
     for (size_t i = 0; i < cur.idx.size(); ++i) members[km.assignment[i]].push_back(cur.idx[i]);
     for (size_t c = 0; c < km.centres.size(); ++c) {
-      t.desc_.push_back(km.centres[c]);
-      t.first_child_.push_back(0);
-      t.child_count_.push_back(0);
+      o->desc.push_back(km.centres[c]);
+      o->first_child.push_back(0);
+      o->child_count.push_back(0);
       // A cluster of one descriptor cannot be split further: it stays a leaf above the bottom level.
       if (cur.depth + 1 < p.levels && members[c].size() > 1)
         queue.push_back({first + static_cast<uint32_t>(c), cur.depth + 1, std::move(members[c])});
@@ -63,37 +79,42 @@ VocabularyTree VocabularyTree::train(const std::vector<Descriptors>& images, con
     done_work += cur.idx.size();
     if (progress) progress(done_work, total_work);
   }
-  t.indexWords();
+  // Weights are filled in by computeIdf once the words are known; the view is re-pointed after it.
+  o->weight.assign(std::count(o->child_count.begin() + 1, o->child_count.end(), 0u), 1.0f);
+  const auto owned = o;
+  t.adopt(std::move(o));
   if (t.words() < static_cast<size_t>(p.k))
     throw PlaceError("degenerate vocabulary: only " + std::to_string(t.words()) + " distinct words from " +
                      std::to_string(data.size()) + " descriptors");
-  t.computeIdf(images);
+  owned->weight = t.computeIdf(images);
+  t.weight_ = {owned->weight.data(), owned->weight.size()};
   return t;
 }
 
 void VocabularyTree::indexWords() {
-  node_word_.assign(desc_.size(), UINT32_MAX);
+  node_word_.assign(desc_.size, UINT32_MAX);
   word_node_.clear();
-  for (uint32_t n = 1; n < desc_.size(); ++n)
+  for (uint32_t n = 1; n < desc_.size; ++n)
     if (child_count_[n] == 0) {
       node_word_[n] = static_cast<uint32_t>(word_node_.size());
       word_node_.push_back(n);
     }
 }
 
-void VocabularyTree::computeIdf(const std::vector<Descriptors>& images) {
+std::vector<float> VocabularyTree::computeIdf(const std::vector<Descriptors>& images) const {
   std::vector<uint32_t> df(words(), 0), last_seen(words(), UINT32_MAX);
   for (uint32_t im = 0; im < images.size(); ++im)
     for (const auto& d : images[im]) {
       const uint32_t w = wordOf(d);
       if (last_seen[w] != im) last_seen[w] = im, df[w]++;
     }
-  weight_.resize(words());
+  std::vector<float> weight(words());
   const double n = static_cast<double>(std::max<size_t>(1, images.size()));
   for (size_t w = 0; w < words(); ++w) {
     const bool uses_idf = weighting_ == Weighting::kTfIdf || weighting_ == Weighting::kIdf;
-    weight_[w] = uses_idf ? static_cast<float>(std::log(n / std::max<uint32_t>(1, df[w]))) : 1.0f;
+    weight[w] = uses_idf ? static_cast<float>(std::log(n / std::max<uint32_t>(1, df[w]))) : 1.0f;
   }
+  return weight;
 }
 
 VocabularyTree VocabularyTree::fromNodes(int k, int levels, Weighting w, const std::vector<InputNode>& in) {
@@ -108,30 +129,30 @@ VocabularyTree VocabularyTree::fromNodes(int k, int levels, Weighting w, const s
   t.k_ = k;
   t.levels_ = levels;
   t.weighting_ = w;
-  std::vector<float> leaf_weight;
+  auto o = std::make_shared<Owned>();
   std::vector<uint32_t> order{0};  // input index of each output node, breadth first
-  t.desc_.push_back(Desc256{});
-  t.first_child_.push_back(0);
-  t.child_count_.push_back(0);
+  o->desc.push_back(Desc256{});
+  o->first_child.push_back(0);
+  o->child_count.push_back(0);
   for (size_t pos = 0; pos < order.size(); ++pos) {
     const auto& ch = children[order[pos]];
     if (ch.size() > 0 && in[order[pos]].is_leaf && pos != 0)
       throw PlaceError("vocabulary node " + std::to_string(order[pos]) + " is marked as a word but has children");
-    t.first_child_[pos] = static_cast<uint32_t>(order.size());
-    t.child_count_[pos] = static_cast<uint32_t>(ch.size());
+    o->first_child[pos] = static_cast<uint32_t>(order.size());
+    o->child_count[pos] = static_cast<uint32_t>(ch.size());
     for (uint32_t c : ch) {
       order.push_back(c);
-      t.desc_.push_back(in[c].descriptor);
-      t.first_child_.push_back(0);
-      t.child_count_.push_back(0);
+      o->desc.push_back(in[c].descriptor);
+      o->first_child.push_back(0);
+      o->child_count.push_back(0);
     }
     if (order.size() > in.size()) throw PlaceError("vocabulary nodes form a cycle");
   }
   if (order.size() != in.size())
     throw PlaceError("vocabulary has " + std::to_string(in.size() - order.size()) + " nodes not reachable from the root");
-  t.indexWords();
-  t.weight_.resize(t.words());
-  for (size_t wd = 0; wd < t.words(); ++wd) t.weight_[wd] = in[order[t.word_node_[wd]]].weight;
+  for (uint32_t n = 1; n < o->desc.size(); ++n)
+    if (o->child_count[n] == 0) o->weight.push_back(in[order[n]].weight);
+  t.adopt(std::move(o));
   if (t.words() == 0) throw PlaceError("vocabulary has no words");
   return t;
 }
@@ -217,10 +238,10 @@ void VocabularyTree::transform(const Descriptors& d, BowVector* bow, FeatureVect
 }
 
 void VocabularyTree::write(ModelWriter& w) const {
-  w.section("TDSC", desc_);
-  w.section("TFCH", first_child_);
-  w.section("TNCH", child_count_);
-  w.section("TWGT", weight_);
+  w.raw("TDSC", sizeof(Desc256), desc_.size, desc_.data);
+  w.raw("TFCH", sizeof(uint32_t), first_child_.size, first_child_.data);
+  w.raw("TNCH", sizeof(uint32_t), child_count_.size, child_count_.data);
+  w.raw("TWGT", sizeof(float), weight_.size, weight_.data);
 }
 
 VocabularyTree VocabularyTree::read(ModelReader& r) {
@@ -228,19 +249,20 @@ VocabularyTree VocabularyTree::read(ModelReader& r) {
   t.k_ = static_cast<int>(r.header().k);
   t.levels_ = static_cast<int>(r.header().levels);
   t.weighting_ = r.header().weighting;
-  t.desc_ = r.section<Desc256>("TDSC");
-  t.first_child_ = r.section<uint32_t>("TFCH");
-  t.child_count_ = r.section<uint32_t>("TNCH");
-  t.weight_ = r.section<float>("TWGT");
-  const size_t n = t.desc_.size();
-  if (n == 0 || t.first_child_.size() != n || t.child_count_.size() != n)
+  t.desc_ = r.view<Desc256>("TDSC");
+  t.first_child_ = r.view<uint32_t>("TFCH");
+  t.child_count_ = r.view<uint32_t>("TNCH");
+  t.weight_ = r.view<float>("TWGT");
+  t.storage_ = r.storage();
+  const size_t n = t.desc_.size;
+  if (n == 0 || t.first_child_.size != n || t.child_count_.size != n)
     throw PlaceError(r.path() + ": vocabulary tree sections disagree on the node count");
   for (size_t i = 0; i < n; ++i)
     if (t.child_count_[i] && (t.first_child_[i] <= i || t.first_child_[i] + t.child_count_[i] > n))
       throw PlaceError(r.path() + ": vocabulary tree node " + std::to_string(i) + " points outside the tree");
   t.indexWords();
-  if (t.weight_.size() != t.words())
-    throw PlaceError(r.path() + ": " + std::to_string(t.weight_.size()) + " word weights for " +
+  if (t.weight_.size != t.words())
+    throw PlaceError(r.path() + ": " + std::to_string(t.weight_.size) + " word weights for " +
                      std::to_string(t.words()) + " words");
   return t;
 }

@@ -36,3 +36,14 @@ TEST(TemporalConsistency, ChainOfOneIsTheRawPrediction) {
   EXPECT_EQ(p[0].candidate, 60);
   EXPECT_DOUBLE_EQ(p[0].confidence, 0.7);
 }
+
+TEST(TemporalConsistency, PassedOnlyWhenEveryLinkPassedItsBar) {
+  // The same chain, once with a middle link that did not pass its model's bar (a best rejected keyframe).
+  for (const bool middle_passed : {true, false}) {
+    const std::vector<QueryOffers> q{{1, {{100, 1.0, true}}}, {2, {{101, 0.9, middle_passed}}}, {3, {{102, 1.1, true}}}};
+    const auto p = consistentPredictions(q, 3, 4);
+    EXPECT_EQ(p[2].candidate, 102);
+    EXPECT_DOUBLE_EQ(p[2].confidence, 0.9);
+    EXPECT_EQ(p[2].passed, middle_passed);
+  }
+}

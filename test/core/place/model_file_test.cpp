@@ -3,8 +3,11 @@
 #include <gtest/gtest.h>
 
 #include <filesystem>
+#include <cstring>
 #include <fstream>
+#include <iterator>
 
+#include "binloop/place/hbow_recognizer.h"
 #include "binloop/place/model_training.h"
 #include "binloop/place/place_recognizer.h"
 #include "place_test_data.h"
@@ -86,4 +89,65 @@ TEST(ModelFile, EmptyDescriptorSetAndDuplicateKeyframeAreRefused) {
   EXPECT_THROW_WITH(rec->add(7, randomPlace(3, 1, 50)), PlaceError, "keyframe 7 was added before");
   EXPECT_EQ(rec->query(8, {}).status, QueryStatus::kUnknownKeyframe);
   EXPECT_EQ(rec->query(7, {}).status, QueryStatus::kEmptyDatabase);
+}
+
+namespace {
+
+// Rewrites a version-2 model file as version 1 wrote it: no padding before sections, the one-word hash.
+void rewriteAsVersion1(const std::string& v2, const std::string& v1) {
+  std::ifstream in(v2, std::ios::binary);
+  std::vector<uint8_t> f((std::istreambuf_iterator<char>(in)), std::istreambuf_iterator<char>());
+  std::vector<uint8_t> payload;
+  for (size_t pos = 128; pos < f.size();) {
+    uint32_t es;
+    uint64_t count;
+    std::memcpy(&es, &f[pos + 4], 4);
+    std::memcpy(&count, &f[pos + 8], 8);
+    const size_t data = (pos + 16 + 63) / 64 * 64;
+    payload.insert(payload.end(), f.begin() + static_cast<long>(pos), f.begin() + static_cast<long>(pos + 16));
+    payload.insert(payload.end(), f.begin() + static_cast<long>(data), f.begin() + static_cast<long>(data + es * count));
+    pos = data + es * count;
+  }
+  std::vector<uint8_t> out(f.begin(), f.begin() + 128);
+  const uint32_t version = 1;
+  const uint64_t size = payload.size(), checksum = hashBytes(payload.data(), payload.size());
+  std::memcpy(&out[8], &version, 4);
+  std::memcpy(&out[72], &size, 8);  // after magic, 6 uint32 and 5 uint64 header fields
+  std::memcpy(&out[80], &checksum, 8);
+  out.insert(out.end(), payload.begin(), payload.end());
+  std::ofstream(v1, std::ios::binary).write(reinterpret_cast<const char*>(out.data()), static_cast<long>(out.size()));
+}
+
+}  // namespace
+
+TEST(ModelFile, SectionsAreAlignedForUseInPlace) {
+  TempDir dir;
+  ModelReader r(trainSmallHbow(dir));
+  const auto desc = r.view<Desc256>("TDSC");
+  const auto first_child = r.view<uint32_t>("TFCH");
+  EXPECT_EQ(reinterpret_cast<uintptr_t>(desc.data) % 64, 0u);
+  EXPECT_EQ(reinterpret_cast<uintptr_t>(first_child.data) % 64, 0u);
+  EXPECT_EQ(desc.size, first_child.size);
+  EXPECT_GT(desc.size, 4u);
+}
+
+TEST(ModelFile, ReadsVersion1Files) {
+  TempDir dir;
+  const std::string v2 = trainSmallHbow(dir), v1 = dir / "v1.bin";
+  rewriteAsVersion1(v2, v1);
+  EXPECT_LT(std::filesystem::file_size(v1), std::filesystem::file_size(v2));  // no padding
+  const auto a = HbowRecognizer::loadVocabulary(v2), b = HbowRecognizer::loadVocabulary(v1);
+  EXPECT_EQ(a->words(), b->words());
+  BowVector va, vb;
+  const Descriptors d = randomPlace(3, 11, 200);
+  a->transform(d, &va);
+  b->transform(d, &vb);
+  ASSERT_EQ(va.size(), vb.size());
+  for (size_t i = 0; i < va.size(); ++i) EXPECT_EQ(va[i].word, vb[i].word);
+  // A version-1 file is checked with its own hash: one flipped byte is still found.
+  std::fstream s(v1, std::ios::in | std::ios::out | std::ios::binary);
+  s.seekp(200);
+  s.put('\x33');
+  s.close();
+  EXPECT_THROW_WITH(HbowRecognizer::loadVocabulary(v1), PlaceError, "payload checksum differs");
 }

@@ -2,6 +2,8 @@
 // Each revisit must return its original place as the best candidate.
 #include <gtest/gtest.h>
 
+#include <filesystem>
+
 #include "binloop/place/fabmap_recognizer.h"
 #include "binloop/place/hbow_recognizer.h"
 #include "binloop/place/model_training.h"
@@ -16,22 +18,25 @@ namespace {
 
 class Recognizers : public ::testing::TestWithParam<std::string> {
  protected:
-  static void SetUpTestSuite() {
-    dir_ = new TempDir;
+  static void SetUpTestSuite() { dir_ = new TempDir; }
+  static void TearDownTestSuite() { delete dir_; }
+  /// The model file of `m`, trained on first use: each test process (ctest runs one test per process)
+  /// trains only the model it needs.
+  static std::string modelFile(const std::string& m) {
+    const std::string f = *dir_ / (m + ".bin");
+    if (std::filesystem::exists(f)) return f;
     std::vector<Descriptors> training;
     for (int p = 0; p < 60; ++p) training.push_back(randomPlace(100, p, 300));
     // The journey's places are drawn from the training distribution but not the training images.
     TrainOptions o;
     o.words = 400;
     o.fabmap_samples = 30;
-    for (const auto& m : placeModelNames()) {
-      TrainOptions om = o;
-      if (m == "hbow") om.k = 8, om.levels = 3;
-      if (m == "vladpq") om.pq_codes = 8;
-      trainModel(modelTypeFromName(m), training, om, *dir_ / (m + ".bin"));
-    }
+    if (m == "hbow") o.k = 8, o.levels = 3;
+    if (m == "vladpq") o.pq_codes = 8;
+    trainModel(modelTypeFromName(m), training, o, f);
+    return f;
   }
-  static void TearDownTestSuite() { delete dir_; }
+  std::unique_ptr<PlaceRecognizer> make() const { return makePlaceRecognizer(GetParam(), {modelFile(GetParam())}); }
   static TempDir* dir_;
 };
 TempDir* Recognizers::dir_ = nullptr;
@@ -39,7 +44,7 @@ TempDir* Recognizers::dir_ = nullptr;
 }  // namespace
 
 TEST_P(Recognizers, FindEachRevisitAtTheRightKeyframe) {
-  auto rec = makePlaceRecognizer(GetParam(), {*dir_ / (GetParam() + ".bin")});
+  auto rec = make();
   KeyframeId id = 0;
   for (int p = 0; p < 24; ++p) {
     // Each place is seen twice in a row (two keyframes), as a moving camera would.
@@ -66,7 +71,7 @@ TEST_P(Recognizers, FindEachRevisitAtTheRightKeyframe) {
 
 TEST_P(Recognizers, ReferenceSetsTheBar) {
   // A query whose reference is its own twin: nothing else can beat that bar.
-  auto rec = makePlaceRecognizer(GetParam(), {*dir_ / (GetParam() + ".bin")});
+  auto rec = make();
   for (int p = 0; p < 6; ++p) rec->add(p, randomPlace(7, p));
   rec->add(100, revisit(randomPlace(7, 5), 9, 1, 0.99));
   const QueryResult r = rec->query(100, {{5}, {}});
@@ -76,12 +81,49 @@ TEST_P(Recognizers, ReferenceSetsTheBar) {
 }
 
 TEST_P(Recognizers, RebuildsAnotherModelFromKeptDescriptors) {
-  auto rec = makePlaceRecognizer(GetParam(), {*dir_ / (GetParam() + ".bin")});
+  auto rec = make();
   for (int p = 0; p < 4; ++p) rec->add(p, randomPlace(7, p));
-  auto other = makePlaceRecognizer("hbow", {*dir_ / "hbow.bin"});
+  auto other = makePlaceRecognizer("hbow", {modelFile("hbow")});
   rec->rebuildInto(*other);
   EXPECT_EQ(other->size(), 4u);
   EXPECT_EQ(other->keyframes(), rec->keyframes());
+}
+
+// Confidence must rank loops across queries. A strong true loop whose own neighbours look much like it (a
+// high bar) has to outrank a weak chance match of a query whose neighbours share nothing with it (a tiny
+// bar): dividing by the bar alone ranked the weak match first (README, "Ranking loops").
+TEST_P(Recognizers, StrongTrueLoopOutranksWeakMatchWithTinyReference) {
+  auto rec = make();
+  KeyframeId id = 0;
+  for (int p = 0; p < 12; ++p) {
+    rec->add(id++, revisit(randomPlace(7, p), 1000 + p, 2, 0.95));
+    rec->add(id++, revisit(randomPlace(7, p), 2000 + p, 2, 0.95));
+  }
+  // A: back at place 4 (60 % of its descriptors) beside new structure (40 %) that its neighbour also sees.
+  const Descriptors place4 = revisit(randomPlace(7, 4), 31, 4, 0.6), fresh = randomPlace(7, 20, 200);
+  Descriptors a = place4;
+  a.insert(a.end(), fresh.begin(), fresh.end());
+  const KeyframeId ref_a = id++, query_a = id++;
+  rec->add(ref_a, revisit(fresh, 32, 4, 0.8));
+  rec->add(query_a, a);
+  // B: a new place (90 %) that shares a few descriptors (10 %) with place 9; its neighbour shares nothing.
+  Descriptors b = revisit(randomPlace(7, 9), 33, 4, 0.1);
+  const Descriptors other = randomPlace(7, 30, 270);
+  b.insert(b.end(), other.begin(), other.end());
+  const KeyframeId ref_b = id++, query_b = id++;
+  rec->add(ref_b, randomPlace(7, 40));
+  rec->add(query_b, b);
+
+  const QueryResult ra = rec->query(query_a, {{ref_a}, {}}), rb = rec->query(query_b, {{ref_b}, {}});
+  const Candidate* top_a = ra.best();
+  const Candidate* top_b = rb.best();
+  ASSERT_NE(top_a, nullptr) << GetParam() << ": " << ra.detail;
+  EXPECT_TRUE(top_a->id == 8 || top_a->id == 9) << GetParam() << ": A matched keyframe " << top_a->id;
+  if (top_b) {
+    EXPECT_GT(top_a->confidence, top_b->confidence)
+        << GetParam() << ": true loop " << top_a->id << " (" << ra.detail << ") vs weak match " << top_b->id << " ("
+        << rb.detail << ")";
+  }
 }
 
 INSTANTIATE_TEST_SUITE_P(AllModels, Recognizers, ::testing::Values("hbow", "fabmap", "vlad", "hmvlad", "vladpq"),
