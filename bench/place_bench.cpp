@@ -169,7 +169,7 @@ void vocabularyBench() {
   }
 }
 
-void queryBench() {
+void queryBench(const std::string& only_model) {
   const int runs = kRuns;
   const std::string vocab_dir = fs::exists("vocab/kitti08") ? "vocab/kitti08" : "";
   if (vocab_dir.empty()) {
@@ -181,6 +181,7 @@ void queryBench() {
   std::printf("\n| model (vocab/kitti08) | query vs %d keyframes, median ms | p95 ms | signature ms | index bytes/keyframe | goal ms |\n|---|---|---|---|---|---|\n", n);
   const std::map<std::string, double> goal{{"hbow", 1}, {"fabmap", 10}, {"vlad", 0.1}, {"hmvlad", 0.1}, {"vladpq", 0.1}};
   for (const auto& name : placeModelNames()) {
+    if (!only_model.empty() && name != only_model) continue;
     const std::string model_file = vocab_dir + "/" + name + ".bin";
     if (!fs::exists(model_file)) {
       std::printf("| %s | (no %s: make it with vocab/make_vocab.sh) | | | | |\n", name.c_str(), model_file.c_str());
@@ -191,17 +192,23 @@ void queryBench() {
     std::vector<double> sig;
     for (int i = 0; i < n; ++i) sig.push_back(rec->add(i, kfs[i]));
     std::vector<double> per_run, all;
+    std::map<std::string, std::vector<double>> steps;
     for (int r = 0; r < runs; ++r) {
       std::vector<double> q;
       for (int i = 0; i < 20; ++i) {
         const KeyframeId id = static_cast<KeyframeId>(n - 1 - (r * 20 + i) * 7);
         QueryScope scope;
         scope.reference = {id - 1, id - 2, id - 3};
-        q.push_back(rec->query(id, scope).total_ms);
+        const QueryResult res = rec->query(id, scope);
+        q.push_back(res.total_ms);
+        for (const auto& st : res.timings) steps[st.step].push_back(st.ms);
       }
       per_run.push_back(median(q));
       all.insert(all.end(), q.begin(), q.end());
     }
+    std::string breakdown;
+    for (const auto& [step, ms] : steps) breakdown += " " + step + " " + std::to_string(median(ms)).substr(0, 6);
+    std::fprintf(stderr, "%s steps (median ms):%s\n", name.c_str(), breakdown.c_str());
     std::sort(all.begin(), all.end());
     const double p95 = all[static_cast<size_t>(0.95 * (all.size() - 1))];
     g_results[name + "_query_1500x2000_ms_median"] = median(per_run);
@@ -213,12 +220,12 @@ void queryBench() {
 
 }  // namespace
 
-// bench_place_bench [vocab|query]: one part, or both.
+// bench_place_bench [vocab|query [model]]: one part (the query part for one model), or both.
 int main(int argc, char** argv) {
   cv::setNumThreads(1);
   const std::string only = argc > 1 ? argv[1] : "";
   if (only.empty() || only == "vocab") vocabularyBench();
-  if (only.empty() || only == "query") queryBench();
+  if (only.empty() || only == "query") queryBench(argc > 2 ? argv[2] : "");
   const char* json = std::getenv("BINLOOP_BENCH_JSON");
   writeJson(json ? json : ".build/bench/place.json");
   return 0;

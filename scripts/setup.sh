@@ -15,6 +15,8 @@ PACKAGES=(
   libopencv-dev libeigen3-dev libceres-dev libgtest-dev libgmock-dev libbenchmark-dev
   # real photographs used as texture banks and vocabulary training data
   opencv-doc python3-skimage plasma-workspace-wallpapers
+  # real photographs of the held-out loop set (data/loop_sets/real_heldout.txt)
+  mate-backgrounds ukui-wallpapers visp-images-data
 )
 
 SUDO=""

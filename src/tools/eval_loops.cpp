@@ -63,6 +63,8 @@ int main(int argc, char** argv) {
       .option("segment-gap", "frames between ground-truth queries that start a new revisit segment", "50")
       .option("fabmap-l2-offset", "offset added to the closest reference's L2 distance in fabmap's pre-filter", "0.05")
       .option("hbow-min-bar", "hbow's bar never goes below this L1 score", "0.005")
+      .option("rank-floor", "ranking: an L1-score bar (hbow) counts as at least this", "0.02")
+      .option("rank-cap", "ranking: a distance bar (vlad, hmvlad, vladpq) counts as at most this fraction of the bits", "0.35")
       .option("dump-ranked", "also write ranked_<model>.csv: each query's bar and its N best keyframes by raw score", "0");
   declareExtractOptions(args);
   return runTool("eval-loops", [&] {
@@ -141,10 +143,11 @@ int main(int argc, char** argv) {
       run.segments_found = 0;
       run.missed_segments.clear();
       const double t = run.metrics.threshold_100p;
-      run.same_found = foundAt(run.predictions, truth, same_dir, t);
-      run.reverse_found = foundAt(run.predictions, truth, reverse_dir, t);
+      const int tier = run.metrics.tier_100p;
+      run.same_found = foundAt(run.predictions, truth, same_dir, t, tier);
+      run.reverse_found = foundAt(run.predictions, truth, reverse_dir, t, tier);
       for (const auto& seg : segments) {
-        if (foundAt(run.predictions, truth, seg, t) > 0) {
+        if (foundAt(run.predictions, truth, seg, t, tier) > 0) {
           run.segments_found++;
         } else {
           run.missed_segments += (run.missed_segments.empty() ? "" : " ") + std::to_string(*seg.begin()) + "-" +
@@ -152,14 +155,17 @@ int main(int argc, char** argv) {
         }
       }
       std::ofstream pr(fs::path(args.str("out")) / ("pr_" + run.name + ".csv"));
-      pr << "threshold,precision,recall\n";
-      for (const auto& pt : run.metrics.curve) pr << pt.threshold << "," << pt.precision << "," << pt.recall << "\n";
+      pr << "tier,threshold,precision,recall\n";
+      for (const auto& pt : run.metrics.curve)
+        pr << pt.tier << "," << pt.threshold << "," << pt.precision << "," << pt.recall << "\n";
     };
     for (const auto& name : models) {
       RecognizerOptions ro;
       ro.model_file = (fs::path(args.str("vocab-dir")) / (name + ".bin")).string();
       ro.fabmap_l2_offset = args.number("fabmap-l2-offset");
       ro.hbow_min_bar = args.number("hbow-min-bar");
+      ro.ranking.score_floor = args.number("rank-floor");
+      ro.ranking.distance_cap = args.number("rank-cap");
       auto rec = makePlaceRecognizer(name, ro);
       rec->setKeepDescriptors(false);
       ModelRun run;

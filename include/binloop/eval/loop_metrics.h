@@ -13,10 +13,15 @@ struct LoopPrediction {
   int candidate = -1;  // frame index; -1: no candidate at all
   double confidence = 0;
   bool passed = false;  // the candidate beat the model's own bar (a candidate, not the best rejected)
+  /// Predictions of a higher tier rank above every prediction of a lower one, whatever their confidence:
+  /// behind the consistency check, chains of candidates (tier 1) come before chains that pass through a
+  /// keyframe that failed its bar (tier 0), as ORB-SLAM2 only chains candidates.
+  int tier = 0;
 };
 
 struct PrPoint {
   double threshold, precision, recall;
+  int tier = 0;
 };
 
 struct LoopMetrics {
@@ -24,6 +29,7 @@ struct LoopMetrics {
   int positives = 0;           // queries with a ground-truth loop that can be found
   double r_at_100p = 0;
   double threshold_100p = 0;   // lowest confidence at which precision is still 1 (inf when none)
+  int tier_100p = 0;           // ... within this tier
   double auc = 0;              // area under the PR curve (precision summed over recall steps)
   double precision_at_bar = 0, recall_at_bar = 0;  // of the predictions that passed the model's own bar
 };
@@ -33,8 +39,8 @@ struct LoopMetrics {
 LoopMetrics evaluateLoops(const std::vector<LoopPrediction>& predictions, const std::set<std::pair<int, int>>& truth,
                           const std::set<int>& positive_queries);
 
-/// Of `queries`, how many have a correct prediction with confidence >= threshold.
+/// Of `queries`, how many have a correct prediction at or above (tier, threshold).
 int foundAt(const std::vector<LoopPrediction>& predictions, const std::set<std::pair<int, int>>& truth,
-            const std::set<int>& queries, double threshold);
+            const std::set<int>& queries, double threshold, int tier = 0);
 
 }  // namespace binloop

@@ -27,8 +27,9 @@ struct QueryOffers {
 /// `queries` are consecutive keyframes in order. A chain has `chain` links (ORB-SLAM2: 3); two candidates
 /// are consistent when their frames are at most `max_gap` apart (groups of ±2 keyframes overlap when the
 /// candidates are 4 keyframes apart). Returns one prediction per query: the end of its strongest chain, with
-/// the chain's weakest confidence, or no candidate when no chain reaches that long. A prediction has
-/// `passed` set when a chain of the same strength exists among offers that all passed their bar.
+/// the chain's weakest confidence, or no candidate when no chain reaches that long. When a chain exists
+/// among offers that all passed their bar, the strongest such chain is the prediction instead, with
+/// `passed` set and tier 1 (it ranks above every chain through a rejected keyframe).
 std::vector<LoopPrediction> consistentPredictions(const std::vector<QueryOffers>& queries, int chain, int max_gap);
 
 }  // namespace binloop

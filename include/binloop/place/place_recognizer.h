@@ -13,6 +13,7 @@
 #include <vector>
 
 #include "binloop/place/binary_descriptor.h"
+#include "binloop/place/ranking.h"
 
 namespace binloop {
 
@@ -39,7 +40,9 @@ std::string statusName(QueryStatus s);
 struct Candidate {
   KeyframeId id = 0;
   double score = 0;       // the model's own score (similarity, negative distance, or probability)
-  double confidence = 0;  // comparable across queries; >= 1 means it beat the reference bar
+  /// Comparable across queries, higher = likelier a true loop (place/ranking.h). Whether the keyframe
+  /// beat the query's own bar is said by where it is: in `candidates` (beat it) or `best_rejected`.
+  double confidence = 0;
 };
 
 struct StepTime {
@@ -52,8 +55,8 @@ struct QueryResult {
   std::string detail;                 // one line for logs: the numbers behind the status
   std::vector<Candidate> candidates;  // best first
   double threshold = 0;               // the bar, in the model's score units
-  /// The best keyframe that did not pass the bar (confidence < 1), when there was one; an evaluation
-  /// sweeps thresholds below the bar with it.
+  /// The best keyframe that did not pass the bar or the pre-filter, when there was one; an evaluation
+  /// ranks it with the candidates of other queries.
   bool has_best_rejected = false;
   Candidate best_rejected;
   std::vector<StepTime> timings;
@@ -87,6 +90,8 @@ class PlaceRecognizer {
   using GroupFn = std::function<std::vector<KeyframeId>(KeyframeId)>;
   void setGroupFunction(GroupFn f) { group_fn_ = std::move(f); }
   void setKeepDescriptors(bool keep) { keep_descriptors_ = keep; }
+  void setRanking(const RankingParams& r) { ranking_ = r; }
+  const RankingParams& ranking() const { return ranking_; }
 
  protected:
   /// A keyframe's position in add order. Models keep signatures in vectors indexed by slot, so a query
@@ -125,12 +130,14 @@ class PlaceRecognizer {
   std::unordered_map<KeyframeId, Descriptors> descriptors_;
   GroupFn group_fn_;
   bool keep_descriptors_ = true;
+  RankingParams ranking_;
 };
 
 struct RecognizerOptions {
   std::string model_file;   // the trained model (vocabulary) of this model type
   double fabmap_l2_offset = 0.05;  // see FabmapRecognizer
   double hbow_min_bar = 0.005;     // see HbowRecognizer
+  RankingParams ranking;
 };
 
 /// `name` is one of hbow, fabmap, vlad, hmvlad, vladpq; throws PlaceError for another name, or when the

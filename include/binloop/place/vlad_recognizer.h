@@ -12,8 +12,6 @@ namespace binloop {
 /// Smallest Hamming distance from `q` to the signatures (per slot) of the reference slots, or -1.
 int closestReference(const BinarySignature& q, const std::vector<uint32_t>& ref_slots,
                      const std::vector<BinarySignature>& sigs);
-/// Confidence of a distance against a bar: bar / distance (>= 1 when it beats the bar).
-inline double distanceConfidence(double bar, double dist) { return (bar + 1.0) / (dist + 1.0); }
 
 class VladRecognizer : public PlaceRecognizer {
  public:

@@ -50,7 +50,7 @@ std::vector<LoopPrediction> consistentPredictions(const std::vector<QueryOffers>
   std::vector<LoopPrediction> all = strongestChains(queries, chain, max_gap, false);
   const std::vector<LoopPrediction> passed = strongestChains(queries, chain, max_gap, true);
   for (size_t i = 0; i < all.size(); ++i)
-    all[i].passed = passed[i].candidate == all[i].candidate && passed[i].confidence == all[i].confidence;
+    if (passed[i].candidate >= 0) all[i] = passed[i], all[i].passed = true, all[i].tier = 1;
   return all;
 }
 

@@ -164,22 +164,16 @@ QueryResult FabmapRecognizer::querySignature(const SlotScope& scope) const {
     return r;
   }
   std::vector<Slot> pre;
-  int nearest = -1;  // the keyframe nearest in L2, kept when none is within the gate
-  for (Slot k : touched) {
-    if (scope.excluded[k]) continue;
-    if (l2(k) < min_l2 + m_.params.l2_offset) pre.push_back(k);
-    if (nearest < 0 || l2(k) < l2(nearest)) nearest = static_cast<int>(k);
-  }
+  for (Slot k : touched)
+    if (!scope.excluded[k] && l2(k) < min_l2 + m_.params.l2_offset) pre.push_back(k);
   r.timings.push_back({"l2_prefilter", msSince(t)});
-  // With none within the gate, the nearest keyframe is still scored, as the best rejected: a query always
-  // names the model's best keyframe, so that evaluations can rank it.
-  const bool gated_out = pre.empty();
-  if (gated_out && nearest < 0) {
+  // Unlike the other models, nothing stands as the best rejected here: a place outside the L2 gate has no
+  // posterior (it was never in the location prior), and ranking one anyway brought false loops to the top.
+  if (pre.empty()) {
     r.status = QueryStatus::kNoPreCandidates;
-    r.detail = "no keyframe outside the scope shares a word with the query";
+    r.detail = "no keyframe within L2 " + std::to_string(min_l2) + " + " + std::to_string(m_.params.l2_offset);
     return r;
   }
-  if (gated_out) pre.push_back(static_cast<Slot>(nearest));
 
   t = std::chrono::steady_clock::now();
   const QueryTables tab = tables(q);
@@ -211,7 +205,7 @@ QueryResult FabmapRecognizer::querySignature(const SlotScope& scope) const {
   for (size_t j = 0; j < pre.size(); ++j) {
     const double p = post[refs.size() + j];
     const Candidate c{idAt(pre[j]), p, p / std::max(bar, 1e-300)};
-    offer(r, c, !gated_out && p > bar);
+    offer(r, c, p > bar);
     if (scope.max_ranked) all.push_back(c);
   }
   sortCandidates(r);
@@ -222,11 +216,6 @@ QueryResult FabmapRecognizer::querySignature(const SlotScope& scope) const {
          << ", new place " << post[places] << "; " << r.candidates.size() << " beat it";
   r.detail = detail.str();
   r.status = r.candidates.empty() ? QueryStatus::kBelowReference : QueryStatus::kFound;
-  if (gated_out) {
-    r.status = QueryStatus::kNoPreCandidates;
-    r.detail = "no keyframe within L2 " + std::to_string(min_l2) + " + " + std::to_string(m_.params.l2_offset) +
-               "; the nearest is at " + std::to_string(l2(pre.front()));
-  }
   return r;
 }
 

@@ -81,7 +81,7 @@ QueryResult HbowRecognizer::querySignature(const SlotScope& scope) const {
   if (scope.max_ranked > 0) {
     std::vector<Candidate> all;
     for (Slot k : touched)
-      if (!scope.excluded[k]) all.push_back({idAt(k), score[k], score[k] / min_score});
+      if (!scope.excluded[k]) all.push_back({idAt(k), score[k], scoreConfidence(score[k], min_score, ranking().score_floor)});
     keepRanked(r, std::move(all), scope.max_ranked);
   }
   if (sharing == 0) {
@@ -96,7 +96,7 @@ QueryResult HbowRecognizer::querySignature(const SlotScope& scope) const {
     if (common[k] > min_common && score[k] >= min_score) {
       scored.push_back(k);
     } else {
-      offer(r, {idAt(k), score[k], score[k] / min_score}, false);
+      offer(r, {idAt(k), score[k], scoreConfidence(score[k], min_score, ranking().score_floor)}, false);
     }
   }
   // Only keyframes that reached the bar take part in group accumulation (-1: did not).
@@ -139,7 +139,7 @@ QueryResult HbowRecognizer::querySignature(const SlotScope& scope) const {
     if (g.acc < retain) break;
     if (std::find(seen.begin(), seen.end(), g.best_slot) != seen.end()) continue;
     seen.push_back(g.best_slot);
-    r.candidates.push_back({idAt(g.best_slot), g.acc, g.best / std::max(min_score, 1e-9)});
+    r.candidates.push_back({idAt(g.best_slot), g.acc, scoreConfidence(g.best, min_score, ranking().score_floor)});
   }
   r.timings.push_back({"group", msSince(t)});
   r.status = QueryStatus::kFound;

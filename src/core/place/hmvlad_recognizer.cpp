@@ -32,6 +32,7 @@ QueryResult HmvladRecognizer::querySignature(const SlotScope& scope) const {
   const size_t refs = scope.reference.size();
   const int bar_short = closestReference(qs, scope.reference, short_);
   const int bar_long = closestReference(ql, scope.reference, long_);
+  const double cap = ranking().distance_cap * static_cast<double>(ql.size() * 64);
   r.threshold = bar_long;
   r.timings.push_back({"reference", msSince(t)});
   if (!refs) {
@@ -53,14 +54,14 @@ QueryResult HmvladRecognizer::querySignature(const SlotScope& scope) const {
   t = std::chrono::steady_clock::now();
   for (Slot k : pre) {
     const int d = hammingBits(ql, long_[k]);
-    const Candidate c{idAt(k), -static_cast<double>(d), distanceConfidence(bar_long, d)};
+    const Candidate c{idAt(k), -static_cast<double>(d), distanceConfidence(bar_long, d, cap)};
     offer(r, c, d < bar_long);
   }
   if (closest_short >= 0 && closest_short_d >= bar_short) {
     // Nothing passed the short signature, or this one did not: it still stands as the best rejected, so
     // that a query always names the model's nearest keyframe.
     const int d = hammingBits(ql, long_[closest_short]);
-    offer(r, {idAt(closest_short), -static_cast<double>(d), distanceConfidence(bar_long, d)}, false);
+    offer(r, {idAt(closest_short), -static_cast<double>(d), distanceConfidence(bar_long, d, cap)}, false);
   }
   sortCandidates(r);
   if (scope.max_ranked) {
@@ -68,7 +69,7 @@ QueryResult HmvladRecognizer::querySignature(const SlotScope& scope) const {
     for (Slot k = 0; k < long_.size(); ++k) {
       if (scope.excluded[k]) continue;
       const int d = hammingBits(ql, long_[k]);
-      all.push_back({idAt(k), -static_cast<double>(d), distanceConfidence(bar_long, d)});
+      all.push_back({idAt(k), -static_cast<double>(d), distanceConfidence(bar_long, d, cap)});
     }
     keepRanked(r, std::move(all), scope.max_ranked);
   }

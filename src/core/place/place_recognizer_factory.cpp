@@ -13,9 +13,9 @@ const std::vector<std::string>& placeModelNames() {
   return names;
 }
 
-std::unique_ptr<PlaceRecognizer> makePlaceRecognizer(const std::string& name, const RecognizerOptions& o) {
-  const ModelType type = modelTypeFromName(name);  // throws on an unknown name
-  if (o.model_file.empty()) throw PlaceError(name + ": no model file given");
+namespace {
+
+std::unique_ptr<PlaceRecognizer> make(ModelType type, const RecognizerOptions& o) {
   switch (type) {
     case ModelType::kHbow: return std::make_unique<HbowRecognizer>(HbowRecognizer::loadVocabulary(o.model_file), o.hbow_min_bar);
     case ModelType::kVlad: return std::make_unique<VladRecognizer>(VladRecognizer::loadVocabulary(o.model_file, type));
@@ -27,7 +27,18 @@ std::unique_ptr<PlaceRecognizer> makePlaceRecognizer(const std::string& name, co
       return std::make_unique<FabmapRecognizer>(std::move(m));
     }
   }
-  throw PlaceError("unknown model '" + name + "'");
+  return nullptr;
+}
+
+}  // namespace
+
+std::unique_ptr<PlaceRecognizer> makePlaceRecognizer(const std::string& name, const RecognizerOptions& o) {
+  const ModelType type = modelTypeFromName(name);  // throws on an unknown name
+  if (o.model_file.empty()) throw PlaceError(name + ": no model file given");
+  auto rec = make(type, o);
+  if (!rec) throw PlaceError("unknown model '" + name + "'");
+  rec->setRanking(o.ranking);
+  return rec;
 }
 
 }  // namespace binloop

@@ -43,6 +43,7 @@ QueryResult VladRecognizer::querySignature(const SlotScope& scope) const {
   auto t = std::chrono::steady_clock::now();
   const size_t refs = scope.reference.size();
   const int bar = closestReference(q, scope.reference, sigs_);
+  const double cap = ranking().distance_cap * static_cast<double>(q.size() * 64);
   r.threshold = bar;
   r.timings.push_back({"reference", msSince(t)});
   t = std::chrono::steady_clock::now();
@@ -50,7 +51,7 @@ QueryResult VladRecognizer::querySignature(const SlotScope& scope) const {
   for (Slot k = 0; k < sigs_.size(); ++k) {
     if (scope.excluded[k]) continue;
     const int d = hammingBits(q, sigs_[k]);
-    const Candidate c{idAt(k), -static_cast<double>(d), distanceConfidence(refs ? bar : 0, d)};
+    const Candidate c{idAt(k), -static_cast<double>(d), distanceConfidence(refs ? bar : 0, d, cap)};
     offer(r, c, refs && d < bar);
     if (scope.max_ranked) all.push_back(c);
   }

@@ -79,6 +79,9 @@ QueryResult VladPqRecognizer::querySignature(const SlotScope& scope) const {
     return r;
   }
   r.threshold = bar;
+  // The cap is in the verification distance's units: bits for Hamming; SDC/ADC distances are not capped.
+  const double cap = verify_ == PqVerify::kHamming ? ranking().distance_cap * static_cast<double>(sigs_[id].size() * 64)
+                                                   : std::numeric_limits<double>::max();
   t = std::chrono::steady_clock::now();
   size_t pre = 0;
   std::vector<Candidate> all;
@@ -91,14 +94,14 @@ QueryResult VladPqRecognizer::querySignature(const SlotScope& scope) const {
     }
     ++pre;
     const double d = distance(id, k);
-    const Candidate c{idAt(k), -d, distanceConfidence(bar, d)};
+    const Candidate c{idAt(k), -d, distanceConfidence(bar, d, cap)};
     offer(r, c, d < bar);
     if (scope.max_ranked) all.push_back(c);
   }
   if (most_shared >= 0 && !r.has_best_rejected && r.candidates.empty()) {
     // Nothing passed the pre-filter: the keyframe closest to passing stands as the best rejected.
     const double d = distance(id, most_shared);
-    offer(r, {idAt(most_shared), -d, distanceConfidence(bar, d)}, false);
+    offer(r, {idAt(most_shared), -d, distanceConfidence(bar, d, cap)}, false);
   }
   sortCandidates(r);
   if (scope.max_ranked) keepRanked(r, std::move(all), scope.max_ranked);

@@ -26,3 +26,13 @@ TEST(LoopMetrics, TiesEnterTogether) {
   const LoopMetrics m = evaluateLoops(p, {{10, 0}, {11, 1}}, {10, 11});
   EXPECT_DOUBLE_EQ(m.r_at_100p, 0.0);
 }
+
+TEST(LoopMetrics, HigherTierRanksFirst) {
+  // A false prediction of tier 0 with a high confidence ranks below a true one of tier 1.
+  std::vector<LoopPrediction> p{{10, 0, 0.2}, {11, 7, 5.0}};
+  p[0].tier = 1;
+  const LoopMetrics m = evaluateLoops(p, {{10, 0}, {11, 1}}, {10, 11});
+  EXPECT_DOUBLE_EQ(m.r_at_100p, 0.5);
+  EXPECT_EQ(m.tier_100p, 1);
+  EXPECT_EQ(foundAt(p, {{10, 0}, {11, 1}}, {10}, m.threshold_100p, m.tier_100p), 1);
+}

@@ -45,5 +45,18 @@ TEST(TemporalConsistency, PassedOnlyWhenEveryLinkPassedItsBar) {
     EXPECT_EQ(p[2].candidate, 102);
     EXPECT_DOUBLE_EQ(p[2].confidence, 0.9);
     EXPECT_EQ(p[2].passed, middle_passed);
+    EXPECT_EQ(p[2].tier, middle_passed ? 1 : 0);
   }
+}
+
+TEST(TemporalConsistency, ChainsOfCandidatesComeFirst) {
+  // A strong chain through a rejected keyframe (200..202) and a weaker chain of candidates (500..502) end at
+  // the same query: the candidates' chain is the prediction, as ORB-SLAM2 only chains candidates.
+  const std::vector<QueryOffers> q{{1, {{200, 3.0, true}, {500, 1.1, true}}},
+                                   {2, {{201, 2.5, false}, {501, 1.2, true}}},
+                                   {3, {{202, 3.0, true}, {502, 1.3, true}}}};
+  const auto p = consistentPredictions(q, 3, 4);
+  EXPECT_EQ(p[2].candidate, 502);
+  EXPECT_DOUBLE_EQ(p[2].confidence, 1.1);
+  EXPECT_EQ(p[2].tier, 1);
 }

@@ -1,0 +1,69 @@
+#pragma once
+// binloop's own ORB extractor, built the way ORB-SLAM2's is: a scale pyramid; FAST in ~30-pixel cells with
+// a lower threshold where a cell finds nothing; a quadtree that keeps the strongest corner of each node so
+// that every level's budget is spread over the whole image; intensity-centroid orientation; 256-bit
+// rotated BRIEF on the blurred level. Tracking and stereo matching need features from everywhere in the
+// image (a corner per region, not the hundred best of the busiest texture), and they need the pyramid
+// itself for sub-pixel stereo, so the pyramid is a value the caller can keep.
+//
+// The BRIEF test pattern is binloop's own, not ORB's learned one: 256 pairs of points drawn from an
+// isotropic Gaussian (sigma = 31/5 px, BRIEF's "G II" layout) by HashRng with a fixed seed, each point kept
+// inside the radius-15 orientation disc so a rotated point never leaves the keypoint's border. Descriptors
+// are therefore NOT comparable with ORB-SLAM2's or OpenCV's: vocabularies must be trained on this extractor.
+#include <opencv2/core/mat.hpp>
+#include <vector>
+
+#include "binloop/features/orb_extractor.h"
+
+namespace binloop {
+
+struct OrbSlamParams {
+  int features = 2000;        // budget over all levels (the result may exceed it by a few, as ORB-SLAM2's)
+  float scale_factor = 1.2f;  // between consecutive pyramid levels
+  int levels = 8;
+  int ini_fast = 20;  // FAST threshold tried first in every cell
+  int min_fast = 7;   // tried in a cell only when ini_fast found nothing there (low-contrast regions)
+  int cell_px = 30;   // FAST cell side, level pixels
+
+  bool operator==(const OrbSlamParams& o) const;
+  bool operator!=(const OrbSlamParams& o) const { return !(*this == o); }
+};
+
+/// Level 0 is the image itself (its header shares the caller's pixels); level i is level i-1 resized
+/// (bilinear) to round(size / scale_factor^i).
+struct ImagePyramid {
+  std::vector<cv::Mat> levels;
+  std::vector<float> scale;  // scale_factor^i: level-0 pixels per level-i pixel
+};
+
+/// Throws PlaceError for an empty or non-8-bit single-channel image, or levels < 1, scale_factor <= 1.
+ImagePyramid buildPyramid(const cv::Mat& gray, int levels, float scale_factor);
+
+/// Keypoints come out level by level. pt is in level-0 pixels, octave is the level, angle in degrees
+/// [0, 360), response is the FAST score, size is 31 * scale. Deterministic; safe to call from several
+/// threads on one instance.
+class OrbSlamExtractor {
+ public:
+  /// Throws PlaceError for parameters out of range (features < 1, levels < 1, scale_factor <= 1,
+  /// thresholds < 1 or min_fast > ini_fast, cell_px < 8).
+  explicit OrbSlamExtractor(const OrbSlamParams& p = {});
+
+  /// Throws PlaceError for an empty or non-8-bit single-channel image.
+  OrbFeatures extract(const cv::Mat& gray) const;
+  /// From a pyramid made by pyramid() (or buildPyramid with the same levels and factor), so that the
+  /// caller keeps it for stereo. Throws PlaceError when its level count or scales differ.
+  OrbFeatures extract(const ImagePyramid& pyramid) const;
+  ImagePyramid pyramid(const cv::Mat& gray) const { return buildPyramid(gray, p_.levels, p_.scale_factor); }
+
+  const OrbSlamParams& params() const { return p_; }
+  /// ORB-SLAM2's per-level budget: a geometric series with ratio 1/scale_factor summing to `features`
+  /// (level area shrinks by scale_factor^2, but the count by scale_factor only, so coarse levels keep a
+  /// useful share).
+  const std::vector<int>& featuresPerLevel() const { return per_level_; }
+
+ private:
+  OrbSlamParams p_;
+  std::vector<int> per_level_;
+};
+
+}  // namespace binloop

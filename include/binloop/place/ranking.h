@@ -1,0 +1,29 @@
+#pragma once
+// How a model's candidates are ranked across queries: the `confidence` of a Candidate (README, "Ranking
+// loops"). A model's bar (its reference keyframes' score) says whether a keyframe beats the query's own
+// neighbours; the thesis and ORB-SLAM2 accept on it. Dividing by the bar alone ranks badly across queries:
+// a query whose neighbours share almost nothing with it (a new room, open ground, a sharp turn) has a tiny
+// bar, and any weak match then gets a huge ratio and outranks true loops. So the bar is bounded before
+// dividing: an L1-score bar never counts as lower than `score_floor`, a distance bar never as farther than
+// `distance_cap` of the signature's bits. Below the bound, confidence follows the raw score. The bounds
+// were chosen on real images and rendered routes together (README has the table).
+#include <algorithm>
+
+namespace binloop {
+
+struct RankingParams {
+  double score_floor = 0.02;   // hbow: L1 score (TF-IDF, k=10 L=6 vocabularies)
+  double distance_cap = 0.35;  // vlad, hmvlad, vladpq: fraction of the signature's bits
+};
+
+/// Similarity scores (higher is better) against a bar of the same units.
+inline double scoreConfidence(double score, double bar, double floor) {
+  return score / std::max({bar, floor, 1e-9});
+}
+
+/// Distances (lower is better) against a bar distance; `cap` in the same units (bits).
+inline double distanceConfidence(double bar, double dist, double cap) {
+  return (std::min(bar, cap) + 1.0) / (dist + 1.0);
+}
+
+}  // namespace binloop
