@@ -13,11 +13,25 @@ set(BINLOOP_WARNINGS -Wall -Wextra -Wno-unused-parameter)
 find_package(OpenCV REQUIRED COMPONENTS core imgproc imgcodecs features2d calib3d)
 find_package(Eigen3 REQUIRED NO_MODULE)
 find_package(Threads REQUIRED)
+# Ceres (optim: pose optimisation, local bundle adjustment). Debian's CMake package (2.1) points
+# Ceres::ceres at the static libceres.a although the shared libceres.so is installed beside it; linking the
+# archive would copy Ceres into libbinloop_core.so and export it from there. Take the shared library when
+# there is one (a no-op where the package already names it).
+find_package(Ceres REQUIRED)
+foreach(cfg IMPORTED_LOCATION IMPORTED_LOCATION_RELEASE IMPORTED_LOCATION_NOCONFIG)
+  get_target_property(ceres_lib Ceres::ceres ${cfg})
+  if(ceres_lib MATCHES "\\.a$")
+    string(REGEX REPLACE "\\.a$" ".so" ceres_so "${ceres_lib}")
+    if(EXISTS "${ceres_so}")
+      set_target_properties(Ceres::ceres PROPERTIES ${cfg} "${ceres_so}")
+    endif()
+  endif()
+endforeach()
 
 file(GLOB_RECURSE BINLOOP_CORE_SOURCES CONFIGURE_DEPENDS ${BINLOOP_ROOT}/src/core/*.cpp)
 add_library(binloop_core SHARED ${BINLOOP_CORE_SOURCES})
 target_include_directories(binloop_core PUBLIC ${BINLOOP_ROOT}/include ${OpenCV_INCLUDE_DIRS})
-target_link_libraries(binloop_core PUBLIC Eigen3::Eigen ${OpenCV_LIBS} Threads::Threads)
+target_link_libraries(binloop_core PUBLIC Eigen3::Eigen ${OpenCV_LIBS} Threads::Threads Ceres::ceres)
 target_compile_options(binloop_core PRIVATE ${BINLOOP_WARNINGS})
 # Hamming distances are four popcounts; without the POPCNT instruction GCC calls a bit-twiddling
 # helper instead, which made the vocabulary-tree descent ~3x slower. Every x86-64 CPU since 2008 has

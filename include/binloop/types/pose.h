@@ -8,6 +8,15 @@ namespace binloop {
 
 using Pose3 = Eigen::Isometry3d;
 
+/// The same pose with its rotation made exactly orthonormal again. Products of many poses (a motion model
+/// applied frame after frame) drift from a rotation by rounding; optimisers check for it.
+inline Pose3 orthonormalized(const Pose3& T) {
+  Pose3 o = Pose3::Identity();
+  o.linear() = Eigen::Quaterniond(T.linear()).normalized().toRotationMatrix();
+  o.translation() = T.translation();
+  return o;
+}
+
 /// A pose with its time, e.g. one line of a trajectory file (T_w_c of the left camera).
 struct StampedPose {
   double stamp_s = 0.0;

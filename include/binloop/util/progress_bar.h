@@ -18,9 +18,11 @@ class ProgressBar {
     update(done);
   }
   void finish();
+  /// Text drawn after the bar (e.g. a rate and a state); kept until changed.
+  void setStatus(std::string status) { status_ = std::move(status); }
 
  private:
-  std::string label_;
+  std::string label_, status_;
   size_t total_;
   bool tty_;
   bool finished_ = false;

@@ -1,0 +1,31 @@
+#pragma once
+// Keyframe and map-point ids. Stages run apart (threads, processes, machines) and each creates entities
+// without asking the others, so an id carries the stage that issued it in its top byte and a counter in
+// the rest: two stages never collide and no id is ever reused. 0 means "none".
+#include <cstdint>
+
+namespace binloop {
+
+using SlamKeyframeId = uint64_t;
+using MapPointId = uint64_t;
+constexpr uint64_t kNoId = 0;
+
+/// Who issued an id (the top byte). Values are part of the message format: never renumber.
+enum class IdIssuer : uint8_t { kTracking = 1, kLocalMapping = 2, kLoopClosing = 3 };
+
+inline IdIssuer issuerOf(uint64_t id) { return static_cast<IdIssuer>(id >> 56); }
+inline uint64_t counterOf(uint64_t id) { return id & ((uint64_t{1} << 56) - 1); }
+
+/// Issues ids 1, 2, 3, ... of one stage.
+class IdCounter {
+ public:
+  explicit IdCounter(IdIssuer who) : base_(uint64_t(static_cast<uint8_t>(who)) << 56) {}
+  uint64_t next() { return base_ | ++count_; }
+  uint64_t issued() const { return count_; }
+
+ private:
+  uint64_t base_;
+  uint64_t count_ = 0;
+};
+
+}  // namespace binloop

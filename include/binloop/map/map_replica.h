@@ -1,0 +1,49 @@
+#pragma once
+// A stage's own copy of the map, kept up to date from messages (its own keyframes, LocalMapUpdate,
+// Correction). Tracking uses one to find its local map; it never reads another stage's memory.
+// Fused points are remembered (removed -> kept), so a frame that still names a removed point finds the one
+// that replaced it.
+#include <unordered_map>
+#include <vector>
+
+#include "binloop/messages/correction.h"
+#include "binloop/messages/keyframe.h"
+#include "binloop/messages/local_map_update.h"
+
+namespace binloop {
+
+class MapReplica {
+ public:
+  void upsertKeyframe(const msg::KeyframeState& kf);
+  void upsertPoint(const msg::MapPoint& p);
+  void removePoint(MapPointId id);
+  void removeKeyframe(SlamKeyframeId id);
+  void fuse(MapPointId removed, MapPointId kept);
+  /// A keyframe as its creator sent it: its state and the points made with it.
+  void add(const msg::KeyFrame& kf);
+  void apply(const msg::LocalMapUpdate& u);
+  void apply(const msg::Correction& c);
+
+  /// The point an id now stands for (following fusions), or kNoId when it was culled or never known.
+  MapPointId resolve(MapPointId id) const;
+  const msg::MapPoint* point(MapPointId id) const;  // after resolve; nullptr when gone
+  const msg::KeyframeState* keyframe(SlamKeyframeId id) const;
+  /// Keyframes whose point_ids name this point (resolved id).
+  const std::vector<SlamKeyframeId>& observers(MapPointId id) const;
+
+  size_t pointCount() const { return points_.size(); }
+  size_t keyframeCount() const { return keyframes_.size(); }
+  SlamKeyframeId lastKeyframe() const { return last_keyframe_; }
+
+ private:
+  void unlinkKeyframe(const msg::KeyframeState& kf);
+  void linkKeyframe(const msg::KeyframeState& kf);
+
+  std::unordered_map<MapPointId, msg::MapPoint> points_;
+  std::unordered_map<SlamKeyframeId, msg::KeyframeState> keyframes_;
+  std::unordered_map<MapPointId, std::vector<SlamKeyframeId>> observers_;
+  std::unordered_map<MapPointId, MapPointId> replaced_;
+  SlamKeyframeId last_keyframe_ = kNoId;
+};
+
+}  // namespace binloop

@@ -1,0 +1,111 @@
+#pragma once
+// The local mapping stage (SPEC, pipeline step 2): keyframes from tracking in; a LocalMapUpdate back to
+// tracking and the refined keyframe on to the loop stages out. It owns the map: every keyframe and map
+// point with its observations, the covisibility graph and the spanning tree. Other stages only ever see
+// copies of parts of it, in messages.
+#include <atomic>
+#include <deque>
+#include <map>
+#include <unordered_map>
+#include <vector>
+
+#include "binloop/messages/correction.h"
+#include "binloop/messages/keyframe.h"
+#include "binloop/messages/local_map_update.h"
+#include "binloop/optim/local_bundle_adjustment.h"
+#include "binloop/tracking/keypoint_grid.h"
+#include "binloop/tracking/scale_pyramid.h"
+
+namespace binloop {
+
+struct LocalMapperParams {
+  int covisibility_min = 15;       // shared points for an edge of the covisibility graph
+  int cull_after_keyframes = 2;    // a new point is judged this many keyframes after its creation...
+  int cull_min_observers = 3;      // ... and culled if fewer keyframes see it (ORB-SLAM2, stereo)
+  bool fuse = true;                // merge duplicates with neighbouring keyframes
+  int fuse_neighbors = 10;         // first-order neighbours searched (plus 5 of each one's neighbours)
+  float fuse_radius = 3;           // level-0 px at level 0
+  int fuse_max_hamming = 50;       // ORB-SLAM2's TH_LOW
+  bool local_ba = true;
+  int local_ba_max_keyframes = 30; // optimised keyframes (the new one and its strongest neighbours)
+  LocalBaParams ba;
+  bool cull_keyframes = true;
+  float redundant_ratio = 0.9f;    // a keyframe whose points are this often seen by >= 3 others goes
+  float close_depth_baselines = 40;
+};
+
+class LocalMapper {
+ public:
+  struct Output {
+    msg::LocalMapUpdatePtr update;  // to tracking
+    msg::KeyFramePtr refined;       // to the loop stages (revision 1, covisibility filled in)
+  };
+
+  explicit LocalMapper(const LocalMapperParams& p = {});
+  /// Inserts the keyframe and runs the local-mapping steps on it. Never throws for a keyframe that names
+  /// unknown points (they are dropped); throws std::invalid_argument for a malformed message (sizes differ).
+  Output process(const msg::KeyFrame& kf);
+  void apply(const msg::Correction& c);
+  /// Set from another thread to cut a running local BA short (a new keyframe is waiting).
+  std::atomic<bool>& abortFlag() { return abort_; }
+
+  struct KeyframePose {
+    SlamKeyframeId id;
+    uint64_t frame_index;
+    double stamp_s;
+    Pose3 T_w_c;
+  };
+  /// The keyframes in the map now, by id.
+  std::vector<KeyframePose> keyframes() const;
+  /// A keyframe's pose now; a culled keyframe's follows its parent's (it keeps its pose relative to it).
+  /// False for an id never seen.
+  bool keyframePose(SlamKeyframeId id, Pose3* T_w_c) const;
+
+  size_t keyframeCount() const { return kfs_.size(); }
+  size_t pointCount() const { return pts_.size(); }
+
+ private:
+  struct KF {
+    msg::KeyframeState state;
+    uint64_t frame_index = 0, seq = 0;
+    double stamp_s = 0;
+    std::vector<msg::KeyPoint> keypoints;
+    Descriptors descriptors;
+    KeypointGrid grid;
+    std::map<SlamKeyframeId, int> weights;  // every keyframe sharing a point, with the count
+  };
+  struct MP {
+    msg::MapPoint state;
+    std::map<SlamKeyframeId, int> obs;  // keyframe -> keypoint index
+    uint64_t first_seq = 0;
+  };
+
+  void insert(const msg::KeyFrame& kf, msg::LocalMapUpdate& u);
+  void updateConnections(KF& kf);
+  void cullRecentPoints(msg::LocalMapUpdate& u);
+  void fuseWithNeighbors(KF& kf, msg::LocalMapUpdate& u);
+  void localBundleAdjustment(KF& kf, msg::LocalMapUpdate& u);
+  void cullKeyframes(KF& kf, msg::LocalMapUpdate& u);
+  void updatePointShape(MP& mp);
+  void addObservation(MP& mp, KF& kf, int idx);
+  void removePoint(MapPointId id);
+  void replacePoint(MapPointId removed, MapPointId kept, msg::LocalMapUpdate& u);
+  void removeKeyframe(SlamKeyframeId id);
+  std::vector<SlamKeyframeId> neighbors(const KF& kf, int n) const;
+  MapPointId resolve(MapPointId id) const;
+
+  LocalMapperParams p_;
+  ScalePyramid scales_;
+  StereoCamera camera_;
+  std::unordered_map<SlamKeyframeId, KF> kfs_;
+  std::unordered_map<MapPointId, MP> pts_;
+  std::unordered_map<MapPointId, MapPointId> replaced_;
+  std::unordered_map<SlamKeyframeId, std::pair<SlamKeyframeId, Pose3>> culled_;  // id -> (parent, T_parent_kf)
+  std::deque<MapPointId> recent_;
+  std::vector<MapPointId> touched_;  // points whose state goes into this update
+  std::atomic<bool> abort_{false};
+  uint64_t seq_ = 0, updates_ = 0;
+  SlamKeyframeId first_kf_ = kNoId;
+};
+
+}  // namespace binloop

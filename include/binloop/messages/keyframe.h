@@ -1,0 +1,38 @@
+#pragma once
+// KeyFrame: tracking -> local mapping (revision 0, as tracking made it) and local mapping -> loop stages
+// (revision >= 1, after local BA, with covisibility). Immutable once sent: stages pass
+// std::shared_ptr<const KeyFrame>, so inside one process no copy is made, and across processes it is
+// one ROS message (binloop/KeyFrame).
+#include <memory>
+#include <vector>
+
+#include "binloop/messages/map_state.h"
+#include "binloop/types/stereo_camera.h"
+
+namespace binloop::msg {
+
+struct KeyPoint {
+  float x = 0, y = 0;   // left image, level-0 pixels
+  float angle = 0;      // degrees
+  uint8_t octave = 0;   // pyramid level it was detected at
+  float right_x = -1;   // matched x in the right image, -1 = none
+  float depth = -1;     // metres from the stereo match, -1 = none
+};
+
+struct KeyFrame {
+  SlamKeyframeId id = kNoId;
+  uint32_t revision = 0;
+  uint64_t frame_index = 0;  // of the input sequence / bag
+  double stamp_s = 0;
+  StereoCamera camera;
+  float scale_factor = 1.2f;  // of the pyramid the octaves refer to
+  uint8_t levels = 8;
+  std::vector<KeyPoint> keypoints;
+  Descriptors descriptors;     // one per keypoint
+  KeyframeState state;         // pose, map point per keypoint, covisibility (empty at revision 0), parent
+  std::vector<MapPoint> new_points;  // the points its creator made with it (ids in point_ids)
+};
+
+using KeyFramePtr = std::shared_ptr<const KeyFrame>;
+
+}  // namespace binloop::msg

@@ -1,0 +1,28 @@
+#pragma once
+// LocalMapUpdate: local mapping -> tracking, after each keyframe it processed (insertion, culling,
+// triangulation, fusion, local BA). A delta: entries not named are unchanged. Tracking applies it to its own
+// copy of the local map; `keyframes` and `points` overwrite what tracking holds for those ids.
+#include <utility>
+#include <vector>
+
+#include "binloop/messages/map_state.h"
+
+namespace binloop::msg {
+
+struct LocalMapUpdate {
+  uint64_t sequence = 0;                // 1, 2, ... per mapper
+  SlamKeyframeId keyframe = kNoId;      // the keyframe whose processing produced it
+  std::vector<KeyframeState> keyframes;  // inserted or refined
+  std::vector<MapPoint> points;          // created, moved by BA, or whose descriptor/range changed
+  std::vector<std::pair<MapPointId, MapPointId>> fused;  // (removed, kept): the same point seen twice
+  std::vector<MapPointId> culled_points;
+  std::vector<SlamKeyframeId> culled_keyframes;
+  // what it cost, for timing.csv and the ROS diagnostics
+  double total_ms = 0, ba_ms = 0;
+  int ba_iterations = 0;
+  int ba_outliers = 0;
+};
+
+using LocalMapUpdatePtr = std::shared_ptr<const LocalMapUpdate>;
+
+}  // namespace binloop::msg

@@ -1,0 +1,29 @@
+#pragma once
+// TrackedFrame: tracking's result for every input frame (the runner's trajectory, the ROS odometry and
+// tf). The pose is also given relative to a keyframe so that a later correction of that keyframe moves
+// the frame with it (ORB-SLAM2 writes its full trajectory this way).
+#include <cstdint>
+#include <string>
+
+#include "binloop/map/ids.h"
+#include "binloop/types/pose.h"
+
+namespace binloop::msg {
+
+enum class TrackingState : uint8_t { kNotInitialized = 0, kOk = 1, kLost = 2, kRelocalized = 3 };
+const char* toString(TrackingState s);
+
+struct TrackedFrame {
+  uint64_t frame_index = 0;
+  double stamp_s = 0;
+  TrackingState state = TrackingState::kNotInitialized;
+  Pose3 T_w_c = Pose3::Identity();  // valid unless state is kNotInitialized or kLost
+  SlamKeyframeId reference = kNoId;
+  Pose3 T_ref_c = Pose3::Identity();  // pose relative to `reference`
+  SlamKeyframeId new_keyframe = kNoId;  // set when this frame became a keyframe
+  int features = 0, stereo_matches = 0, tracked_points = 0;
+  std::string problem;  // why the frame was not tracked (bad input, lost), empty otherwise
+  double extract_ms = 0, stereo_ms = 0, track_ms = 0;
+};
+
+}  // namespace binloop::msg

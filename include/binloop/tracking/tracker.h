@@ -1,0 +1,94 @@
+#pragma once
+// The tracking stage (SPEC, pipeline step 1): stereo frames in, a pose per frame and keyframes out.
+// It owns its state: the last frame, the motion model, and a MapReplica built only from the keyframes it
+// made and the LocalMapUpdate / Correction messages it is given. It never waits for another stage, so the
+// pipeline can run it in lock-step or on its own thread.
+#include <memory>
+#include <string>
+
+#include "binloop/map/map_replica.h"
+#include "binloop/messages/tracked_frame.h"
+#include "binloop/optim/pose_optimizer.h"
+#include "binloop/tracking/frame.h"
+#include "binloop/tracking/projection_search.h"
+
+namespace binloop {
+
+struct TrackerParams {
+  OrbSlamParams orb;
+  StereoMatchParams stereo;
+  ProjectionParams projection;
+  PoseOptimizerParams pose;
+  int init_min_stereo = 500;        // stereo matches the first frame needs to become the first keyframe
+  float last_frame_radius = 7;      // search radius (level-0 px at level 0) from the last frame; doubled once
+  int min_last_frame_matches = 20;  // below this the wider search is tried, then the frame fails
+  float local_map_radius = 1;       // factor on the viewing-angle radius (2.5 or 4 px) in the local-map search
+  float lost_radius = 5;            // the same factor while recovering after lost frames
+  int min_inliers = 30;             // a frame is tracked with at least this many inliers after the local map
+  int min_inliers_after_loss = 50;
+  int max_local_keyframes = 80;
+  int covisible_per_keyframe = 10;  // neighbours each local keyframe adds to the local map
+  // keyframe decision, ORB-SLAM2's stereo rules
+  int keyframe_max_frames = 10;           // always insert after this many frames (the camera's rate)
+  float keyframe_ref_ratio = 0.75f;       // insert when tracked points < this times the reference keyframe's
+  int keyframe_close_tracked_max = 100;   // ... or fewer close points tracked than this
+  int keyframe_close_untracked_min = 70;  // ... while at least this many close points could be added
+  int max_mapping_queue = 3;              // while mapping is busy, insert only if its queue is shorter
+  int new_points_min = 100;               // a keyframe makes at least this many new points (closest first)
+};
+
+class Tracker {
+ public:
+  struct Output {
+    msg::TrackedFrame frame;
+    msg::KeyFramePtr keyframe;  // set when the frame became a keyframe
+  };
+
+  /// Throws std::invalid_argument for a camera without positive focal length, baseline and size.
+  Tracker(const StereoCamera& cam, const TrackerParams& p = {});
+
+  /// Never throws for bad input: an unusable frame (empty, mismatched sizes, wrong encoding, time going
+  /// backwards) is reported in Output::frame.problem and leaves the tracker as it was. `mapping_queue` is the
+  /// number of keyframes the mapper has not finished (0 = idle).
+  Output track(const StereoFrame& in, int mapping_queue = 0);
+
+  void apply(const msg::LocalMapUpdate& u);
+  void apply(const msg::Correction& c);
+
+  msg::TrackingState state() const { return state_; }
+  const MapReplica& map() const { return map_; }
+  const TrackerParams& params() const { return p_; }
+
+ private:
+  bool initialize(Frame& f, msg::KeyFramePtr* kf);
+  bool trackLastFrame(Frame& f);
+  bool trackWithoutPrediction(Frame& f);
+  bool trackLocalMap(Frame& f, float radius, int min_inliers);
+  int optimizePose(Frame& f);
+  void updateLocalKeyframes(const Frame& f);
+  bool needKeyframe(const Frame& f, int mapping_queue) const;
+  msg::KeyFramePtr makeKeyframe(Frame& f);
+  Pose3 lastPose() const;
+
+  StereoCamera cam_;
+  TrackerParams p_;
+  FrameBuilder builder_;
+  MapReplica map_;
+  IdCounter keyframe_ids_{IdIssuer::kTracking};
+  IdCounter point_ids_{IdIssuer::kTracking};
+  msg::TrackingState state_ = msg::TrackingState::kNotInitialized;
+  std::unique_ptr<Frame> last_;
+  SlamKeyframeId last_ref_ = kNoId;  // the last frame's pose is kept relative to this keyframe, so that
+  Pose3 T_ref_last_;                 // local BA moving that keyframe moves the last frame too
+  Pose3 velocity_ = Pose3::Identity();  // T_prev_last
+  bool have_velocity_ = false;
+  double last_stamp_ = 0;
+  bool have_stamp_ = false;
+  SlamKeyframeId reference_ = kNoId;
+  uint64_t last_keyframe_frame_ = 0;
+  std::vector<SlamKeyframeId> local_keyframes_;
+  int inliers_ = 0;
+  int frames_since_loss_ = 1000;
+};
+
+}  // namespace binloop

@@ -1,0 +1,134 @@
+#include "binloop/map/map_replica.h"
+
+#include <algorithm>
+
+namespace binloop {
+
+namespace {
+const std::vector<SlamKeyframeId> kNone;
+}
+
+void MapReplica::unlinkKeyframe(const msg::KeyframeState& kf) {
+  for (MapPointId p : kf.point_ids) {
+    if (p == kNoId) continue;
+    auto it = observers_.find(p);
+    if (it == observers_.end()) continue;
+    auto& v = it->second;
+    v.erase(std::remove(v.begin(), v.end(), kf.id), v.end());
+    if (v.empty()) observers_.erase(it);
+  }
+}
+
+void MapReplica::linkKeyframe(const msg::KeyframeState& kf) {
+  for (MapPointId p : kf.point_ids) {
+    if (p == kNoId) continue;
+    auto& v = observers_[p];
+    if (std::find(v.begin(), v.end(), kf.id) == v.end()) v.push_back(kf.id);
+  }
+}
+
+void MapReplica::upsertKeyframe(const msg::KeyframeState& kf) {
+  auto it = keyframes_.find(kf.id);
+  if (it != keyframes_.end()) {
+    unlinkKeyframe(it->second);
+    it->second = kf;
+  } else {
+    it = keyframes_.emplace(kf.id, kf).first;
+  }
+  // Ids the sender did not know were fused yet are mapped to the kept point.
+  for (MapPointId& p : it->second.point_ids) {
+    if (p != kNoId) p = resolve(p);
+  }
+  linkKeyframe(it->second);
+  if (counterOf(kf.id) > counterOf(last_keyframe_)) last_keyframe_ = kf.id;
+}
+
+void MapReplica::upsertPoint(const msg::MapPoint& p) {
+  if (replaced_.count(p.id)) return;  // fused away meanwhile: the kept point stands for it
+  points_[p.id] = p;
+}
+
+void MapReplica::removePoint(MapPointId id) {
+  points_.erase(id);
+  auto it = observers_.find(id);
+  if (it == observers_.end()) return;
+  for (SlamKeyframeId k : it->second) {
+    auto kf = keyframes_.find(k);
+    if (kf == keyframes_.end()) continue;
+    for (MapPointId& q : kf->second.point_ids)
+      if (q == id) q = kNoId;
+  }
+  observers_.erase(it);
+}
+
+void MapReplica::removeKeyframe(SlamKeyframeId id) {
+  auto it = keyframes_.find(id);
+  if (it == keyframes_.end()) return;
+  unlinkKeyframe(it->second);
+  keyframes_.erase(it);
+}
+
+void MapReplica::fuse(MapPointId removed, MapPointId kept) {
+  kept = resolve(kept);
+  if (removed == kept || kept == kNoId) return;
+  replaced_[removed] = kept;
+  auto it = observers_.find(removed);
+  if (it != observers_.end()) {
+    const std::vector<SlamKeyframeId> seen = it->second;
+    observers_.erase(it);
+    auto& kv = observers_[kept];
+    for (SlamKeyframeId k : seen) {
+      auto kf = keyframes_.find(k);
+      if (kf == keyframes_.end()) continue;
+      for (MapPointId& q : kf->second.point_ids)
+        if (q == removed) q = kept;
+      if (std::find(kv.begin(), kv.end(), k) == kv.end()) kv.push_back(k);
+    }
+  }
+  points_.erase(removed);
+}
+
+void MapReplica::add(const msg::KeyFrame& kf) {
+  for (const auto& p : kf.new_points) upsertPoint(p);
+  upsertKeyframe(kf.state);
+}
+
+void MapReplica::apply(const msg::LocalMapUpdate& u) {
+  for (const auto& [removed, kept] : u.fused) fuse(removed, kept);
+  for (MapPointId id : u.culled_points) removePoint(id);
+  for (SlamKeyframeId id : u.culled_keyframes) removeKeyframe(id);
+  for (const auto& p : u.points) upsertPoint(p);
+  for (const auto& k : u.keyframes) upsertKeyframe(k);
+}
+
+void MapReplica::apply(const msg::Correction& c) {
+  for (const auto& [removed, kept] : c.fused) fuse(removed, kept);
+  for (const auto& p : c.points) upsertPoint(p);
+  for (const auto& k : c.keyframes) upsertKeyframe(k);
+}
+
+MapPointId MapReplica::resolve(MapPointId id) const {
+  for (int hops = 0; hops < 64; ++hops) {  // fusion chains are short; the bound guards a cycle
+    auto it = replaced_.find(id);
+    if (it == replaced_.end()) break;
+    id = it->second;
+  }
+  return points_.count(id) ? id : kNoId;
+}
+
+const msg::MapPoint* MapReplica::point(MapPointId id) const {
+  auto it = points_.find(resolve(id));
+  return it == points_.end() ? nullptr : &it->second;
+}
+
+const msg::KeyframeState* MapReplica::keyframe(SlamKeyframeId id) const {
+  auto it = keyframes_.find(id);
+  return it == keyframes_.end() ? nullptr : &it->second;
+}
+
+const std::vector<SlamKeyframeId>& MapReplica::observers(MapPointId id) const {
+  auto it = observers_.find(id);
+  return it == observers_.end() ? kNone : it->second;
+}
+
+}  // namespace binloop

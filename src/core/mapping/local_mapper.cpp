@@ -1,0 +1,494 @@
+#include "binloop/mapping/local_mapper.h"
+
+#include <algorithm>
+#include <chrono>
+#include <cmath>
+#include <limits>
+#include <stdexcept>
+#include <unordered_set>
+
+namespace binloop {
+
+namespace {
+
+double msSinceT(std::chrono::steady_clock::time_point t0) {
+  return std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - t0).count();
+}
+
+double chi2Of(const StereoCamera& cam, const Pose3& T_c_w, const Eigen::Vector3d& p_w, const msg::KeyPoint& k,
+              float inv_sigma2, bool* in_front) {
+  const Eigen::Vector3d p = T_c_w * p_w;
+  *in_front = p.z() > 0;
+  if (!*in_front) return std::numeric_limits<double>::infinity();
+  const double u = cam.fx * p.x() / p.z() + cam.cx, v = cam.fy * p.y() / p.z() + cam.cy;
+  double e2 = (u - k.x) * (u - k.x) + (v - k.y) * (v - k.y);
+  if (k.right_x >= 0) {
+    const double ur = u - cam.bf() / p.z();
+    e2 += (ur - k.right_x) * (ur - k.right_x);
+  }
+  return e2 * inv_sigma2;
+}
+
+}  // namespace
+
+LocalMapper::LocalMapper(const LocalMapperParams& p) : p_(p) {}
+
+MapPointId LocalMapper::resolve(MapPointId id) const {
+  for (int hops = 0; hops < 64; ++hops) {
+    auto it = replaced_.find(id);
+    if (it == replaced_.end()) break;
+    id = it->second;
+  }
+  return pts_.count(id) ? id : kNoId;
+}
+
+void LocalMapper::addObservation(MP& mp, KF& kf, int idx) {
+  mp.obs[kf.state.id] = idx;
+  kf.state.point_ids[idx] = mp.state.id;
+}
+
+void LocalMapper::updatePointShape(MP& mp) {
+  // Descriptor: the observation with the least median distance to the others (ORB-SLAM2's
+  // ComputeDistinctiveDescriptors). Normal and range: from every observing keyframe.
+  std::vector<const Desc256*> ds;
+  Eigen::Vector3d normal = Eigen::Vector3d::Zero();
+  const KF* ref = nullptr;
+  int ref_idx = -1;
+  for (const auto& [kid, idx] : mp.obs) {
+    const KF& kf = kfs_.at(kid);
+    ds.push_back(&kf.descriptors[idx]);
+    const Eigen::Vector3d ray = mp.state.p_w - kf.state.T_w_c.translation();
+    normal += ray.normalized();
+    if (kid == mp.state.reference || !ref) {
+      ref = &kf;
+      ref_idx = idx;
+    }
+  }
+  if (ds.empty()) return;
+  if (ds.size() > 2) {
+    int best = std::numeric_limits<int>::max();
+    size_t best_i = 0;
+    for (size_t i = 0; i < ds.size(); ++i) {
+      std::vector<int> d;
+      for (size_t j = 0; j < ds.size(); ++j)
+        if (j != i) d.push_back(hamming(*ds[i], *ds[j]));
+      std::nth_element(d.begin(), d.begin() + d.size() / 2, d.end());
+      if (d[d.size() / 2] < best) {
+        best = d[d.size() / 2];
+        best_i = i;
+      }
+    }
+    mp.state.descriptor = *ds[best_i];
+  }
+  mp.state.normal = normal.normalized().cast<float>();
+  const double dist = (mp.state.p_w - ref->state.T_w_c.translation()).norm();
+  mp.state.max_distance = static_cast<float>(dist * scales_.scale[ref->keypoints[ref_idx].octave]);
+  mp.state.min_distance = mp.state.max_distance / scales_.scale.back();
+  mp.state.observations = static_cast<uint32_t>(mp.obs.size());
+}
+
+void LocalMapper::insert(const msg::KeyFrame& in, msg::LocalMapUpdate& u) {
+  if (in.descriptors.size() != in.keypoints.size() || in.state.point_ids.size() != in.keypoints.size())
+    throw std::invalid_argument("keyframe " + std::to_string(in.id) + ": " + std::to_string(in.keypoints.size()) +
+                                " keypoints but " + std::to_string(in.descriptors.size()) + " descriptors and " +
+                                std::to_string(in.state.point_ids.size()) + " point ids");
+  if (scales_.levels() == 0) scales_ = ScalePyramid(in.scale_factor, in.levels);
+  camera_ = in.camera;
+  KF& kf = kfs_[in.id];
+  kf.state = in.state;
+  kf.state.covisible.clear();
+  kf.frame_index = in.frame_index;
+  kf.stamp_s = in.stamp_s;
+  kf.seq = ++seq_;
+  kf.keypoints = in.keypoints;
+  kf.descriptors = in.descriptors;
+  kf.grid = KeypointGrid(kf.keypoints, in.camera.width, in.camera.height);
+  if (first_kf_ == kNoId) first_kf_ = in.id;
+
+  std::unordered_set<MapPointId> created;
+  for (const msg::MapPoint& np : in.new_points) {
+    MP& mp = pts_[np.id];
+    mp.state = np;
+    mp.first_seq = kf.seq;
+    recent_.push_back(np.id);
+    created.insert(np.id);
+  }
+  for (size_t i = 0; i < kf.state.point_ids.size(); ++i) {
+    MapPointId id = kf.state.point_ids[i];
+    if (id == kNoId) continue;
+    id = resolve(id);
+    kf.state.point_ids[i] = kNoId;
+    if (id == kNoId) continue;  // culled meanwhile
+    MP& mp = pts_.at(id);
+    if (mp.obs.count(kf.state.id)) continue;  // two keypoints matched to one point after a fusion
+    addObservation(mp, kf, static_cast<int>(i));
+    touched_.push_back(id);
+  }
+  for (MapPointId id : created) {
+    MP& mp = pts_.at(id);
+    if (mp.obs.empty()) {
+      pts_.erase(id);
+      continue;
+    }
+    updatePointShape(mp);
+  }
+  for (MapPointId id : touched_)
+    if (pts_.count(id)) updatePointShape(pts_.at(id));
+  updateConnections(kf);
+}
+
+void LocalMapper::updateConnections(KF& kf) {
+  std::map<SlamKeyframeId, int> w;
+  for (MapPointId id : kf.state.point_ids) {
+    if (id == kNoId) continue;
+    for (const auto& [k, idx] : pts_.at(id).obs)
+      if (k != kf.state.id) ++w[k];
+  }
+  // Old edges of this keyframe go, then the new ones are written on both sides.
+  for (const auto& [k, c] : kf.weights) {
+    auto it = kfs_.find(k);
+    if (it != kfs_.end()) it->second.weights.erase(kf.state.id);
+  }
+  kf.weights = w;
+  for (const auto& [k, c] : w) kfs_.at(k).weights[kf.state.id] = c;
+  auto covisible = [&](const KF& x) {
+    std::vector<msg::CovisibleEdge> e;
+    int best = 0;
+    SlamKeyframeId best_id = kNoId;
+    for (const auto& [k, c] : x.weights) {
+      if (c >= p_.covisibility_min) e.push_back({k, static_cast<uint32_t>(c)});
+      if (c > best) best = c, best_id = k;
+    }
+    if (e.empty() && best_id != kNoId) e.push_back({best_id, static_cast<uint32_t>(best)});
+    std::stable_sort(e.begin(), e.end(), [](const auto& a, const auto& b) { return a.weight > b.weight; });
+    return e;
+  };
+  kf.state.covisible = covisible(kf);
+  for (const auto& e : kf.state.covisible) {
+    KF& o = kfs_.at(e.id);
+    o.state.covisible = covisible(o);
+  }
+  // Spanning tree: the first time, the keyframe with most shared points becomes the parent.
+  if (kf.state.id != first_kf_ && !kf.state.covisible.empty() &&
+      (kf.state.parent == kNoId || !kfs_.count(kf.state.parent) || kf.state.parent == kf.state.id))
+    kf.state.parent = kf.state.covisible.front().id;
+  if (kf.state.parent != kNoId && !kfs_.count(kf.state.parent)) kf.state.parent = kNoId;
+}
+
+void LocalMapper::removePoint(MapPointId id) {
+  auto it = pts_.find(id);
+  if (it == pts_.end()) return;
+  for (const auto& [k, idx] : it->second.obs) {
+    auto kf = kfs_.find(k);
+    if (kf != kfs_.end()) kf->second.state.point_ids[idx] = kNoId;
+  }
+  pts_.erase(it);
+}
+
+void LocalMapper::cullRecentPoints(msg::LocalMapUpdate& u) {
+  std::deque<MapPointId> keep;
+  for (MapPointId id : recent_) {
+    auto it = pts_.find(id);
+    if (it == pts_.end()) continue;
+    const uint64_t age = seq_ - it->second.first_seq;
+    if (age >= static_cast<uint64_t>(p_.cull_after_keyframes) &&
+        static_cast<int>(it->second.obs.size()) < p_.cull_min_observers) {
+      removePoint(id);
+      u.culled_points.push_back(id);
+    } else if (age < static_cast<uint64_t>(p_.cull_after_keyframes) + 1) {
+      keep.push_back(id);
+    }
+  }
+  recent_.swap(keep);
+}
+
+std::vector<SlamKeyframeId> LocalMapper::neighbors(const KF& kf, int n) const {
+  std::vector<SlamKeyframeId> out;
+  for (const auto& e : kf.state.covisible) {
+    if (static_cast<int>(out.size()) >= n) break;
+    out.push_back(e.id);
+  }
+  return out;
+}
+
+void LocalMapper::replacePoint(MapPointId removed, MapPointId kept, msg::LocalMapUpdate& u) {
+  if (removed == kept) return;
+  MP& gone = pts_.at(removed);
+  MP& stay = pts_.at(kept);
+  for (const auto& [k, idx] : gone.obs) {
+    KF& kf = kfs_.at(k);
+    if (stay.obs.count(k)) {
+      kf.state.point_ids[idx] = kNoId;
+    } else {
+      addObservation(stay, kf, idx);
+    }
+  }
+  pts_.erase(removed);
+  replaced_[removed] = kept;
+  u.fused.emplace_back(removed, kept);
+  touched_.push_back(kept);
+}
+
+void LocalMapper::fuseWithNeighbors(KF& kf, msg::LocalMapUpdate& u) {
+  // Targets: the strongest neighbours and, for each, its 5 strongest (ORB-SLAM2's SearchInNeighbors).
+  std::vector<SlamKeyframeId> targets;
+  std::unordered_set<SlamKeyframeId> in{kf.state.id};
+  for (SlamKeyframeId k : neighbors(kf, p_.fuse_neighbors)) {
+    if (in.insert(k).second) targets.push_back(k);
+    for (SlamKeyframeId k2 : neighbors(kfs_.at(k), 5))
+      if (in.insert(k2).second) targets.push_back(k2);
+  }
+  // Projects `points` into keyframe `t`; a match either adds an observation or merges two points.
+  auto fuseInto = [&](KF& t, const std::vector<MapPointId>& points) {
+    const Pose3 T_c_w = t.state.T_w_c.inverse();
+    const Eigen::Vector3d o_w = t.state.T_w_c.translation();
+    for (MapPointId id0 : points) {
+      const MapPointId id = resolve(id0);
+      if (id == kNoId) continue;
+      MP& mp = pts_.at(id);
+      if (mp.obs.count(t.state.id)) continue;
+      const Eigen::Vector3d p_c = T_c_w * mp.state.p_w;
+      if (p_c.z() <= 0) continue;
+      const float u0 = static_cast<float>(camera_.fx * p_c.x() / p_c.z() + camera_.cx);
+      const float v0 = static_cast<float>(camera_.fy * p_c.y() / p_c.z() + camera_.cy);
+      if (u0 < 0 || u0 >= camera_.width || v0 < 0 || v0 >= camera_.height) continue;
+      const double dist = (mp.state.p_w - o_w).norm();
+      if (dist < 0.8 * mp.state.min_distance || dist > 1.2 * mp.state.max_distance) continue;
+      if ((mp.state.p_w - o_w).dot(mp.state.normal.cast<double>()) < 0.5 * dist) continue;
+      const int level = scales_.predictLevel(mp.state.max_distance, static_cast<float>(dist));
+      const float r = p_.fuse_radius * scales_.scale[level];
+      int best = std::numeric_limits<int>::max(), best_i = -1;
+      for (int i : t.grid.near(u0, v0, r, level - 1, level + 1)) {
+        const msg::KeyPoint& k = t.keypoints[i];
+        bool front = false;
+        const double chi2 = chi2Of(camera_, T_c_w, mp.state.p_w, k, scales_.inv_sigma2[k.octave], &front);
+        if (chi2 > (k.right_x >= 0 ? 7.815 : 5.991)) continue;
+        const int d = hamming(mp.state.descriptor, t.descriptors[i]);
+        if (d < best) best = d, best_i = i;
+      }
+      if (best_i < 0 || best > p_.fuse_max_hamming) continue;
+      const MapPointId there = t.state.point_ids[best_i];
+      if (there == kNoId) {
+        addObservation(mp, t, best_i);
+        touched_.push_back(id);
+      } else if (there != id) {
+        // Keep the better-observed point (ORB-SLAM2).
+        if (pts_.at(there).obs.size() >= mp.obs.size()) replacePoint(id, there, u);
+        else replacePoint(there, id, u);
+      }
+    }
+  };
+  std::vector<MapPointId> own;
+  for (MapPointId id : kf.state.point_ids)
+    if (id != kNoId) own.push_back(id);
+  for (SlamKeyframeId k : targets) fuseInto(kfs_.at(k), own);
+  std::vector<MapPointId> theirs;
+  std::unordered_set<MapPointId> seen;
+  for (SlamKeyframeId k : targets)
+    for (MapPointId id : kfs_.at(k).state.point_ids)
+      if (id != kNoId && seen.insert(id).second) theirs.push_back(id);
+  fuseInto(kf, theirs);
+  for (MapPointId id : kf.state.point_ids)
+    if (id != kNoId) touched_.push_back(id);
+  for (MapPointId& id : touched_) id = resolve(id);
+  std::sort(touched_.begin(), touched_.end());
+  touched_.erase(std::unique(touched_.begin(), touched_.end()), touched_.end());
+  for (MapPointId id : touched_)
+    if (id != kNoId) updatePointShape(pts_.at(id));
+  updateConnections(kf);
+}
+
+void LocalMapper::localBundleAdjustment(KF& kf, msg::LocalMapUpdate& u) {
+  // Local keyframes: the new one and its covisible neighbours; fixed: the others that see their points.
+  BaProblem prob;
+  std::unordered_map<SlamKeyframeId, size_t> kf_index;
+  std::unordered_map<MapPointId, size_t> pt_index;
+  auto addKf = [&](SlamKeyframeId id, bool fixed) {
+    if (kf_index.count(id)) return;
+    kf_index[id] = prob.keyframes.size();
+    prob.keyframes.push_back({id, orthonormalized(kfs_.at(id).state.T_w_c.inverse()), fixed || id == first_kf_});
+  };
+  addKf(kf.state.id, false);
+  for (SlamKeyframeId k : neighbors(kf, p_.local_ba_max_keyframes - 1)) addKf(k, false);
+  const size_t local = prob.keyframes.size();
+  for (size_t i = 0; i < local; ++i)
+    for (MapPointId id : kfs_.at(prob.keyframes[i].id).state.point_ids)
+      if (id != kNoId && !pt_index.count(id)) {
+        pt_index[id] = prob.points.size();
+        prob.points.push_back({id, pts_.at(id).state.p_w});
+      }
+  std::vector<std::pair<MapPointId, SlamKeyframeId>> obs_of;
+  for (const BaPoint& bp : prob.points)
+    for (const auto& [k, idx] : pts_.at(bp.id).obs) {
+      addKf(k, true);
+      const KF& o = kfs_.at(k);
+      const msg::KeyPoint& kp = o.keypoints[idx];
+      prob.observations.push_back(
+          {kf_index.at(k), pt_index.at(bp.id), {kp.x, kp.y}, kp.right_x, scales_.inv_sigma2[kp.octave]});
+      obs_of.emplace_back(bp.id, k);
+    }
+  if (prob.points.empty()) return;
+  const auto t0 = std::chrono::steady_clock::now();
+  const LocalBaResult r = binloop::localBundleAdjustment(camera_, prob, p_.ba, &abort_);
+  u.ba_ms = msSinceT(t0);
+  u.ba_iterations = r.iterations;
+  u.ba_outliers = r.num_outliers;
+  for (const BaRefinedKeyframe& rk : r.keyframes) kfs_.at(rk.id).state.T_w_c = orthonormalized(rk.T_c_w.inverse());
+  for (const BaPoint& bp : r.points) pts_.at(bp.id).state.p_w = bp.p_w;
+  // Observations that are still outliers are removed from both sides.
+  for (size_t i = 0; i < r.outlier.size(); ++i) {
+    if (!r.outlier[i]) continue;
+    const auto& [pid, k] = obs_of[i];
+    MP& mp = pts_.at(pid);
+    auto it = mp.obs.find(k);
+    if (it == mp.obs.end()) continue;
+    kfs_.at(k).state.point_ids[it->second] = kNoId;
+    mp.obs.erase(it);
+  }
+  for (const BaPoint& bp : prob.points) {
+    MP& mp = pts_.at(bp.id);
+    if (mp.obs.empty()) {
+      pts_.erase(bp.id);
+      u.culled_points.push_back(bp.id);
+      continue;
+    }
+    updatePointShape(mp);
+    touched_.push_back(bp.id);
+  }
+  for (size_t i = 0; i < local; ++i) updateConnections(kfs_.at(prob.keyframes[i].id));
+}
+
+void LocalMapper::removeKeyframe(SlamKeyframeId id) {
+  KF& kf = kfs_.at(id);
+  for (size_t i = 0; i < kf.state.point_ids.size(); ++i) {
+    const MapPointId pid = kf.state.point_ids[i];
+    if (pid == kNoId) continue;
+    MP& mp = pts_.at(pid);
+    mp.obs.erase(id);
+    if (mp.obs.empty()) pts_.erase(pid);
+  }
+  for (const auto& [k, c] : kf.weights) {
+    auto it = kfs_.find(k);
+    if (it != kfs_.end()) it->second.weights.erase(id);
+  }
+  // Children of the culled keyframe take its parent (ORB-SLAM2 picks the best covisible candidate; the
+  // parent is the simplest choice that keeps the tree connected).
+  for (auto& [k, o] : kfs_)
+    if (o.state.parent == id) o.state.parent = kf.state.parent;
+  auto parent = kfs_.find(kf.state.parent);
+  if (parent != kfs_.end())
+    culled_[id] = {kf.state.parent, parent->second.state.T_w_c.inverse() * kf.state.T_w_c};
+  kfs_.erase(id);
+}
+
+void LocalMapper::cullKeyframes(KF& kf, msg::LocalMapUpdate& u) {
+  const double close = p_.close_depth_baselines * camera_.baseline_m;
+  for (SlamKeyframeId k : neighbors(kf, std::numeric_limits<int>::max())) {
+    if (k == first_kf_) continue;
+    KF& c = kfs_.at(k);
+    int points = 0, redundant = 0;
+    for (size_t i = 0; i < c.state.point_ids.size(); ++i) {
+      const MapPointId pid = c.state.point_ids[i];
+      if (pid == kNoId) continue;
+      const float d = c.keypoints[i].depth;
+      if (d > close || d < 0) continue;  // stereo: only close points count (ORB-SLAM2)
+      ++points;
+      const MP& mp = pts_.at(pid);
+      if (mp.obs.size() <= 3) continue;
+      const int level = c.keypoints[i].octave;
+      int others = 0;
+      for (const auto& [o, idx] : mp.obs) {
+        if (o == k) continue;
+        if (kfs_.at(o).keypoints[idx].octave <= level + 1) ++others;
+        if (others >= 3) break;
+      }
+      if (others >= 3) ++redundant;
+    }
+    if (points > 0 && redundant > p_.redundant_ratio * points) {
+      std::vector<SlamKeyframeId> nb;
+      for (const auto& [o, w] : c.weights) nb.push_back(o);
+      removeKeyframe(k);
+      u.culled_keyframes.push_back(k);
+      for (SlamKeyframeId o : nb)
+        if (kfs_.count(o)) updateConnections(kfs_.at(o));
+    }
+  }
+}
+
+LocalMapper::Output LocalMapper::process(const msg::KeyFrame& in) {
+  const auto t0 = std::chrono::steady_clock::now();
+  abort_ = false;
+  auto u = std::make_shared<msg::LocalMapUpdate>();
+  u->sequence = ++updates_;
+  u->keyframe = in.id;
+  touched_.clear();
+  insert(in, *u);
+  KF& kf = kfs_.at(in.id);
+  cullRecentPoints(*u);
+  if (p_.fuse) fuseWithNeighbors(kf, *u);
+  if (p_.local_ba && kfs_.size() > 1) localBundleAdjustment(kf, *u);
+  if (p_.cull_keyframes) cullKeyframes(kf, *u);
+
+  // The update: every keyframe of the local window (poses, associations, edges) and every touched point.
+  std::unordered_set<SlamKeyframeId> sent;
+  auto sendKf = [&](SlamKeyframeId id) {
+    auto it = kfs_.find(id);
+    if (it != kfs_.end() && sent.insert(id).second) u->keyframes.push_back(it->second.state);
+  };
+  sendKf(kf.state.id);
+  for (SlamKeyframeId k : neighbors(kf, p_.local_ba_max_keyframes)) sendKf(k);
+  std::sort(touched_.begin(), touched_.end());
+  touched_.erase(std::unique(touched_.begin(), touched_.end()), touched_.end());
+  for (MapPointId id : touched_) {
+    auto it = pts_.find(id);
+    if (it != pts_.end()) u->points.push_back(it->second.state);
+  }
+  u->total_ms = msSinceT(t0);
+
+  auto refined = std::make_shared<msg::KeyFrame>(in);
+  refined->revision = in.revision + 1;
+  refined->state = kf.state;
+  refined->new_points.clear();
+  return {u, refined};
+}
+
+std::vector<LocalMapper::KeyframePose> LocalMapper::keyframes() const {
+  std::vector<KeyframePose> out;
+  for (const auto& [id, kf] : kfs_) out.push_back({id, kf.frame_index, kf.stamp_s, kf.state.T_w_c});
+  std::sort(out.begin(), out.end(), [](const auto& a, const auto& b) { return a.id < b.id; });
+  return out;
+}
+
+bool LocalMapper::keyframePose(SlamKeyframeId id, Pose3* T_w_c) const {
+  Pose3 T = Pose3::Identity();
+  for (int hops = 0; hops < 10000; ++hops) {
+    auto it = kfs_.find(id);
+    if (it != kfs_.end()) {
+      *T_w_c = it->second.state.T_w_c * T;
+      return true;
+    }
+    auto c = culled_.find(id);
+    if (c == culled_.end()) return false;
+    T = c->second.second * T;
+    id = c->second.first;
+  }
+  return false;
+}
+
+void LocalMapper::apply(const msg::Correction& c) {
+  for (const auto& [removed, kept] : c.fused) {
+    if (resolve(removed) == kNoId || resolve(kept) == kNoId) continue;
+    msg::LocalMapUpdate ignored;
+    replacePoint(resolve(removed), resolve(kept), ignored);
+  }
+  for (const auto& p : c.points) {
+    auto it = pts_.find(resolve(p.id));
+    if (it != pts_.end()) it->second.state.p_w = p.p_w;
+  }
+  for (const auto& k : c.keyframes) {
+    auto it = kfs_.find(k.id);
+    if (it != kfs_.end()) it->second.state.T_w_c = k.T_w_c;
+  }
+}
+
+}  // namespace binloop

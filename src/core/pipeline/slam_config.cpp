@@ -1,0 +1,140 @@
+#include "binloop/pipeline/slam_config.h"
+
+#include <cmath>
+#include <filesystem>
+#include <functional>
+#include <map>
+#include <opencv2/core.hpp>
+#include <sstream>
+#include <vector>
+
+namespace binloop {
+
+namespace {
+
+// One setting: where it lives in the structs and the smallest value it accepts.
+struct Setting {
+  enum Kind { kInt, kFloat, kDouble, kBool } kind;
+  void* ptr;
+  double min;
+};
+
+std::map<std::string, std::map<std::string, Setting>> settingsOf(SlamConfig& c) {
+  TrackerParams& t = c.tracker;
+  LocalMapperParams& m = c.mapper;
+  using S = Setting;
+  return {
+      {"orb",
+       {{"features", {S::kInt, &t.orb.features, 1}},
+        {"scale_factor", {S::kFloat, &t.orb.scale_factor, 1.01}},
+        {"levels", {S::kInt, &t.orb.levels, 1}},
+        {"ini_fast", {S::kInt, &t.orb.ini_fast, 1}},
+        {"min_fast", {S::kInt, &t.orb.min_fast, 1}}}},
+      {"stereo",
+       {{"max_hamming", {S::kInt, &t.stereo.max_hamming, 0}},
+        {"sad_half_window", {S::kInt, &t.stereo.sad_half_window, 1}},
+        {"close_depth_baselines", {S::kDouble, &t.stereo.close_depth_baselines, 1}}}},
+      {"tracking",
+       {{"init_min_stereo", {S::kInt, &t.init_min_stereo, 10}},
+        {"last_frame_radius", {S::kFloat, &t.last_frame_radius, 0.5}},
+        {"min_last_frame_matches", {S::kInt, &t.min_last_frame_matches, 3}},
+        {"local_map_radius", {S::kFloat, &t.local_map_radius, 0.1}},
+        {"lost_radius", {S::kFloat, &t.lost_radius, 0.1}},
+        {"min_inliers", {S::kInt, &t.min_inliers, 3}},
+        {"min_inliers_after_loss", {S::kInt, &t.min_inliers_after_loss, 3}},
+        {"max_local_keyframes", {S::kInt, &t.max_local_keyframes, 1}},
+        {"keyframe_max_frames", {S::kInt, &t.keyframe_max_frames, 1}},
+        {"keyframe_ref_ratio", {S::kFloat, &t.keyframe_ref_ratio, 0}},
+        {"keyframe_close_tracked_max", {S::kInt, &t.keyframe_close_tracked_max, 0}},
+        {"keyframe_close_untracked_min", {S::kInt, &t.keyframe_close_untracked_min, 0}},
+        {"new_points_min", {S::kInt, &t.new_points_min, 0}}}},
+      {"mapping",
+       {{"covisibility_min", {S::kInt, &m.covisibility_min, 1}},
+        {"cull_after_keyframes", {S::kInt, &m.cull_after_keyframes, 1}},
+        {"cull_min_observers", {S::kInt, &m.cull_min_observers, 1}},
+        {"fuse", {S::kBool, &m.fuse, 0}},
+        {"fuse_radius", {S::kFloat, &m.fuse_radius, 0.1}},
+        {"local_ba", {S::kBool, &m.local_ba, 0}},
+        {"local_ba_max_keyframes", {S::kInt, &m.local_ba_max_keyframes, 1}},
+        {"ba_robust_iterations", {S::kInt, &m.ba.robust_iterations, 1}},
+        {"ba_refine_iterations", {S::kInt, &m.ba.refine_iterations, 0}},
+        {"cull_keyframes", {S::kBool, &m.cull_keyframes, 0}},
+        {"redundant_ratio", {S::kFloat, &m.redundant_ratio, 0}}}},
+  };
+}
+
+double valueOf(const Setting& s) {
+  switch (s.kind) {
+    case Setting::kInt: return *static_cast<int*>(s.ptr);
+    case Setting::kFloat: return *static_cast<float*>(s.ptr);
+    case Setting::kDouble: return *static_cast<double*>(s.ptr);
+    case Setting::kBool: return *static_cast<bool*>(s.ptr) ? 1 : 0;
+  }
+  return 0;
+}
+
+}  // namespace
+
+SlamConfig loadSlamConfig(const std::string& path) {
+  if (!std::filesystem::is_regular_file(path)) throw ConfigError(path + ": no such file");
+  cv::FileStorage fs;
+  try {
+    if (!fs.open(path, cv::FileStorage::READ | cv::FileStorage::FORMAT_YAML))
+      throw ConfigError(path + ": cannot be read as YAML");
+  } catch (const cv::Exception& e) {
+    throw ConfigError(path + ": not valid YAML (" + e.msg + ")");
+  }
+  SlamConfig c;
+  auto settings = settingsOf(c);
+  const cv::FileNode root = fs.root();
+  if (!root.isMap()) throw ConfigError(path + ": expected sections (orb, stereo, tracking, mapping)");
+  for (const std::string& section : root.keys()) {
+    auto sec = settings.find(section);
+    if (sec == settings.end()) {
+      std::string known;
+      for (const auto& [name, _] : settings) known += (known.empty() ? "" : ", ") + name;
+      throw ConfigError(path + ": unknown section '" + section + "' (known: " + known + ")");
+    }
+    const cv::FileNode node = root[section];
+    if (!node.isMap()) throw ConfigError(path + ": section '" + section + "' must hold key: value lines");
+    for (const std::string& key : node.keys()) {
+      auto it = sec->second.find(key);
+      if (it == sec->second.end()) {
+        std::string known;
+        for (const auto& [name, _] : sec->second) known += (known.empty() ? "" : ", ") + name;
+        throw ConfigError(path + ": unknown key '" + section + "." + key + "' (known in " + section + ": " + known + ")");
+      }
+      const cv::FileNode v = node[key];
+      if (!v.isInt() && !v.isReal())
+        throw ConfigError(path + ": " + section + "." + key + " must be a number");
+      const double x = v.real();
+      const Setting& s = it->second;
+      if (!std::isfinite(x) || x < s.min)
+        throw ConfigError(path + ": " + section + "." + key + " = " + std::to_string(x) + " is out of range (at least " +
+                          std::to_string(s.min) + ")");
+      if ((s.kind == Setting::kInt || s.kind == Setting::kBool) && x != std::floor(x))
+        throw ConfigError(path + ": " + section + "." + key + " must be a whole number");
+      if (s.kind == Setting::kBool && x > 1) throw ConfigError(path + ": " + section + "." + key + " must be 0 or 1");
+      switch (s.kind) {
+        case Setting::kInt: *static_cast<int*>(s.ptr) = static_cast<int>(x); break;
+        case Setting::kFloat: *static_cast<float*>(s.ptr) = static_cast<float>(x); break;
+        case Setting::kDouble: *static_cast<double*>(s.ptr) = x; break;
+        case Setting::kBool: *static_cast<bool*>(s.ptr) = x != 0; break;
+      }
+    }
+  }
+  if (c.tracker.orb.min_fast > c.tracker.orb.ini_fast)
+    throw ConfigError(path + ": orb.min_fast must not exceed orb.ini_fast");
+  c.mapper.close_depth_baselines = static_cast<float>(c.tracker.stereo.close_depth_baselines);
+  return c;
+}
+
+std::string describe(const SlamConfig& c0) {
+  SlamConfig c = c0;
+  std::ostringstream out;
+  for (const auto& [section, keys] : settingsOf(c))
+    for (const auto& [key, s] : keys) out << section << "." << key << ": " << valueOf(s) << "\n";
+  return out.str();
+}
+
+}  // namespace binloop

@@ -1,0 +1,189 @@
+// run: the SLAM over a KITTI-layout sequence folder, offline (no ROS master). See README, "Running the SLAM".
+#include <algorithm>
+#include <chrono>
+#include <cstdio>
+#include <filesystem>
+#include <fstream>
+#include <iomanip>
+#include <iostream>
+#include <sstream>
+
+#include "binloop/io/data_error.h"
+#include "binloop/io/kitti_sequence.h"
+#include "binloop/io/trajectory_io.h"
+#include "binloop/pipeline/slam_config.h"
+#include "binloop/pipeline/slam_pipeline.h"
+#include "binloop/util/cli_args.h"
+#include "binloop/util/progress_bar.h"
+
+namespace fs = std::filesystem;
+using namespace binloop;
+
+namespace {
+
+double percentile(std::vector<double> v, double q) {
+  if (v.empty()) return 0;
+  std::sort(v.begin(), v.end());
+  return v[std::min(v.size() - 1, static_cast<size_t>(q * (v.size() - 1) + 0.5))];
+}
+
+std::string jsonEscape(const std::string& s) {
+  std::string o;
+  for (char c : s) {
+    if (c == '"' || c == '\\') o += '\\';
+    if (c == '\n') {
+      o += "\\n";
+      continue;
+    }
+    o += c;
+  }
+  return o;
+}
+
+}  // namespace
+
+int main(int argc, char** argv) {
+  CliArgs args("run",
+               "scripts/binloop run <sequence_dir> --out <dir> [--config config/kitti.yaml] [--detector none]\n"
+               "    [--lockstep] [--seed N] [--start N] [--end N]\n"
+               "Tracks and maps a KITTI-layout stereo sequence (image_0/, image_1/, calib.txt, times.txt) and writes\n"
+               "trajectory.kitti.txt / .tum.txt (every frame), keyframes.kitti.txt / .tum.txt, timing.csv, summary.json.");
+  args.positional("sequence_dir", "KITTI-layout sequence folder")
+      .option("out", "output folder (created)")
+      .option("config", "SLAM settings (YAML; see config/kitti.yaml); default: the built-in defaults, which that file repeats")
+      .option("detector", "loop detector: none (loop closing is not built yet)", "none")
+      .flag("lockstep", "map every keyframe before the next frame (bit-identical reruns); default: mapping on its own thread")
+      .option("seed", "seed for every random choice (recorded in summary.json)", "1")
+      .option("start", "first frame", "0")
+      .option("end", "one past the last frame (default: all)", "-1");
+  return runTool("run", [&] {
+    if (!args.parse(argc, argv)) return 0;
+    if (!args.has("out")) throw CliError("--out is required");
+    if (args.str("detector") != "none")
+      throw CliError("--detector " + args.str("detector") + ": only 'none' is available until loop closing is built");
+    const SlamConfig config = args.has("config") ? loadSlamConfig(args.str("config")) : SlamConfig{};
+    const KittiSequence seq = KittiSequence::open(args.str("sequence_dir"));
+    const long start = args.integer("start");
+    long end = args.integer("end");
+    if (end < 0 || end > static_cast<long>(seq.size())) end = static_cast<long>(seq.size());
+    if (start < 0 || start >= end)
+      throw CliError("--start " + std::to_string(start) + " must lie in [0, " + std::to_string(end) + ")");
+    const fs::path out = args.str("out");
+    fs::create_directories(out);
+    const bool lockstep = args.has("lockstep");
+    std::cerr << "run: " << seq.directory() << ", frames " << start << "-" << end - 1 << ", "
+              << (lockstep ? "lock-step" : "threaded") << "\n"
+              << seq.camera().describe();
+
+    SlamPipeline slam(seq.camera(), config.tracker, config.mapper,
+                      lockstep ? PipelineMode::kLockStep : PipelineMode::kThreaded);
+    std::vector<msg::TrackedFrame> frames;
+    ProgressBar bar("run", static_cast<size_t>(end - start));
+    const auto t0 = std::chrono::steady_clock::now();
+    int problems = 0;
+    for (long i = start; i < end; ++i) {
+      msg::TrackedFrame tf;
+      try {
+        tf = slam.process(seq.load(static_cast<size_t>(i)));
+      } catch (const DataError& e) {  // an unreadable image: reported, skipped, the run goes on
+        tf.frame_index = static_cast<uint64_t>(i);
+        tf.stamp_s = seq.times()[i];
+        tf.state = frames.empty() ? msg::TrackingState::kNotInitialized : msg::TrackingState::kLost;
+        if (!frames.empty()) tf.T_w_c = frames.back().T_w_c;
+        tf.problem = std::string(e.what()) + "; frame skipped";
+      }
+      if (!tf.problem.empty() && problems++ < 20) std::cerr << "\nrun: frame " << i << ": " << tf.problem << "\n";
+      frames.push_back(tf);
+      const double secs = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
+      std::ostringstream st;
+      st << std::fixed << std::setprecision(1) << frames.size() / std::max(secs, 1e-9) << " frames/s, "
+         << msg::toString(tf.state) << ", " << slam.tracker().map().keyframeCount() << " keyframes";
+      bar.setStatus(st.str());
+      bar.update(frames.size());
+    }
+    slam.finish();
+    bar.finish();
+    const double wall_s = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
+
+    // Final poses: each frame rides on its reference keyframe as local mapping left it.
+    const LocalMapper& mapper = slam.mapper();
+    std::vector<Pose3> poses;
+    Trajectory tum;
+    for (const msg::TrackedFrame& tf : frames) {
+      Pose3 T = tf.T_w_c, T_ref;
+      if (tf.state != msg::TrackingState::kLost && tf.reference != kNoId && mapper.keyframePose(tf.reference, &T_ref))
+        T = T_ref * tf.T_ref_c;
+      poses.push_back(T);
+      tum.push_back({tf.stamp_s, T});
+    }
+    writeKittiPoses((out / "trajectory.kitti.txt").string(), poses);
+    writeTumTrajectory((out / "trajectory.tum.txt").string(), tum);
+    std::vector<Pose3> kf_poses;
+    Trajectory kf_tum;
+    for (const auto& k : mapper.keyframes()) {
+      kf_poses.push_back(k.T_w_c);
+      kf_tum.push_back({k.stamp_s, k.T_w_c});
+    }
+    writeKittiPoses((out / "keyframes.kitti.txt").string(), kf_poses);
+    writeTumTrajectory((out / "keyframes.tum.txt").string(), kf_tum);
+
+    std::map<SlamKeyframeId, const SlamPipeline::MappingTime*> map_time;
+    for (const auto& m : slam.mappingTimes()) map_time[m.keyframe] = &m;
+    std::ofstream timing(out / "timing.csv");
+    timing << "frame,state,features,stereo_matches,tracked_points,keyframe,extract_ms,stereo_ms,track_ms,mapping_ms,ba_ms\n";
+    std::vector<double> ex, stt, tr, mp, ba;
+    int lost = 0, relocalized = 0;
+    for (const msg::TrackedFrame& tf : frames) {
+      const auto it = map_time.find(tf.new_keyframe);
+      const bool kf = tf.new_keyframe != kNoId && it != map_time.end();
+      timing << tf.frame_index << "," << msg::toString(tf.state) << "," << tf.features << "," << tf.stereo_matches << ","
+             << tf.tracked_points << "," << (tf.new_keyframe != kNoId) << "," << tf.extract_ms << "," << tf.stereo_ms
+             << "," << tf.track_ms << "," << (kf ? it->second->total_ms : 0) << "," << (kf ? it->second->ba_ms : 0)
+             << "\n";
+      if (tf.features > 0) {
+        ex.push_back(tf.extract_ms);
+        stt.push_back(tf.stereo_ms);
+        tr.push_back(tf.extract_ms + tf.stereo_ms + tf.track_ms);
+      }
+      lost += tf.state == msg::TrackingState::kLost;
+      relocalized += tf.state == msg::TrackingState::kRelocalized;
+    }
+    for (const auto& m : slam.mappingTimes()) {
+      mp.push_back(m.total_ms);
+      ba.push_back(m.ba_ms);
+    }
+    std::ofstream js(out / "summary.json");
+    js << std::setprecision(6) << "{\n  \"sequence\": \"" << jsonEscape(seq.directory()) << "\",\n"
+       << "  \"frames\": " << frames.size() << ",\n  \"start\": " << start << ",\n  \"end\": " << end << ",\n"
+       << "  \"keyframes\": " << mapper.keyframeCount() << ",\n  \"keyframes_made\": " << slam.mappingTimes().size()
+       << ",\n  \"map_points\": " << mapper.pointCount() << ",\n  \"lost_frames\": " << lost
+       << ",\n  \"relocalizations\": " << relocalized << ",\n  \"problems\": " << problems
+       << ",\n  \"wall_s\": " << wall_s << ",\n  \"frames_per_s\": " << frames.size() / std::max(wall_s, 1e-9)
+       << ",\n  \"mode\": \"" << (lockstep ? "lockstep" : "threaded") << "\",\n  \"seed\": " << args.integer("seed")
+       << ",\n  \"detector\": \"none\",\n";
+    auto stat = [&](const char* name, const std::vector<double>& v, bool last) {
+      js << "  \"" << name << "_ms_median\": " << percentile(v, 0.5) << ",\n  \"" << name
+         << "_ms_p95\": " << percentile(v, 0.95) << (last ? "\n" : ",\n");
+    };
+    stat("extract", ex, false);
+    stat("stereo", stt, false);
+    stat("tracking_total", tr, false);
+    stat("local_mapping", mp, false);
+    stat("local_ba", ba, false);
+    js << "  \"settings\": {";
+    std::istringstream lines(describe(config));
+    std::string line;
+    bool first = true;
+    while (std::getline(lines, line)) {
+      const auto colon = line.find(": ");
+      js << (first ? "\n" : ",\n") << "    \"" << line.substr(0, colon) << "\": " << line.substr(colon + 2);
+      first = false;
+    }
+    js << "\n  }\n}\n";
+    std::cout << "frames: " << frames.size() << "\nkeyframes: " << mapper.keyframeCount()
+              << "\nmap_points: " << mapper.pointCount() << "\nlost_frames: " << lost
+              << "\nframes_per_s: " << std::fixed << std::setprecision(1) << frames.size() / std::max(wall_s, 1e-9)
+              << "\nresults: " << out.string() << "\n";
+    return 0;
+  });
+}
