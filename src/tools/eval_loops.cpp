@@ -63,8 +63,8 @@ int main(int argc, char** argv) {
       .option("segment-gap", "frames between ground-truth queries that start a new revisit segment", "50")
       .option("fabmap-l2-offset", "offset added to the closest reference's L2 distance in fabmap's pre-filter", "0.05")
       .option("hbow-min-bar", "hbow's bar never goes below this L1 score", "0.005")
-      .option("rank-floor", "ranking: an L1-score bar (hbow) counts as at least this (default: the model's, place/ranking.h)")
-      .option("rank-cap", "ranking: a distance bar (vlad, hmvlad, vladpq) counts as at most this fraction of the bits (default: the model's)")
+      .option("rank-floor", "ranking: an L1-score bar (hbow) counts as at least this ", "0.02")
+      .option("rank-cap", "ranking: a distance bar (vlad, hmvlad, vladpq) counts as at most this fraction of the bits", "0.35")
       .option("dump-ranked", "also write ranked_<model>.csv: each query's bar and its N best keyframes by raw score", "0");
   declareExtractOptions(args);
   return runTool("eval-loops", [&] {
@@ -164,10 +164,8 @@ int main(int argc, char** argv) {
       ro.model_file = (fs::path(args.str("vocab-dir")) / (name + ".bin")).string();
       ro.fabmap_l2_offset = args.number("fabmap-l2-offset");
       ro.hbow_min_bar = args.number("hbow-min-bar");
-      RankingParams ranking = defaultRanking(name);
-      if (args.has("rank-floor")) ranking.score_floor = args.number("rank-floor");
-      if (args.has("rank-cap")) ranking.distance_cap = args.number("rank-cap");
-      ro.ranking = ranking;
+      ro.ranking.score_floor = args.number("rank-floor");
+      ro.ranking.distance_cap = args.number("rank-cap");
       auto rec = makePlaceRecognizer(name, ro);
       rec->setKeepDescriptors(false);
       ModelRun run;

@@ -24,7 +24,7 @@ namespace binloop {
 struct BaKeyframe {
   uint64_t id = 0;
   Pose3 T_c_w = Pose3::Identity();  // world -> left camera
-  bool fixed = false;                // held still (ORB-SLAM2's fixed keyframes, and the first keyframe)
+  bool fixed = false;               // held still (ORB-SLAM2's fixed keyframes, and the first keyframe)
 };
 
 struct BaPoint {
@@ -33,11 +33,11 @@ struct BaPoint {
 };
 
 struct BaObservation {
-  std::size_t keyframe = 0;  // index into BaProblem::keyframes
-  std::size_t point = 0;     // index into BaProblem::points
+  std::size_t keyframe = 0;                      // index into BaProblem::keyframes
+  std::size_t point = 0;                         // index into BaProblem::points
   Eigen::Vector2d uv = Eigen::Vector2d::Zero();  // keypoint in the left image (px)
-  double u_right = -1;    // u in the right image (px); negative: monocular
-  double inv_sigma2 = 1;  // 1 / scale_factor^(2 octave) of the keypoint
+  double u_right = -1;                           // u in the right image (px); negative: monocular
+  double inv_sigma2 = 1;                         // 1 / scale_factor^(2 octave) of the keypoint
 };
 
 struct BaProblem {
@@ -84,8 +84,8 @@ struct LocalBaResult {
   /// 1/2 sum of chi2 over the final inliers, at the input and at the result (same observations, no
   /// robust loss, so the two compare).
   double initial_cost = 0, final_cost = 0;
-  int iterations = 0;  // Levenberg-Marquardt iterations, both stages
-  double time_s = 0;   // wall time of the whole call
+  int iterations = 0;    // Levenberg-Marquardt iterations, both stages
+  double time_s = 0;     // wall time of the whole call
   bool aborted = false;  // the abort flag stopped it (stage 2 then does not run)
 };
 

@@ -17,14 +17,14 @@ namespace binloop {
 struct PoseObservation {
   Eigen::Vector3d p_w = Eigen::Vector3d::Zero();  // the point, world frame (held fixed)
   Eigen::Vector2d uv = Eigen::Vector2d::Zero();   // its keypoint in the left image (px)
-  double u_right = -1;   // its u in the right image (px); negative: monocular (no depth)
+  double u_right = -1;    // its u in the right image (px); negative: monocular (no depth)
   double inv_sigma2 = 1;  // 1 / scale_factor^(2 octave) of the keypoint
 };
 
 struct PoseOptimizerParams {
-  int rounds = 4;                // of optimisation + classification
+  int rounds = 4;                 // of optimisation + classification
   int iterations_per_round = 10;  // Levenberg-Marquardt iterations (fewer if Ceres converges)
-  int robust_rounds = 3;         // the first rounds use the Huber loss, the rest plain squares
+  int robust_rounds = 3;          // the first rounds use the Huber loss, the rest plain squares
   // An observation is an outlier when chi2 exceeds these (chi-square 95 %, 2 and 3 dof) or its point is
   // behind the camera.
   double chi2_mono = 5.991;
@@ -41,8 +41,8 @@ struct PoseOptimizationResult {
   /// 1/2 sum of chi2 over the final inliers, at the initial pose and at the refined one (same observations,
   /// no robust loss, so the two compare).
   double initial_cost = 0, final_cost = 0;
-  int rounds_run = 0;   // rounds that ran a solve (a round needs 3 inliers, the fewest that fix a pose)
-  int iterations = 0;   // Levenberg-Marquardt iterations over all rounds
+  int rounds_run = 0;  // rounds that ran a solve (a round needs 3 inliers, the fewest that fix a pose)
+  int iterations = 0;  // Levenberg-Marquardt iterations over all rounds
 };
 
 /// Refines T_c_w (world -> left camera) from the observations. Throws std::invalid_argument on invalid input:

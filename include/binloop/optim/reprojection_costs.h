@@ -74,8 +74,8 @@ Pose3 poseFromIncrement(const double* xi, const Pose3& T0_c_w);
 /// Writes the kDim whitened residuals of a camera-frame point; false when z <= 0 (or z is NaN). The
 /// residuals are written in any case, for a caller that wants them (they are not finite at z = 0).
 template <int kDim, typename T>
-inline bool whitenedReprojection(const ProjectionConstants& k, const double* obs, double sqrt_info, const T* p_c,
-                                 T* r) {
+inline bool whitenedReprojection(const ProjectionConstants& k, const double* obs, double sqrt_info,
+                                 const T* p_c, T* r) {
   static_assert(kDim == 2 || kDim == 3, "2 rows (mono) or 3 rows (stereo)");
   const T inv_z = T(1.0) / p_c[2];
   const T u = k.fx * p_c[0] * inv_z + k.cx;
@@ -90,9 +90,12 @@ inline bool whitenedReprojection(const ProjectionConstants& k, const double* obs
 template <int kDim>
 class ReprojectionCost {
  public:
-  ReprojectionCost(const ProjectionConstants& k, const Pose3& T0_c_w, const Eigen::Vector2d& uv, double u_right,
-                   double inv_sigma2)
-      : k_(k), R0_(T0_c_w.linear()), t0_(T0_c_w.translation()), obs_{uv.x(), uv.y(), u_right},
+  ReprojectionCost(const ProjectionConstants& k, const Pose3& T0_c_w, const Eigen::Vector2d& uv,
+                   double u_right, double inv_sigma2)
+      : k_(k),
+        R0_(T0_c_w.linear()),
+        t0_(T0_c_w.translation()),
+        obs_{uv.x(), uv.y(), u_right},
         sqrt_info_(std::sqrt(inv_sigma2)) {}
 
   template <typename T>

@@ -6,22 +6,16 @@
 // bar, and any weak match then gets a huge ratio and outranks true loops. So the bar is bounded before
 // dividing: an L1-score bar never counts as lower than `score_floor`, a distance bar never as farther than
 // `distance_cap` of the signature's bits. Below the bound, confidence follows the raw score. The bounds
-// are per model (defaultRanking): they were chosen on the tuning sets (real_tune, rendered 06 and 05) and
-// checked on the held-out ones (real_heldout, rendered 00); README, "Ranking loops", has the table.
+// were chosen on the tuning sets (real_tune, rendered 06 and 05) and checked on the held-out ones
+// (real_heldout, rendered 00); README, "Ranking loops", has the table and the sweep.
 #include <algorithm>
-#include <string>
 
 namespace binloop {
 
 struct RankingParams {
-  double score_floor = 0.03;   // hbow: L1 score (TF-IDF, k=10 L=6 vocabularies)
-  double distance_cap = 0.25;  // vlad, hmvlad, vladpq: fraction of the signature's bits
+  double score_floor = 0.02;   // hbow: L1 score (TF-IDF, k=10 L=6 vocabularies)
+  double distance_cap = 0.35;  // vlad, hmvlad, vladpq: fraction of the signature's bits
 };
-
-/// The bounds binloop uses for a model (by name: hbow, fabmap, vlad, hmvlad, vladpq). hmvlad's cap is
-/// higher because its signature concatenates several levels whose finer parts differ more between any two
-/// views, so its bars sit at a larger fraction of the bits.
-RankingParams defaultRanking(const std::string& model);
 
 /// Similarity scores (higher is better) against a bar of the same units.
 inline double scoreConfidence(double score, double bar, double floor) {

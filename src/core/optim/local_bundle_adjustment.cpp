@@ -38,8 +38,8 @@ struct Term {
   }
 };
 
-// ORB-SLAM2's mbAbortBA: Ceres calls this after every iteration (and after evaluating the start, iteration 0).
-// Terminating "successfully" keeps the parameters reached so far, as g2o's force-stop flag does.
+// ORB-SLAM2's mbAbortBA: Ceres calls this after every iteration (and after evaluating the start, iteration
+// 0). Terminating "successfully" keeps the parameters reached so far, as g2o's force-stop flag does.
 class AbortCallback : public ceres::IterationCallback {
  public:
   explicit AbortCallback(std::atomic<bool>* flag) : flag_(flag) {}
@@ -79,7 +79,8 @@ void checkInput(const StereoCamera& camera, const BaProblem& pb, const LocalBaPa
               "keyframe " + std::to_string(i) + " (id " + std::to_string(pb.keyframes[i].id) + ") T_c_w");
   for (size_t i = 0; i < pb.points.size(); ++i)
     if (!pb.points[i].p_w.allFinite())
-      fail(kWho, "point " + std::to_string(i) + " (id " + std::to_string(pb.points[i].id) + ") is not finite");
+      fail(kWho,
+           "point " + std::to_string(i) + " (id " + std::to_string(pb.points[i].id) + ") is not finite");
   checkUniqueIds(pb.keyframes, "keyframe");
   checkUniqueIds(pb.points, "point");
   bool any_stereo = false;
@@ -117,7 +118,8 @@ struct Stage {
 // Solves over the observations marked in `use`, with the given losses (nullptr: plain squares).
 Stage solveStage(const BaProblem& pb, const std::vector<Term>& terms, const std::vector<bool>& use,
                  ceres::LossFunction* loss_stereo, ceres::LossFunction* loss_mono, int max_iterations,
-                 BaLinearSolver solver, std::atomic<bool>* abort, Variables& v, std::vector<bool>& kf_touched) {
+                 BaLinearSolver solver, std::atomic<bool>* abort, Variables& v,
+                 std::vector<bool>& kf_touched) {
   Stage stage;
   ceres::Problem::Options po;
   po.cost_function_ownership = ceres::DO_NOT_TAKE_OWNERSHIP;
@@ -127,8 +129,8 @@ Stage solveStage(const BaProblem& pb, const std::vector<Term>& terms, const std:
   for (size_t i = 0; i < terms.size(); ++i) {
     if (!use[i]) continue;
     const BaObservation& o = pb.observations[i];
-    problem.AddResidualBlock(terms[i].cost(), terms[i].stereo ? loss_stereo : loss_mono, v.keyframe(o.keyframe),
-                             v.point(o.point));
+    problem.AddResidualBlock(terms[i].cost(), terms[i].stereo ? loss_stereo : loss_mono,
+                             v.keyframe(o.keyframe), v.point(o.point));
     kf_in[o.keyframe] = pt_in[o.point] = true;
   }
   if (problem.NumResidualBlocks() == 0) return stage;
@@ -171,15 +173,16 @@ Stage solveStage(const BaProblem& pb, const std::vector<Term>& terms, const std:
   }
   ceres::Solver::Summary summary;
   ceres::Solve(options, &problem, &summary);
-  stage.iterations = std::max(0, static_cast<int>(summary.iterations.size()) - 1);  // iteration 0 is the start
+  stage.iterations =
+      std::max(0, static_cast<int>(summary.iterations.size()) - 1);  // iteration 0 is the start
   stage.aborted = callback && callback->fired();
   return stage;
 }
 
 }  // namespace
 
-LocalBaResult localBundleAdjustment(const StereoCamera& camera, const BaProblem& pb, const LocalBaParams& params,
-                                    std::atomic<bool>* abort) {
+LocalBaResult localBundleAdjustment(const StereoCamera& camera, const BaProblem& pb,
+                                    const LocalBaParams& params, std::atomic<bool>* abort) {
   const auto t0 = std::chrono::steady_clock::now();
   checkInput(camera, pb, params);
   const ProjectionConstants k(camera);
@@ -228,8 +231,8 @@ LocalBaResult localBundleAdjustment(const StereoCamera& camera, const BaProblem&
       const BaObservation& o = pb.observations[i];
       use[i] = use[i] && !terms[i].isOutlier(v.keyframe(o.keyframe), v.point(o.point));
     }
-    const Stage s = solveStage(pb, terms, use, nullptr, nullptr, params.refine_iterations, params.linear_solver,
-                               abort, v, kf_touched);
+    const Stage s = solveStage(pb, terms, use, nullptr, nullptr, params.refine_iterations,
+                               params.linear_solver, abort, v, kf_touched);
     result.iterations += s.iterations;
     result.aborted = s.aborted;
   }
@@ -238,7 +241,8 @@ LocalBaResult localBundleAdjustment(const StereoCamera& camera, const BaProblem&
   for (size_t i = 0; i < pb.keyframes.size(); ++i) {
     const BaKeyframe& kf = pb.keyframes[i];
     if (kf.fixed) continue;
-    result.keyframes.push_back({i, kf.id, kf_touched[i] ? poseFromIncrement(v.keyframe(i), kf.T_c_w) : kf.T_c_w});
+    result.keyframes.push_back(
+        {i, kf.id, kf_touched[i] ? poseFromIncrement(v.keyframe(i), kf.T_c_w) : kf.T_c_w});
   }
   result.points.resize(pb.points.size());
   for (size_t j = 0; j < pb.points.size(); ++j)

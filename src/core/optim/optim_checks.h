@@ -20,7 +20,8 @@ inline std::string num(double v) { return std::to_string(v); }
 /// fx, fy > 0 and finite, cx, cy finite; bf > 0 when some observation is stereo.
 inline void checkCamera(const char* who, const StereoCamera& c, bool needs_stereo) {
   if (!(c.fx > 0) || !std::isfinite(c.fx) || !(c.fy > 0) || !std::isfinite(c.fy))
-    fail(who, "camera focal lengths must be positive and finite (fx=" + num(c.fx) + ", fy=" + num(c.fy) + ")");
+    fail(who,
+         "camera focal lengths must be positive and finite (fx=" + num(c.fx) + ", fy=" + num(c.fy) + ")");
   if (!std::isfinite(c.cx) || !std::isfinite(c.cy))
     fail(who, "camera principal point is not finite (cx=" + num(c.cx) + ", cy=" + num(c.cy) + ")");
   if (needs_stereo && (!(c.bf() > 0) || !std::isfinite(c.bf())))
@@ -33,8 +34,8 @@ inline void checkPose(const char* who, const Pose3& T, const std::string& name) 
   const Eigen::Matrix3d R = T.linear();
   const double err = (R.transpose() * R - Eigen::Matrix3d::Identity()).cwiseAbs().maxCoeff();
   if (err > 1e-6 || !(R.determinant() > 0))
-    fail(who, name + " has no rotation matrix (|R^T R - I| = " + num(err) + ", det = " + num(R.determinant()) +
-                  ")");
+    fail(who, name + " has no rotation matrix (|R^T R - I| = " + num(err) +
+                  ", det = " + num(R.determinant()) + ")");
 }
 
 /// Finite point and pixel, finite u_right (negative = monocular), inv_sigma2 > 0 and finite.
@@ -42,13 +43,15 @@ inline void checkObservation(const char* who, const std::string& name, const Eig
                              const Eigen::Vector2d& uv, double u_right, double inv_sigma2) {
   if (p_w && !p_w->allFinite()) fail(who, name + ": point p_w is not finite");
   if (!uv.allFinite()) fail(who, name + ": pixel uv is not finite");
-  if (!std::isfinite(u_right)) fail(who, name + ": u_right is not finite (use a negative value for monocular)");
+  if (!std::isfinite(u_right))
+    fail(who, name + ": u_right is not finite (use a negative value for monocular)");
   if (!(inv_sigma2 > 0) || !std::isfinite(inv_sigma2))
     fail(who, name + ": inv_sigma2 must be positive and finite (got " + num(inv_sigma2) + ")");
 }
 
 inline void checkPositive(const char* who, const char* name, double v) {
-  if (!(v > 0) || !std::isfinite(v)) fail(who, std::string("parameter ") + name + " must be positive (got " + num(v) + ")");
+  if (!(v > 0) || !std::isfinite(v))
+    fail(who, std::string("parameter ") + name + " must be positive (got " + num(v) + ")");
 }
 
 }  // namespace binloop::optim_detail

@@ -39,7 +39,8 @@ void checkInput(const StereoCamera& camera, const Pose3& T_c_w, const std::vecto
                 const PoseOptimizerParams& p) {
   if (p.rounds < 1) fail(kWho, "parameter rounds must be >= 1 (got " + std::to_string(p.rounds) + ")");
   if (p.iterations_per_round < 1)
-    fail(kWho, "parameter iterations_per_round must be >= 1 (got " + std::to_string(p.iterations_per_round) + ")");
+    fail(kWho,
+         "parameter iterations_per_round must be >= 1 (got " + std::to_string(p.iterations_per_round) + ")");
   if (p.robust_rounds < 0)
     fail(kWho, "parameter robust_rounds must be >= 0 (got " + std::to_string(p.robust_rounds) + ")");
   checkPositive(kWho, "chi2_mono", p.chi2_mono);
@@ -119,7 +120,8 @@ PoseOptimizationResult optimizePose(const StereoCamera& camera, const Pose3& T_c
     }
     ceres::Solver::Summary summary;
     ceres::Solve(options, &problem, &summary);
-    result.iterations += std::max(0, static_cast<int>(summary.iterations.size()) - 1);  // iteration 0 is the start
+    result.iterations +=
+        std::max(0, static_cast<int>(summary.iterations.size()) - 1);  // iteration 0 is the start
     ++result.rounds_run;
 
     // Every observation, those left out included, is judged again at the new pose.

@@ -8,12 +8,6 @@
 
 namespace binloop {
 
-RankingParams defaultRanking(const std::string& model) {
-  RankingParams r;
-  if (model == "hmvlad") r.distance_cap = 0.35;
-  return r;
-}
-
 const std::vector<std::string>& placeModelNames() {
   static const std::vector<std::string> names{"hbow", "fabmap", "vlad", "hmvlad", "vladpq"};
   return names;
@@ -43,7 +37,7 @@ std::unique_ptr<PlaceRecognizer> makePlaceRecognizer(const std::string& name, co
   if (o.model_file.empty()) throw PlaceError(name + ": no model file given");
   auto rec = make(type, o);
   if (!rec) throw PlaceError("unknown model '" + name + "'");
-  rec->setRanking(o.ranking ? *o.ranking : defaultRanking(name));
+  rec->setRanking(o.ranking);
   return rec;
 }
 

@@ -53,8 +53,8 @@ struct Measurement {
 
 /// Measures a camera-frame point: random octave, noise `pixel_sigma` * 1.2^octave, stereo when closer than
 /// maxStereoDepth (and `stereo` allowed). Not visible when z < 0.5 m or the true pixel is off the image.
-inline Measurement measure(const StereoCamera& cam, const Eigen::Vector3d& p_c, double pixel_sigma, bool stereo,
-                           HashRng& rng) {
+inline Measurement measure(const StereoCamera& cam, const Eigen::Vector3d& p_c, double pixel_sigma,
+                           bool stereo, HashRng& rng) {
   Measurement m;
   if (p_c.z() < 0.5) return m;
   const double u = cam.fx * p_c.x() / p_c.z() + cam.cx, v = cam.fy * p_c.y() / p_c.z() + cam.cy;
@@ -65,7 +65,8 @@ inline Measurement measure(const StereoCamera& cam, const Eigen::Vector3d& p_c, 
   m.inv_sigma2 = 1 / (m.sigma * m.sigma);
   m.uv = Eigen::Vector2d(u + pixel_sigma * m.sigma * rng.normal(), v + pixel_sigma * m.sigma * rng.normal());
   const double ur = u - cam.bf() / p_c.z();
-  if (stereo && p_c.z() < maxStereoDepth(cam) && ur >= 0) m.u_right = ur + pixel_sigma * m.sigma * rng.normal();
+  if (stereo && p_c.z() < maxStereoDepth(cam) && ur >= 0)
+    m.u_right = ur + pixel_sigma * m.sigma * rng.normal();
   return m;
 }
 
@@ -79,7 +80,8 @@ inline void corrupt(Measurement& m, HashRng& rng) {
 }
 
 /// A point seen at pixel (u, v) and depth z by camera T_c_w, in the world frame.
-inline Eigen::Vector3d backProject(const StereoCamera& cam, const Pose3& T_c_w, double u, double v, double z) {
+inline Eigen::Vector3d backProject(const StereoCamera& cam, const Pose3& T_c_w, double u, double v,
+                                   double z) {
   const Eigen::Vector3d p_c((u - cam.cx) / cam.fx * z, (v - cam.cy) / cam.fy * z, z);
   return T_c_w.inverse() * p_c;
 }

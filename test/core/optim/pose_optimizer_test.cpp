@@ -180,7 +180,8 @@ TEST(PoseOptimizer, InvalidInputThrows) {
   EXPECT_THROW_WITH(optimizePose(cam, f.T_c_w_true, f.obs), std::invalid_argument, "positive baseline");
   Pose3 bad = f.T_c_w_true;
   bad.translation().z() = nan;
-  EXPECT_THROW_WITH(optimizePose(f.cam, bad, f.obs), std::invalid_argument, "initial pose T_c_w is not finite");
+  EXPECT_THROW_WITH(optimizePose(f.cam, bad, f.obs), std::invalid_argument,
+                    "initial pose T_c_w is not finite");
   bad = f.T_c_w_true;
   bad.linear() *= 1.1;
   EXPECT_THROW_WITH(optimizePose(f.cam, bad, f.obs), std::invalid_argument, "no rotation matrix");
@@ -208,15 +209,18 @@ TEST(ReprojectionCosts, ResidualIsTheWhitenedProjectionError) {
   const Eigen::Vector3d p_c = T * p_w;
   const double u = cam.fx * p_c.x() / p_c.z() + cam.cx, v = cam.fy * p_c.y() / p_c.z() + cam.cy;
   const Eigen::Vector3d e(uv.x() - u, uv.y() - v, u_right - (u - cam.bf() / p_c.z()));
-  const double expected_stereo = inv_sigma2 * e.squaredNorm(), expected_mono = inv_sigma2 * e.head<2>().squaredNorm();
+  const double expected_stereo = inv_sigma2 * e.squaredNorm(),
+               expected_mono = inv_sigma2 * e.head<2>().squaredNorm();
   EXPECT_NEAR(u, 400, 1e-9);
 
   bool in_front = false;
-  EXPECT_NEAR(StereoReprojectionCost(k, T0, uv, u_right, inv_sigma2).chi2(xi, p_w.data(), &in_front), expected_stereo,
-              1e-9);
+  EXPECT_NEAR(StereoReprojectionCost(k, T0, uv, u_right, inv_sigma2).chi2(xi, p_w.data(), &in_front),
+              expected_stereo, 1e-9);
   EXPECT_TRUE(in_front);
-  EXPECT_NEAR(MonoReprojectionCost(k, T0, uv, -1, inv_sigma2).chi2(xi, p_w.data(), &in_front), expected_mono, 1e-9);
-  EXPECT_NEAR(StereoPoseOnlyCost(k, T0, p_w, uv, u_right, inv_sigma2).chi2(xi, &in_front), expected_stereo, 1e-9);
+  EXPECT_NEAR(MonoReprojectionCost(k, T0, uv, -1, inv_sigma2).chi2(xi, p_w.data(), &in_front), expected_mono,
+              1e-9);
+  EXPECT_NEAR(StereoPoseOnlyCost(k, T0, p_w, uv, u_right, inv_sigma2).chi2(xi, &in_front), expected_stereo,
+              1e-9);
   EXPECT_NEAR(MonoPoseOnlyCost(k, T0, p_w, uv, -1, inv_sigma2).chi2(xi, &in_front), expected_mono, 1e-9);
 
   const Eigen::Vector3d behind = T.inverse() * Eigen::Vector3d(1, 0, -3);
