@@ -69,6 +69,12 @@ void MapReplica::removeKeyframe(SlamKeyframeId id) {
 }
 
 void MapReplica::fuse(MapPointId removed, MapPointId kept) {
+  // Another stage may name a point that was itself fused meanwhile: merge what it has become.
+  for (int hops = 0; hops < 64; ++hops) {
+    auto r = replaced_.find(removed);
+    if (r == replaced_.end()) break;
+    removed = r->second;
+  }
   kept = resolve(kept);
   if (removed == kept || kept == kNoId) return;
   replaced_[removed] = kept;
@@ -80,8 +86,11 @@ void MapReplica::fuse(MapPointId removed, MapPointId kept) {
     for (SlamKeyframeId k : seen) {
       auto kf = keyframes_.find(k);
       if (kf == keyframes_.end()) continue;
+      // A keyframe that already sees the kept point drops the duplicate (as local mapping does).
+      const bool has_kept = std::find(kf->second.point_ids.begin(), kf->second.point_ids.end(), kept) !=
+                            kf->second.point_ids.end();
       for (MapPointId& q : kf->second.point_ids)
-        if (q == removed) q = kept;
+        if (q == removed) q = has_kept ? kNoId : kept;
       if (std::find(kv.begin(), kv.end(), k) == kv.end()) kv.push_back(k);
     }
   }

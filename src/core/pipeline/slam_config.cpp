@@ -2,7 +2,9 @@
 
 #include <cmath>
 #include <filesystem>
+#include <fstream>
 #include <functional>
+#include <limits>
 #include <map>
 #include <opencv2/core.hpp>
 #include <sstream>
@@ -38,6 +40,7 @@ std::map<std::string, std::map<std::string, Setting>> settingsOf(SlamConfig& c) 
        {{"init_min_stereo", {S::kInt, &t.init_min_stereo, 10}},
         {"last_frame_radius", {S::kFloat, &t.last_frame_radius, 0.5}},
         {"min_last_frame_matches", {S::kInt, &t.min_last_frame_matches, 3}},
+        {"motion_model_min_inliers", {S::kInt, &t.motion_model_min_inliers, 0}},
         {"local_map_radius", {S::kFloat, &t.local_map_radius, 0.1}},
         {"lost_radius", {S::kFloat, &t.lost_radius, 0.1}},
         {"min_inliers", {S::kInt, &t.min_inliers, 3}},
@@ -47,7 +50,8 @@ std::map<std::string, std::map<std::string, Setting>> settingsOf(SlamConfig& c) 
         {"keyframe_ref_ratio", {S::kFloat, &t.keyframe_ref_ratio, 0}},
         {"keyframe_close_tracked_max", {S::kInt, &t.keyframe_close_tracked_max, 0}},
         {"keyframe_close_untracked_min", {S::kInt, &t.keyframe_close_untracked_min, 0}},
-        {"new_points_min", {S::kInt, &t.new_points_min, 0}}}},
+        {"new_points_min", {S::kInt, &t.new_points_min, 0}},
+        {"create_far_points", {S::kBool, &t.create_far_points, 0}}}},
       {"mapping",
        {{"covisibility_min", {S::kInt, &m.covisibility_min, 1}},
         {"cull_after_keyframes", {S::kInt, &m.cull_after_keyframes, 1}},
@@ -73,10 +77,38 @@ double valueOf(const Setting& s) {
   return 0;
 }
 
+// OpenCV's YAML reader wraps an integer literal beyond 32 bits silently (99999999999 reads as 1215752191),
+// so whole numbers are checked on the file's text before it is parsed.
+void checkIntegerLiterals(const std::string& path) {
+  std::ifstream in(path);
+  std::string line, section;
+  while (std::getline(in, line)) {
+    const std::string code = line.substr(0, line.find('#'));
+    const auto colon = code.find(':');
+    if (colon == std::string::npos || code.empty() || code[0] == '%') continue;
+    const auto first = code.find_first_not_of(" \t");
+    std::string key = code.substr(first, colon - first);
+    while (!key.empty() && key.back() == ' ') key.pop_back();
+    std::string value = code.substr(colon + 1);
+    value.erase(0, value.find_first_not_of(" \t"));
+    while (!value.empty() && (value.back() == ' ' || value.back() == '\t' || value.back() == '\r')) value.pop_back();
+    if (first == 0) {
+      section = key;
+      continue;
+    }
+    size_t i = (!value.empty() && (value[0] == '-' || value[0] == '+')) ? 1 : 0;
+    if (i == value.size() || value.find_first_not_of("0123456789", i) != std::string::npos) continue;
+    if (std::stold(value) > std::numeric_limits<int>::max() || std::stold(value) < std::numeric_limits<int>::min())
+      throw ConfigError(path + ": " + section + "." + key + " = " + value + " is out of range (at most " +
+                        std::to_string(std::numeric_limits<int>::max()) + ")");
+  }
+}
+
 }  // namespace
 
 SlamConfig loadSlamConfig(const std::string& path) {
   if (!std::filesystem::is_regular_file(path)) throw ConfigError(path + ": no such file");
+  checkIntegerLiterals(path);
   cv::FileStorage fs;
   try {
     if (!fs.open(path, cv::FileStorage::READ | cv::FileStorage::FORMAT_YAML))
@@ -114,6 +146,9 @@ SlamConfig loadSlamConfig(const std::string& path) {
                           std::to_string(s.min) + ")");
       if ((s.kind == Setting::kInt || s.kind == Setting::kBool) && x != std::floor(x))
         throw ConfigError(path + ": " + section + "." + key + " must be a whole number");
+      if (s.kind == Setting::kInt && x > std::numeric_limits<int>::max())
+        throw ConfigError(path + ": " + section + "." + key + " = " + std::to_string(x) + " is out of range (at most " +
+                          std::to_string(std::numeric_limits<int>::max()) + ")");
       if (s.kind == Setting::kBool && x > 1) throw ConfigError(path + ": " + section + "." + key + " must be 0 or 1");
       switch (s.kind) {
         case Setting::kInt: *static_cast<int*>(s.ptr) = static_cast<int>(x); break;

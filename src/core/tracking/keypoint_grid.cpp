@@ -19,10 +19,11 @@ KeypointGrid::KeypointGrid(const std::vector<msg::KeyPoint>& kps, int width, int
 std::vector<int> KeypointGrid::near(float x, float y, float r, int min_level, int max_level) const {
   std::vector<int> out;
   if (kps_.empty() || !std::isfinite(x) || !std::isfinite(y)) return out;
-  const int x0 = std::max(0, static_cast<int>(std::floor((x - r) / cell_)));
-  const int x1 = std::min(cols_ - 1, static_cast<int>(std::floor((x + r) / cell_)));
-  const int y0 = std::max(0, static_cast<int>(std::floor((y - r) / cell_)));
-  const int y1 = std::min(rows_ - 1, static_cast<int>(std::floor((y + r) / cell_)));
+  if (!std::isfinite(r) || r < 0) return out;
+  // Cells are clamped on both sides: keypoints outside the image were binned into the border cells.
+  auto cell = [&](float v, int n) { return std::clamp(static_cast<int>(std::floor(std::clamp(v, -1e6f, 1e6f) / cell_)), 0, n - 1); };
+  const int x0 = cell(x - r, cols_), x1 = cell(x + r, cols_);
+  const int y0 = cell(y - r, rows_), y1 = cell(y + r, rows_);
   for (int cy = y0; cy <= y1; ++cy)
     for (int cx = x0; cx <= x1; ++cx)
       for (int i : cells_[static_cast<size_t>(cy) * cols_ + cx]) {

@@ -71,7 +71,7 @@ std::vector<uint8_t> rotationConsistent(const std::vector<float>& angle_diff_deg
   std::array<int, kBins> count{};
   std::vector<int> bin(angle_diff_deg.size());
   for (size_t i = 0; i < angle_diff_deg.size(); ++i) {
-    float a = std::fmod(angle_diff_deg[i], 360.f);
+    float a = std::isfinite(angle_diff_deg[i]) ? std::fmod(angle_diff_deg[i], 360.f) : 0.f;
     if (a < 0) a += 360.f;
     bin[i] = std::min(kBins - 1, static_cast<int>(a * kBins / 360.f));
     ++count[bin[i]];

@@ -84,16 +84,28 @@ Tracker::Output Tracker::track(const StereoFrame& in, int mapping_queue) {
     f.T_w_c = have_velocity_ ? orthonormalized(last_pose * velocity_) : last_pose;
     bool ok = false;
     if (state_ == msg::TrackingState::kOk) {
-      // The motion model when there is one; without it (right after the first keyframe) or when it fails,
-      // descriptor matching against the last frame, which needs no prediction.
-      ok = have_velocity_ && trackLastFrame(f);
-      if (!ok) {
-        std::fill(f.points.begin(), f.points.end(), kNoId);
-        std::fill(f.outlier.begin(), f.outlier.end(), 0);
+      // The motion model when there is one; without it (right after the first keyframe), when it fails, or
+      // when it holds on to only a few points (in a sharp turn a wrong prediction can still collect a dozen
+      // chance matches), descriptor matching against the last frame, which needs no prediction; the
+      // attempt that tracks more of the local map wins.
+      Frame by_model = f;
+      bool model_ok = have_velocity_ && trackLastFrame(by_model);
+      const bool model_strong = model_ok && inliers_ >= p_.motion_model_min_inliers;
+      model_ok = model_ok && trackLocalMap(by_model, p_.local_map_radius, p_.min_inliers);
+      const int model_inliers = model_ok ? inliers_ : 0;
+      if (model_ok && model_strong) {
+        f = std::move(by_model);
+        ok = true;
+      } else {
         f.T_w_c = last_pose;
-        ok = trackWithoutPrediction(f);
+        ok = trackWithoutPrediction(f) && trackLocalMap(f, p_.local_map_radius, p_.min_inliers);
+        if (model_ok && (!ok || model_inliers >= inliers_)) {
+          f = std::move(by_model);
+          inliers_ = model_inliers;
+          ok = true;
+          updateLocalKeyframes(f);  // the reference keyframe of the attempt that won
+        }
       }
-      ok = ok && trackLocalMap(f, p_.local_map_radius, p_.min_inliers);
     }
     if (!ok) {
       // Recovery without place recognition: the local map of the last keyframes, searched wide around the
@@ -344,7 +356,7 @@ msg::KeyFramePtr Tracker::makeKeyframe(Frame& f) {
   const Eigen::Vector3d o_w = f.T_w_c.translation();
   int made = 0;
   for (const auto& [depth, i] : by_depth) {
-    if (!isCloseDepth(depth, cam_, p_.stereo) && made >= p_.new_points_min) break;
+    if (!p_.create_far_points && !isCloseDepth(depth, cam_, p_.stereo) && made >= p_.new_points_min) break;
     if (kf->state.point_ids[i] != kNoId) continue;
     msg::MapPoint mp;
     mp.id = point_ids_.next();
