@@ -61,7 +61,8 @@ int main(int argc, char** argv) {
     if (!args.has("out")) throw CliError("--out is required");
     if (args.str("detector") != "none")
       throw CliError("--detector " + args.str("detector") + ": only 'none' is available until loop closing is built");
-    const SlamConfig config = args.has("config") ? loadSlamConfig(args.str("config")) : SlamConfig{};
+    SlamConfig config = args.has("config") ? loadSlamConfig(args.str("config")) : SlamConfig{};
+    config.tracker.seed = static_cast<uint64_t>(args.integer("seed"));
     const KittiSequence seq = KittiSequence::open(args.str("sequence_dir"));
     const long start = args.integer("start");
     long end = args.integer("end");

@@ -31,6 +31,9 @@ class MapReplica {
   /// Keyframes whose point_ids name this point (resolved id).
   const std::vector<SlamKeyframeId>& observers(MapPointId id) const;
 
+  /// The n most recently made keyframes still in the map, newest first.
+  std::vector<SlamKeyframeId> recentKeyframes(size_t n) const;
+
   size_t pointCount() const { return points_.size(); }
   size_t keyframeCount() const { return keyframes_.size(); }
   SlamKeyframeId lastKeyframe() const { return last_keyframe_; }

@@ -135,6 +135,16 @@ const msg::KeyframeState* MapReplica::keyframe(SlamKeyframeId id) const {
   return it == keyframes_.end() ? nullptr : &it->second;
 }
 
+std::vector<SlamKeyframeId> MapReplica::recentKeyframes(size_t n) const {
+  std::vector<SlamKeyframeId> ids;
+  for (const auto& [id, kf] : keyframes_) ids.push_back(id);
+  std::sort(ids.begin(), ids.end(), [](SlamKeyframeId a, SlamKeyframeId b) {
+    return counterOf(a) != counterOf(b) ? counterOf(a) > counterOf(b) : a > b;
+  });
+  if (ids.size() > n) ids.resize(n);
+  return ids;
+}
+
 const std::vector<SlamKeyframeId>& MapReplica::observers(MapPointId id) const {
   auto it = observers_.find(id);
   return it == observers_.end() ? kNone : it->second;

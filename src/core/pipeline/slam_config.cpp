@@ -48,6 +48,7 @@ std::map<std::string, std::map<std::string, Setting>> settingsOf(SlamConfig& c) 
         {"max_local_keyframes", {S::kInt, &t.max_local_keyframes, 1}},
         {"keyframe_max_frames", {S::kInt, &t.keyframe_max_frames, 1}},
         {"keyframe_ref_ratio", {S::kFloat, &t.keyframe_ref_ratio, 0}},
+        {"keyframe_ref_min_observers", {S::kInt, &t.keyframe_ref_min_observers, 1}},
         {"keyframe_close_tracked_max", {S::kInt, &t.keyframe_close_tracked_max, 0}},
         {"keyframe_close_untracked_min", {S::kInt, &t.keyframe_close_untracked_min, 0}},
         {"new_points_min", {S::kInt, &t.new_points_min, 0}},

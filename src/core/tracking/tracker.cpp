@@ -8,6 +8,7 @@
 #include <unordered_set>
 
 #include "binloop/io/data_error.h"
+#include "binloop/util/hash_random.h"
 
 namespace binloop {
 
@@ -15,6 +16,17 @@ namespace {
 
 double msSinceT(std::chrono::steady_clock::time_point t0) {
   return std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - t0).count();
+}
+
+// The motion T repeated k times (k need not be whole): rotation angle and translation scaled by k, which is
+// exact for k = 1 and close for the small motions between frames.
+Pose3 scaledMotion(const Pose3& T, double k) {
+  if (!(k > 0) || std::abs(k - 1) < 1e-9) return T;
+  const Eigen::AngleAxisd aa(T.linear());
+  Pose3 out = Pose3::Identity();
+  out.linear() = Eigen::AngleAxisd(aa.angle() * k, aa.axis()).toRotationMatrix();
+  out.translation() = T.translation() * k;
+  return out;
 }
 
 Eigen::Vector3d unproject(const msg::KeyPoint& k, const StereoCamera& cam) {
@@ -81,7 +93,12 @@ Tracker::Output Tracker::track(const StereoFrame& in, int mapping_queue) {
     tf.state = state_;
   } else {
     const Pose3 last_pose = lastPose();
-    f.T_w_c = have_velocity_ ? orthonormalized(last_pose * velocity_) : last_pose;
+    // The motion model over the time since the last tracked frame, so that frames lost in between (a dropped
+    // message, a skipped bad image) do not leave the prediction behind.
+    const double dt = f.stamp_s - last_->stamp_s;
+    const Pose3 predicted =
+        have_velocity_ ? orthonormalized(last_pose * scaledMotion(velocity_, dt / velocity_dt_)) : last_pose;
+    f.T_w_c = predicted;
     bool ok = false;
     if (state_ == msg::TrackingState::kOk) {
       // The motion model when there is one; without it (right after the first keyframe), when it fails, or
@@ -97,7 +114,7 @@ Tracker::Output Tracker::track(const StereoFrame& in, int mapping_queue) {
         f = std::move(by_model);
         ok = true;
       } else {
-        f.T_w_c = last_pose;
+        f.T_w_c = predicted;  // matching ignores it; the pose optimisation starts there
         ok = trackWithoutPrediction(f) && trackLocalMap(f, p_.local_map_radius, p_.min_inliers);
         if (model_ok && (!ok || model_inliers >= inliers_)) {
           f = std::move(by_model);
@@ -108,8 +125,9 @@ Tracker::Output Tracker::track(const StereoFrame& in, int mapping_queue) {
       }
     }
     if (!ok) {
-      // Recovery without place recognition: the local map of the last keyframes, searched wide around the
-      // predicted pose. Relocalisation with hbow + PnP replaces this for long gaps (SLAM issue, not yet done).
+      // Recovery: first the local map of the reference keyframe, searched wide around the prediction; then
+      // relocalisation against recent keyframes (relocalize()).
+      f.T_w_c = predicted;
       std::fill(f.points.begin(), f.points.end(), kNoId);
       std::fill(f.outlier.begin(), f.outlier.end(), 0);
       local_keyframes_.clear();
@@ -121,9 +139,10 @@ Tracker::Output Tracker::track(const StereoFrame& in, int mapping_queue) {
         }
       }
       ok = trackLocalMap(f, p_.lost_radius, p_.min_inliers_after_loss);
-      if (ok && state_ == msg::TrackingState::kOk) {
-        ok = true;
-      } else if (ok) {
+      // Still nothing: the pose is unknown; find it from scratch against recent keyframes.
+      bool relocalized = false;
+      if (!ok) ok = relocalized = relocalize(f);
+      if (ok && (relocalized || state_ != msg::TrackingState::kOk)) {
         state_ = msg::TrackingState::kRelocalized;
         frames_since_loss_ = 0;
       }
@@ -141,6 +160,7 @@ Tracker::Output Tracker::track(const StereoFrame& in, int mapping_queue) {
     state_ = msg::TrackingState::kOk;
     ++frames_since_loss_;
     velocity_ = last_pose.inverse() * f.T_w_c;
+    velocity_dt_ = dt > 0 ? dt : 1;
     have_velocity_ = true;
     if (needKeyframe(f, mapping_queue)) out.keyframe = makeKeyframe(f);
   }
@@ -238,6 +258,88 @@ bool Tracker::trackWithoutPrediction(Frame& f) {
   return inl >= 10;
 }
 
+bool Tracker::relocalize(Frame& f) {
+  const ScalePyramid& s = builder_.scales();
+  std::unique_ptr<Frame> best;
+  int best_inliers = 0;
+  std::vector<SlamKeyframeId> best_local;
+  SlamKeyframeId best_reference = reference_;
+  const Pose3 start = f.T_w_c;
+  for (SlamKeyframeId k : map_.recentKeyframes(static_cast<size_t>(p_.reloc_keyframes))) {
+    const msg::KeyframeState* kf = map_.keyframe(k);
+    std::vector<const msg::MapPoint*> pts;
+    std::unordered_set<MapPointId> seen;
+    for (MapPointId id : kf->point_ids) {
+      const msg::MapPoint* mp = id != kNoId ? map_.point(id) : nullptr;
+      if (mp && seen.insert(mp->id).second) pts.push_back(mp);
+    }
+    // Each point's best keypoint, if clearly better than the second (brute force: this runs once per lost
+    // frame and keyframe, not per tracked frame).
+    std::fill(f.points.begin(), f.points.end(), kNoId);
+    std::fill(f.outlier.begin(), f.outlier.end(), 0);
+    f.T_w_c = start;
+    std::vector<Eigen::Vector3d> p_w;
+    std::vector<Eigen::Vector2d> uv;
+    std::vector<double> w;
+    std::vector<int> kp_of;
+    for (const msg::MapPoint* mp : pts) {
+      int best = 256, second = 256, best_j = -1;
+      for (size_t j = 0; j < f.size(); ++j) {
+        const int d = hamming(mp->descriptor, f.descriptors[j]);
+        if (d < best) second = best, best = d, best_j = static_cast<int>(j);
+        else if (d < second) second = d;
+      }
+      if (best_j < 0 || best > 64 || best > 0.8 * second || f.points[best_j] != kNoId) continue;
+      f.points[best_j] = mp->id;
+      p_w.push_back(mp->p_w);
+      uv.emplace_back(f.keypoints[best_j].x, f.keypoints[best_j].y);
+      w.push_back(s.inv_sigma2[f.keypoints[best_j].octave]);
+      kp_of.push_back(best_j);
+    }
+    if (static_cast<int>(p_w.size()) < p_.reloc_min_matches) continue;
+    const PnpRansacResult r = solvePnpRansac(p_w, uv, w, cam_, p_.pnp, hashCombine(p_.seed, ++reloc_attempts_));
+    if (!r.ok) continue;
+    for (size_t i = 0; i < kp_of.size(); ++i)
+      if (!r.inlier[i]) f.points[kp_of[i]] = kNoId;
+    f.T_w_c = r.T_c_w.inverse();
+    if (optimizePose(f) < 10) continue;
+    for (size_t i = 0; i < f.size(); ++i)
+      if (f.outlier[i]) f.points[i] = kNoId, f.outlier[i] = 0;
+    // The keyframe's other points, searched wide around the PnP pose (ORB-SLAM2's th = 10), then refined.
+    {
+      const Pose3 T_c_w = f.T_w_c.inverse();
+      std::vector<ProjectedPoint> visible;
+      for (const msg::MapPoint* mp : pts) {
+        ProjectedPoint pp;
+        if (projectIntoFrame(*mp, T_c_w, cam_, s, &pp)) visible.push_back(pp);
+      }
+      matchProjectedPoints(f, visible, cam_, s, 10, p_.projection);
+      optimizePose(f);
+      for (size_t i = 0; i < f.size(); ++i)
+        if (f.outlier[i]) f.points[i] = kNoId, f.outlier[i] = 0;
+    }
+    const bool tracked = trackLocalMap(f, p_.lost_radius, p_.min_inliers_after_loss);
+    // Every candidate is tried and the one that explains most of the local map wins: with repeated
+    // structure a wrong pose can still gather a few dozen inliers.
+    if (tracked && (!best || inliers_ > best_inliers)) {
+      best = std::make_unique<Frame>(f);
+      best_inliers = inliers_;
+      best_local = local_keyframes_;
+      best_reference = reference_;
+    }
+  }
+  if (best) {
+    f = std::move(*best);
+    inliers_ = best_inliers;
+    local_keyframes_ = best_local;
+    reference_ = best_reference;
+    return true;
+  }
+  std::fill(f.points.begin(), f.points.end(), kNoId);
+  std::fill(f.outlier.begin(), f.outlier.end(), 0);
+  return false;
+}
+
 void Tracker::updateLocalKeyframes(const Frame& f) {
   std::unordered_map<SlamKeyframeId, int> count;
   for (size_t i = 0; i < f.size(); ++i) {
@@ -307,7 +409,7 @@ bool Tracker::trackLocalMap(Frame& f, float radius, int min_inliers) {
 bool Tracker::needKeyframe(const Frame& f, int mapping_queue) const {
   if (mapping_queue >= p_.max_mapping_queue) return false;
   const size_t kfs = map_.keyframeCount();
-  const size_t min_obs = kfs <= 2 ? 2 : 3;
+  const size_t min_obs = std::min<size_t>(kfs <= 2 ? 2 : 3, static_cast<size_t>(p_.keyframe_ref_min_observers));
   int ref_matches = 0;
   if (const msg::KeyframeState* ref = map_.keyframe(reference_))
     for (MapPointId id : ref->point_ids)

@@ -1,0 +1,219 @@
+// The SLAM stages end to end: real KITTI frames, a rendered stretch of route 06 (rendered here, in memory),
+// lock-step determinism, threaded mode, and bad input that must not stop tracking.
+#include <gtest/gtest.h>
+
+#include <cmath>
+#include <filesystem>
+#include <map>
+#include <limits>
+
+#include "binloop/eval/trajectory_metrics.h"
+#include "binloop/io/kitti_sequence.h"
+#include "binloop/io/trajectory_io.h"
+#include "binloop/pipeline/slam_pipeline.h"
+#include "binloop/sim/stereo_renderer.h"
+#include "binloop/sim/texture_bank.h"
+#include <opencv2/imgproc.hpp>
+
+#include "support/test_support.h"
+
+using namespace binloop;
+
+namespace {
+
+double rotationDeg(const Pose3& T) {
+  return Eigen::AngleAxisd(T.linear()).angle() * 180.0 / M_PI;
+}
+
+// Frames 0..n-1 of KITTI route 06 rendered as the `render` tool does (kitti04 camera, seed 1).
+struct RenderedStretch {
+  std::vector<Pose3> route;
+  std::vector<StereoFrame> frames;
+  StereoCamera cam = kittiCameraByName("kitti04");
+};
+
+const RenderedStretch* renderedStretch(int n) {
+  static std::map<int, RenderedStretch> cache;
+  auto it = cache.find(n);
+  if (it != cache.end()) return &it->second;
+  const std::string poses = test::sharedData("kitti/poses/06.txt");
+  if (!std::filesystem::exists(poses)) return nullptr;
+  RenderedStretch& s = cache[n];
+  s.route = readKittiPoses(poses);
+  const auto world = sim::World::build(s.route, sim::TextureBank::build(sim::defaultTexturePhotos(), 1), {}, 1);
+  sim::StereoRenderer r(world, s.cam, {}, 1);
+  for (int i = 0; i < n; ++i) {
+    StereoFrame f;
+    f.index = i;
+    f.stamp_s = 0.1 * i;
+    r.render(i, f.stamp_s, s.route[i], &f.left, &f.right);
+    s.frames.push_back(std::move(f));
+  }
+  return &s;
+}
+
+std::vector<msg::TrackedFrame> runOn(const std::vector<StereoFrame>& frames, const StereoCamera& cam, PipelineMode mode,
+                                     std::vector<Pose3>* final_poses = nullptr) {
+  SlamPipeline slam(cam, {}, {}, mode);
+  std::vector<msg::TrackedFrame> out;
+  for (const auto& f : frames) out.push_back(slam.process(f));
+  slam.finish();
+  if (final_poses) {
+    for (const auto& tf : out) {
+      Pose3 T_ref;
+      final_poses->push_back(tf.reference != kNoId && slam.mapper().keyframePose(tf.reference, &T_ref)
+                                 ? Pose3(T_ref * tf.T_ref_c)
+                                 : tf.T_w_c);
+    }
+  }
+  return out;
+}
+
+}  // namespace
+
+// Real images. The sample's ground truth moves 0.86 m per frame, but two independent estimates from its
+// images (binloop's, and OpenCV's SGBM + ORB + solvePnPRansac) agree on 0.66-0.74 m for the first frames and
+// on about twice the rotation; the bounds below are what the images support (see README, "Running the SLAM").
+TEST(SlamPipeline, RealKittiSampleIsTrackedThroughout) {
+  const std::string dir = test::sharedData("kitti/sample_00");
+  BINLOOP_REQUIRE_DATA(dir);
+  const KittiSequence seq = KittiSequence::open(dir);
+  std::vector<StereoFrame> frames;
+  for (size_t i = 0; i < seq.size(); ++i) frames.push_back(seq.load(i));
+  std::vector<Pose3> poses;
+  const auto tracked = runOn(frames, seq.camera(), PipelineMode::kLockStep, &poses);
+  ASSERT_EQ(tracked.size(), 11u);
+  for (const auto& tf : tracked) EXPECT_EQ(tf.state, msg::TrackingState::kOk) << "frame " << tf.frame_index << ": " << tf.problem;
+  const Pose3 err = seq.poses().back().inverse() * poses.back();
+  const double travelled = seq.poses().back().translation().norm();
+  EXPECT_LT(err.translation().norm(), 0.2 * travelled) << "last pose " << err.translation().transpose();
+  EXPECT_LT(rotationDeg(err), 1.5);
+  // Forward, as the car drives, by most of the ground truth's distance.
+  EXPECT_GT(poses.back().translation().z(), 0.75 * travelled);
+}
+
+TEST(SlamPipeline, RenderedRoute06StretchIsTrackedWithLowDrift) {
+  const RenderedStretch* s = renderedStretch(300);
+  if (!s) GTEST_SKIP() << "needs " << test::sharedData("kitti/poses/06.txt");
+  std::vector<Pose3> poses;
+  const auto tracked = runOn(s->frames, s->cam, PipelineMode::kLockStep, &poses);
+  for (const auto& tf : tracked) ASSERT_EQ(tf.state, msg::TrackingState::kOk) << "frame " << tf.frame_index << ": " << tf.problem;
+  MatchedPoses m;
+  for (size_t i = 0; i < poses.size(); ++i) {
+    m.frames.push_back(static_cast<int>(i));
+    m.gt.push_back(s->route[i]);
+    m.est.push_back(poses[i]);
+  }
+  m.gt_frames = poses.size();
+  const TrajectoryMetrics r = evaluateTrajectory(m);
+  // Measured: ATE 0.15 m and t_rel 0.31 % over 200 frames; the bounds leave room without hiding a failure.
+  EXPECT_LT(r.ate_rmse_m, 0.6);
+  ASSERT_TRUE(r.relative.valid) << r.relative.reason;
+  EXPECT_LT(r.relative.t_rel_pct, 1.0);
+  EXPECT_LT(r.relative.r_rel_deg_per_100m, 0.6);
+}
+
+TEST(SlamPipeline, LockStepRunsAreBitIdentical) {
+  const RenderedStretch* s = renderedStretch(300);
+  if (!s) GTEST_SKIP() << "needs " << test::sharedData("kitti/poses/06.txt");
+  const std::vector<StereoFrame> frames(s->frames.begin(), s->frames.begin() + 80);
+  std::vector<Pose3> a, b;
+  runOn(frames, s->cam, PipelineMode::kLockStep, &a);
+  runOn(frames, s->cam, PipelineMode::kLockStep, &b);
+  ASSERT_EQ(a.size(), b.size());
+  for (size_t i = 0; i < a.size(); ++i)
+    ASSERT_TRUE(a[i].matrix() == b[i].matrix()) << "frame " << i << " differs";
+}
+
+TEST(SlamPipeline, ThreadedModeTracksTheSameStretch) {
+  const RenderedStretch* s = renderedStretch(300);
+  if (!s) GTEST_SKIP() << "needs " << test::sharedData("kitti/poses/06.txt");
+  const std::vector<StereoFrame> frames(s->frames.begin(), s->frames.begin() + 150);
+  std::vector<Pose3> poses;
+  const auto tracked = runOn(frames, s->cam, PipelineMode::kThreaded, &poses);
+  for (const auto& tf : tracked) ASSERT_EQ(tf.state, msg::TrackingState::kOk) << "frame " << tf.frame_index;
+  const Pose3 err = s->route[149].inverse() * poses.back();
+  EXPECT_LT(err.translation().norm(), 0.5);
+  EXPECT_LT(rotationDeg(err), 0.5);
+}
+
+// Each bad frame is reported and skipped; the frames after it are tracked as if it had not come.
+TEST(SlamPipeline, BadFramesAreReportedAndTrackingGoesOn) {
+  const RenderedStretch* s = renderedStretch(300);
+  if (!s) GTEST_SKIP() << "needs " << test::sharedData("kitti/poses/06.txt");
+  SlamPipeline slam(s->cam, {}, {}, PipelineMode::kLockStep);
+  for (int i = 0; i < 10; ++i) ASSERT_EQ(slam.process(s->frames[i]).state, msg::TrackingState::kOk);
+
+  StereoFrame empty = s->frames[10];
+  empty.left = cv::Mat();
+  auto tf = slam.process(empty);
+  EXPECT_NE(tf.problem.find("frame 10: empty left image"), std::string::npos) << tf.problem;
+
+  StereoFrame mismatch = s->frames[10];
+  cv::resize(mismatch.right, mismatch.right, cv::Size(mismatch.right.cols / 2, mismatch.right.rows / 2));
+  tf = slam.process(mismatch);
+  EXPECT_NE(tf.problem.find("left image is 1226x370 but right is 613x185"), std::string::npos) << tf.problem;
+
+  StereoFrame colour = s->frames[10];
+  cv::cvtColor(colour.left, colour.left, cv::COLOR_GRAY2BGR);
+  cv::cvtColor(colour.right, colour.right, cv::COLOR_GRAY2BGR);
+  tf = slam.process(colour);
+  EXPECT_NE(tf.problem.find("images must be 8-bit grey (mono8)"), std::string::npos) << tf.problem;
+
+  StereoFrame back = s->frames[10];
+  back.stamp_s = 0.5;  // frame 9 was at 0.9 s
+  tf = slam.process(back);
+  EXPECT_NE(tf.problem.find("does not come after the last frame's"), std::string::npos) << tf.problem;
+
+  // New pixels: a copied StereoFrame shares the cached frame's, and assigning Mat::zeros() would write into them.
+  StereoFrame black = s->frames[10];
+  black.left = cv::Mat(black.left.size(), CV_8UC1, cv::Scalar(0));
+  black.right = cv::Mat(black.right.size(), CV_8UC1, cv::Scalar(0));
+  tf = slam.process(black);
+  EXPECT_EQ(tf.state, msg::TrackingState::kLost);
+  EXPECT_NE(tf.problem.find("lost"), std::string::npos) << tf.problem;
+
+  // Frame 11 comes after a gap of two frames and a lost frame: tracking takes up the map again.
+  for (int i = 11; i < 20; ++i) {
+    tf = slam.process(s->frames[i]);
+    EXPECT_NE(tf.state, msg::TrackingState::kLost) << "frame " << i << ": " << tf.problem;
+  }
+  const Pose3 err = s->route[19].inverse() * tf.T_w_c;
+  EXPECT_LT(err.translation().norm(), 0.3);
+}
+
+// Frames missing from the input: the motion model is carried over the time since the last tracked frame.
+void expectTrackedAfterGap(const RenderedStretch& s, int gap) {
+  SlamPipeline slam(s.cam, {}, {}, PipelineMode::kLockStep);
+  for (int i = 0; i < 100; ++i) ASSERT_EQ(slam.process(s.frames[i]).state, msg::TrackingState::kOk) << i;
+  for (int i = 100 + gap; i < 130 + gap; ++i) {
+    const msg::TrackedFrame tf = slam.process(s.frames[i]);
+    ASSERT_NE(tf.state, msg::TrackingState::kLost) << "frame " << i << ": " << tf.problem;
+    EXPECT_LT((s.route[i].translation() - tf.T_w_c.translation()).norm(), 0.3) << "frame " << i;
+  }
+}
+
+TEST(SlamPipeline, TrackingGoesOnAfterFiveMissingFrames) {
+  const RenderedStretch* s = renderedStretch(300);
+  if (!s) GTEST_SKIP() << "needs " << test::sharedData("kitti/poses/06.txt");
+  expectTrackedAfterGap(*s, 5);
+}
+
+// The SLAM issue's case: 20 frames (24 m) missing. Fails today: relocalisation against recent keyframes
+// (brute-force descriptor matches + PnP RANSAC) picks a pose 30 m behind, which the far points it matched
+// explain as well as the true one, and the wide local-map search from the (correct) prediction keeps only
+// a handful of inliers. Left disabled until relocalisation uses the hbow vocabulary over all keyframes.
+TEST(SlamPipeline, DISABLED_TrackingIsFoundAgainAfterTwentyMissingFrames) {
+  const RenderedStretch* s = renderedStretch(300);
+  if (!s) GTEST_SKIP() << "needs " << test::sharedData("kitti/poses/06.txt");
+  expectTrackedAfterGap(*s, 20);
+}
+
+TEST(SlamPipeline, CameraWithoutFocalLengthIsRefused) {
+  StereoCamera cam = kitti00Camera();
+  cam.fx = std::numeric_limits<double>::quiet_NaN();
+  EXPECT_THROW_WITH(Tracker t(cam), std::invalid_argument, "fx, fy and baseline must be positive");
+  cam = kitti00Camera();
+  cam.fx = 0;
+  EXPECT_THROW_WITH(Tracker t(cam), std::invalid_argument, "fx, fy and baseline must be positive");
+}
