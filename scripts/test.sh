@@ -4,12 +4,42 @@
 # with one summary line "binloop: N passed, N failed, N skipped".
 #   scripts/test.sh              everything
 #   scripts/test.sh --no-setup   skip the apt step (packages already installed)
+#   scripts/test.sh --sanitize   only the core unit tests, built with AddressSanitizer and
+#                                UndefinedBehaviorSanitizer into .build/core-sanitize (any report fails)
 set -uo pipefail
 source "$(dirname "${BASH_SOURCE[0]}")/env.sh"
 log="$BINLOOP_BUILD/test-logs"
+setup=1 sanitize=0
+for a in "$@"; do
+  case "$a" in
+    --no-setup) setup=0 ;;
+    --sanitize) sanitize=1 ;;
+    *) echo "test: unknown option $a (--no-setup, --sanitize)"; exit 2 ;;
+  esac
+done
 
-if [ "${1:-}" != --no-setup ]; then
+if [ "$setup" = 1 ]; then
   "$BINLOOP_ROOT/scripts/setup.sh" || { echo "test: set-up failed"; exit 1; }
+fi
+
+if [ "$sanitize" = 1 ]; then
+  san="$BINLOOP_BUILD/core-sanitize"
+  flags="-fsanitize=address,undefined -fno-sanitize-recover=undefined -fno-omit-frame-pointer"
+  [ -f "$san/CMakeCache.txt" ] || cmake -S "$BINLOOP_ROOT/cmake/core_only" -B "$san" -DCMAKE_BUILD_TYPE=RelWithDebInfo \
+    -DCMAKE_CXX_FLAGS="$flags" -DCMAKE_EXE_LINKER_FLAGS="-fsanitize=address,undefined" \
+    -DCMAKE_SHARED_LINKER_FLAGS="-fsanitize=address,undefined" >/dev/null
+  cmake --build "$san" -j "$BINLOOP_JOBS" || { echo "test: sanitize build failed"; echo "binloop: 0 passed, 1 failed"; exit 1; }
+  mkdir -p "$log"
+  rm -f "$log/sanitize.xml"
+  echo "== core tests under ASan + UBSan"
+  (cd "$san" && ASAN_OPTIONS=detect_leaks=1:abort_on_error=1 UBSAN_OPTIONS=print_stacktrace=1:halt_on_error=1 \
+    ctest --output-on-failure -j "$BINLOOP_JOBS" --timeout 2400 --output-junit "$log/sanitize.xml") \
+    2>&1 | tee "$log/sanitize.txt" | grep -vE '^ *Start|Test +#[0-9]+: .* Passed' || true
+  [ -f "$log/sanitize.xml" ] || echo '<testsuite><testcase name="ctest-did-not-run"><failure/></testcase></testsuite>' >"$log/sanitize.xml"
+  read -r p f s < <("$BINLOOP_ROOT/scripts/junit_summary.py" "$log/sanitize.xml")
+  echo "binloop: $p passed, $f failed, $s skipped (sanitized core; log $log/sanitize.txt)"
+  [ "$f" -eq 0 ]
+  exit
 fi
 "$BINLOOP_ROOT/scripts/build.sh" || { echo "test: build failed"; echo "binloop: 0 passed, 1 failed"; exit 1; }
 mkdir -p "$log"

@@ -73,7 +73,7 @@ uint64_t hashBytes(const void* data, size_t n, uint64_t seed) {
     h = (h ^ w) * 0x100000001B3ull + (h >> 29);
   }
   uint64_t tail = 0;
-  std::memcpy(&tail, p + i, n - i);
+  if (n > i) std::memcpy(&tail, p + i, n - i);
   return splitmix64(h ^ tail);
 }
 
@@ -93,7 +93,7 @@ uint64_t checksum64(const void* data, size_t n) {
   uint64_t h = n;
   for (int l = 0; l < 4; ++l) h = splitmix64(h ^ lane[l]);
   uint64_t tail[4] = {0, 0, 0, 0};
-  std::memcpy(tail, p + i, n - i);
+  if (n > i) std::memcpy(tail, p + i, n - i);  // an empty section may have no pointer at all
   for (uint64_t t : tail) h = splitmix64(h ^ t);
   return h;
 }
@@ -130,7 +130,7 @@ void ModelWriter::save(const std::string& path) const {
   std::unique_ptr<FILE, int (*)(FILE*)> f(std::fopen(tmp.c_str(), "wb"), &std::fclose);
   if (!f) throw PlaceError(path + ": cannot write");
   if (std::fwrite(c.bytes, 1, kHeaderBytes, f.get()) != kHeaderBytes ||
-      std::fwrite(payload_.data(), 1, payload_.size(), f.get()) != payload_.size())
+      (!payload_.empty() && std::fwrite(payload_.data(), 1, payload_.size(), f.get()) != payload_.size()))
     throw PlaceError(path + ": write failed (disk full?)");
   f.reset();
   std::filesystem::rename(tmp, path);
