@@ -137,7 +137,7 @@ struct RecognizerOptions {
   std::string model_file;   // the trained model (vocabulary) of this model type
   double fabmap_l2_offset = 0.05;  // see FabmapRecognizer
   double hbow_min_bar = 0.005;     // see HbowRecognizer
-  RankingParams ranking;
+  RankingParams ranking{};
 };
 
 /// `name` is one of hbow, fabmap, vlad, hmvlad, vladpq; throws PlaceError for another name, or when the
