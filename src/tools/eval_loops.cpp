@@ -22,18 +22,13 @@
 #include "binloop/io/trajectory_io.h"
 #include "binloop/place/place_recognizer.h"
 #include "binloop/util/cli_args.h"
+#include "binloop/util/percentile.h"
 #include "binloop/util/progress_bar.h"
 
 namespace fs = std::filesystem;
 using namespace binloop;
 
 namespace {
-
-double percentile(std::vector<double> v, double q) {
-  if (v.empty()) return 0;
-  std::sort(v.begin(), v.end());
-  return v[std::min(v.size() - 1, static_cast<size_t>(q * (v.size() - 1) + 0.5))];
-}
 
 struct ModelRun {
   std::string name;

@@ -80,7 +80,7 @@ class LocalMapper {
     uint64_t first_seq = 0;
   };
 
-  void insert(const msg::KeyFrame& kf, msg::LocalMapUpdate& u);
+  void insert(const msg::KeyFrame& kf);
   void updateConnections(KF& kf);
   void cullRecentPoints(msg::LocalMapUpdate& u);
   void fuseWithNeighbors(KF& kf, msg::LocalMapUpdate& u);

@@ -32,8 +32,8 @@ bool projectIntoFrame(const msg::MapPoint& p, const Pose3& T_c_w, const StereoCa
 
 /// Matches points to the frame's unmatched keypoints within th * (2.5 or 4 by viewing angle) * level scale
 /// of their projection; returns the number of new matches.
-int matchProjectedPoints(Frame& f, const std::vector<ProjectedPoint>& pts, const StereoCamera& cam,
-                         const ScalePyramid& s, float th, const ProjectionParams& p = {});
+int matchProjectedPoints(Frame& f, const std::vector<ProjectedPoint>& pts, const ScalePyramid& s, float th,
+                         const ProjectionParams& p = {});
 
 /// The last frame's matched points into the current one, predicted with `cur.T_w_c`; search radius th times
 /// the last keypoint's level scale, levels restricted by the direction of motion. `lookup` gives a map point

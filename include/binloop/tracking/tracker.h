@@ -78,6 +78,7 @@ class Tracker {
   bool initialize(Frame& f, msg::KeyFramePtr* kf);
   bool trackLastFrame(Frame& f);
   bool trackWithoutPrediction(Frame& f);
+  bool poseFromMatches(Frame& f, int matches);
   bool relocalize(Frame& f);
   bool trackLocalMap(Frame& f, float radius, int min_inliers);
   int optimizePose(Frame& f);
@@ -105,7 +106,6 @@ class Tracker {
   uint64_t last_keyframe_frame_ = 0;
   std::vector<SlamKeyframeId> local_keyframes_;
   int inliers_ = 0;
-  int frames_since_loss_ = 1000;
   uint64_t reloc_attempts_ = 0;
 };
 

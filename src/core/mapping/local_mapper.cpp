@@ -7,6 +7,8 @@
 #include <stdexcept>
 #include <unordered_set>
 
+#include "binloop/tracking/projection_search.h"
+
 namespace binloop {
 
 namespace {
@@ -87,7 +89,7 @@ void LocalMapper::updatePointShape(MP& mp) {
   mp.state.observations = static_cast<uint32_t>(mp.obs.size());
 }
 
-void LocalMapper::insert(const msg::KeyFrame& in, msg::LocalMapUpdate& u) {
+void LocalMapper::insert(const msg::KeyFrame& in) {
   if (in.descriptors.size() != in.keypoints.size() || in.state.point_ids.size() != in.keypoints.size())
     throw std::invalid_argument("keyframe " + std::to_string(in.id) + ": " + std::to_string(in.keypoints.size()) +
                                 " keypoints but " + std::to_string(in.descriptors.size()) + " descriptors and " +
@@ -241,24 +243,17 @@ void LocalMapper::fuseWithNeighbors(KF& kf, msg::LocalMapUpdate& u) {
   // Projects `points` into keyframe `t`; a match either adds an observation or merges two points.
   auto fuseInto = [&](KF& t, const std::vector<MapPointId>& points) {
     const Pose3 T_c_w = t.state.T_w_c.inverse();
-    const Eigen::Vector3d o_w = t.state.T_w_c.translation();
     for (MapPointId id0 : points) {
       const MapPointId id = resolve(id0);
       if (id == kNoId) continue;
       MP& mp = pts_.at(id);
       if (mp.obs.count(t.state.id)) continue;
-      const Eigen::Vector3d p_c = T_c_w * mp.state.p_w;
-      if (p_c.z() <= 0) continue;
-      const float u0 = static_cast<float>(camera_.fx * p_c.x() / p_c.z() + camera_.cx);
-      const float v0 = static_cast<float>(camera_.fy * p_c.y() / p_c.z() + camera_.cy);
-      if (u0 < 0 || u0 >= camera_.width || v0 < 0 || v0 >= camera_.height) continue;
-      const double dist = (mp.state.p_w - o_w).norm();
-      if (dist < 0.8 * mp.state.min_distance || dist > 1.2 * mp.state.max_distance) continue;
-      if ((mp.state.p_w - o_w).dot(mp.state.normal.cast<double>()) < 0.5 * dist) continue;
-      const int level = scales_.predictLevel(mp.state.max_distance, static_cast<float>(dist));
+      ProjectedPoint pp;  // in front, inside the image, within the distance range, less than 60 deg off
+      if (!projectIntoFrame(mp.state, T_c_w, camera_, scales_, &pp)) continue;
+      const int level = pp.level;
       const float r = p_.fuse_radius * scales_.scale[level];
       int best = std::numeric_limits<int>::max(), best_i = -1;
-      for (int i : t.grid.near(u0, v0, r, level - 1, level + 1)) {
+      for (int i : t.grid.near(pp.u, pp.v, r, level - 1, level + 1)) {
         const msg::KeyPoint& k = t.keypoints[i];
         bool front = false;
         const double chi2 = chi2Of(camera_, T_c_w, mp.state.p_w, k, scales_.inv_sigma2[k.octave], &front);
@@ -422,7 +417,7 @@ LocalMapper::Output LocalMapper::process(const msg::KeyFrame& in) {
   u->sequence = ++updates_;
   u->keyframe = in.id;
   touched_.clear();
-  insert(in, *u);
+  insert(in);
   KF& kf = kfs_.at(in.id);
   cullRecentPoints(*u);
   if (p_.fuse) fuseWithNeighbors(kf, *u);

@@ -11,6 +11,7 @@
 #include <memory>
 
 #include "binloop/optim/reprojection_costs.h"
+#include "observation_term.h"
 #include "optim_checks.h"
 
 namespace binloop {
@@ -19,24 +20,7 @@ namespace {
 using namespace optim_detail;
 constexpr const char* kWho = "localBundleAdjustment";
 
-// One observation: its cost function (stereo or mono) and its outlier threshold.
-struct Term {
-  std::unique_ptr<StereoReprojectionCost::CostFunction> stereo;
-  std::unique_ptr<MonoReprojectionCost::CostFunction> mono;
-  double chi2_max = 0;
-
-  ceres::CostFunction* cost() const {
-    return stereo ? static_cast<ceres::CostFunction*>(stereo.get()) : mono.get();
-  }
-  double chi2(const double* xi, const double* p_w, bool* in_front) const {
-    return stereo ? stereo->functor().chi2(xi, p_w, in_front) : mono->functor().chi2(xi, p_w, in_front);
-  }
-  bool isOutlier(const double* xi, const double* p_w) const {
-    bool in_front = false;
-    const double c = chi2(xi, p_w, &in_front);
-    return !in_front || !(c <= chi2_max);
-  }
-};
+using Term = ObservationTerm<StereoReprojectionCost::CostFunction, MonoReprojectionCost::CostFunction>;
 
 // ORB-SLAM2's mbAbortBA: Ceres calls this after every iteration (and after evaluating the start, iteration
 // 0). Terminating "successfully" keeps the parameters reached so far, as g2o's force-stop flag does.

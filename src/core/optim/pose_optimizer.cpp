@@ -8,6 +8,7 @@
 #include <memory>
 
 #include "binloop/optim/reprojection_costs.h"
+#include "observation_term.h"
 #include "optim_checks.h"
 
 namespace binloop {
@@ -16,24 +17,7 @@ namespace {
 using namespace optim_detail;
 constexpr const char* kWho = "optimizePose";
 
-// One observation: its cost function (stereo or mono) and its outlier threshold.
-struct Term {
-  std::unique_ptr<StereoPoseOnlyCost::CostFunction> stereo;
-  std::unique_ptr<MonoPoseOnlyCost::CostFunction> mono;
-  double chi2_max = 0;
-
-  ceres::CostFunction* cost() const {
-    return stereo ? static_cast<ceres::CostFunction*>(stereo.get()) : mono.get();
-  }
-  double chi2(const double* xi, bool* in_front) const {
-    return stereo ? stereo->functor().chi2(xi, in_front) : mono->functor().chi2(xi, in_front);
-  }
-  bool isOutlier(const double* xi) const {
-    bool in_front = false;
-    const double c = chi2(xi, &in_front);
-    return !in_front || !(c <= chi2_max);
-  }
-};
+using Term = ObservationTerm<StereoPoseOnlyCost::CostFunction, MonoPoseOnlyCost::CostFunction>;
 
 void checkInput(const StereoCamera& camera, const Pose3& T_c_w, const std::vector<PoseObservation>& obs,
                 const PoseOptimizerParams& p) {

@@ -33,9 +33,8 @@ bool projectIntoFrame(const msg::MapPoint& mp, const Pose3& T_c_w, const StereoC
   return true;
 }
 
-int matchProjectedPoints(Frame& f, const std::vector<ProjectedPoint>& pts, const StereoCamera& cam,
-                         const ScalePyramid& s, float th, const ProjectionParams& p) {
-  (void)cam;
+int matchProjectedPoints(Frame& f, const std::vector<ProjectedPoint>& pts, const ScalePyramid& s, float th,
+                         const ProjectionParams& p) {
   int matches = 0;
   for (const ProjectedPoint& pp : pts) {
     const float r = th * (pp.view_cos > 0.998f ? 2.5f : 4.0f) * s.scale[pp.level];

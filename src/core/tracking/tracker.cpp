@@ -144,7 +144,6 @@ Tracker::Output Tracker::track(const StereoFrame& in, int mapping_queue) {
       if (!ok) ok = relocalized = relocalize(f);
       if (ok && (relocalized || state_ != msg::TrackingState::kOk)) {
         state_ = msg::TrackingState::kRelocalized;
-        frames_since_loss_ = 0;
       }
     }
     if (!ok) {
@@ -158,7 +157,6 @@ Tracker::Output Tracker::track(const StereoFrame& in, int mapping_queue) {
     }
     tf.state = state_ == msg::TrackingState::kRelocalized ? state_ : msg::TrackingState::kOk;
     state_ = msg::TrackingState::kOk;
-    ++frames_since_loss_;
     velocity_ = last_pose.inverse() * f.T_w_c;
     velocity_dt_ = dt > 0 ? dt : 1;
     have_velocity_ = true;
@@ -208,9 +206,10 @@ int Tracker::optimizePose(Frame& f) {
   if (obs.size() < 3) return 0;
   const PoseOptimizationResult r = binloop::optimizePose(cam_, orthonormalized(f.T_w_c.inverse()), obs, p_.pose);
   f.T_w_c = orthonormalized(r.T_c_w.inverse());
+  // Every caller drops the outliers' matches, so that the next search may give those keypoints to other points.
   int inliers = 0;
   for (size_t j = 0; j < index.size(); ++j) {
-    f.outlier[index[j]] = r.outlier[j] ? 1 : 0;
+    if (r.outlier[j]) f.points[index[j]] = kNoId;
     inliers += !r.outlier[j];
   }
   return inliers;
@@ -226,36 +225,17 @@ bool Tracker::trackLastFrame(Frame& f) {
     std::fill(f.points.begin(), f.points.end(), kNoId);
     n = matchFromLastFrame(f, last, lookup, cam_, builder_.scales(), 2 * p_.last_frame_radius, p_.projection);
   }
-  if (n < p_.min_last_frame_matches) {
-    inliers_ = n;
-    return false;
-  }
-  const int inl = optimizePose(f);
-  for (size_t i = 0; i < f.size(); ++i)
-    if (f.outlier[i]) {
-      f.points[i] = kNoId;
-      f.outlier[i] = 0;
-    }
-  inliers_ = inl;
-  return inl >= 10;
+  return poseFromMatches(f, n);
 }
 
 bool Tracker::trackWithoutPrediction(Frame& f) {
   auto lookup = [this](MapPointId id) { return map_.point(id); };
-  Frame& last = *last_;
-  const int n = matchByDescriptor(f, last, lookup);
-  if (n < p_.min_last_frame_matches) {
-    inliers_ = n;
-    return false;
-  }
-  const int inl = optimizePose(f);
-  for (size_t i = 0; i < f.size(); ++i)
-    if (f.outlier[i]) {
-      f.points[i] = kNoId;
-      f.outlier[i] = 0;
-    }
-  inliers_ = inl;
-  return inl >= 10;
+  return poseFromMatches(f, matchByDescriptor(f, *last_, lookup));
+}
+
+bool Tracker::poseFromMatches(Frame& f, int matches) {
+  inliers_ = matches >= p_.min_last_frame_matches ? optimizePose(f) : matches;
+  return matches >= p_.min_last_frame_matches && inliers_ >= 10;
 }
 
 bool Tracker::relocalize(Frame& f) {
@@ -303,8 +283,6 @@ bool Tracker::relocalize(Frame& f) {
       if (!r.inlier[i]) f.points[kp_of[i]] = kNoId;
     f.T_w_c = r.T_c_w.inverse();
     if (optimizePose(f) < 10) continue;
-    for (size_t i = 0; i < f.size(); ++i)
-      if (f.outlier[i]) f.points[i] = kNoId, f.outlier[i] = 0;
     // The keyframe's other points, searched wide around the PnP pose (ORB-SLAM2's th = 10), then refined.
     {
       const Pose3 T_c_w = f.T_w_c.inverse();
@@ -313,10 +291,8 @@ bool Tracker::relocalize(Frame& f) {
         ProjectedPoint pp;
         if (projectIntoFrame(*mp, T_c_w, cam_, s, &pp)) visible.push_back(pp);
       }
-      matchProjectedPoints(f, visible, cam_, s, 10, p_.projection);
+      matchProjectedPoints(f, visible, s, 10, p_.projection);
       optimizePose(f);
-      for (size_t i = 0; i < f.size(); ++i)
-        if (f.outlier[i]) f.points[i] = kNoId, f.outlier[i] = 0;
     }
     const bool tracked = trackLocalMap(f, p_.lost_radius, p_.min_inliers_after_loss);
     // Every candidate is tried and the one that explains most of the local map wins: with repeated
@@ -396,13 +372,8 @@ bool Tracker::trackLocalMap(Frame& f, float radius, int min_inliers) {
       if (mp && projectIntoFrame(*mp, T_c_w, cam_, builder_.scales(), &pp)) visible.push_back(pp);
     }
   }
-  matchProjectedPoints(f, visible, cam_, builder_.scales(), radius, p_.projection);
+  matchProjectedPoints(f, visible, builder_.scales(), radius, p_.projection);
   inliers_ = optimizePose(f);
-  for (size_t i = 0; i < f.size(); ++i)
-    if (f.outlier[i]) {
-      f.points[i] = kNoId;
-      f.outlier[i] = 0;
-    }
   return inliers_ >= min_inliers;
 }
 

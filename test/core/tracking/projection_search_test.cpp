@@ -385,7 +385,7 @@ TEST(MatchProjectedPoints, EveryPointFindsItsKeypointAndNoDistractorIsMatched) {
   const auto pts = sc.project(predicted);
   ASSERT_EQ(pts.size(), sc.points.size()) << "every point should project";
   for (size_t i = 0; i < sc.true_points; ++i) EXPECT_EQ(pts[i].level, sc.level[i]) << i;
-  const int n = matchProjectedPoints(m.f, pts, sc.cam, sc.scales, 3);
+  const int n = matchProjectedPoints(m.f, pts, sc.scales, 3);
   expectAllRight(m.f, m.expected, n, static_cast<int>(sc.true_points));
   for (size_t i = 0; i < m.f.size(); ++i) EXPECT_EQ(m.f.outlier[i], 0);
 }
@@ -393,7 +393,7 @@ TEST(MatchProjectedPoints, EveryPointFindsItsKeypointAndNoDistractorIsMatched) {
 TEST(MatchProjectedPoints, MonocularKeypointsAndTightRadius) {
   Scene sc;
   auto m = sc.frame(sc.T_w_true, sc.T_w_true, /*stereo=*/false);
-  const int n = matchProjectedPoints(m.f, sc.project(sc.T_w_true), sc.cam, sc.scales, 1);
+  const int n = matchProjectedPoints(m.f, sc.project(sc.T_w_true), sc.scales, 1);
   expectAllRight(m.f, m.expected, n, static_cast<int>(sc.true_points));
 }
 
@@ -401,7 +401,7 @@ TEST(MatchProjectedPoints, RadiusTooSmallForTheOffsetFindsLess) {
   Scene sc;
   const Pose3 predicted = sc.T_w_true * pose(0, 1.5, 0, {0.3, 0, 0});  // ~20-40 px off
   auto m = sc.frame(sc.T_w_true, predicted);
-  const int n = matchProjectedPoints(m.f, sc.project(predicted), sc.cam, sc.scales, 1);
+  const int n = matchProjectedPoints(m.f, sc.project(predicted), sc.scales, 1);
   // Whatever it finds must still be right.
   expectAllRight(m.f, m.expected, n, n);
   EXPECT_LT(n, static_cast<int>(sc.true_points) / 2);
@@ -414,7 +414,7 @@ TEST(MatchProjectedPoints, MatchedKeypointsAreSkippedOutliersAreNot) {
   m.f.points[0] = other;  // keypoint 0 (point 0) already matched, trusted
   m.f.points[2] = other;  // keypoint 2 (point 1) matched but rejected by the pose optimisation
   m.f.outlier[2] = 1;
-  const int n = matchProjectedPoints(m.f, sc.project(sc.T_w_true), sc.cam, sc.scales, 3);
+  const int n = matchProjectedPoints(m.f, sc.project(sc.T_w_true), sc.scales, 3);
   EXPECT_EQ(n, static_cast<int>(sc.true_points) - 1);
   EXPECT_EQ(m.f.points[0], other);
   EXPECT_EQ(m.f.points[2], sc.points[1].id);
@@ -450,7 +450,7 @@ struct OnePoint {
     f.points.assign(f.size(), kNoId);
     f.outlier.assign(f.size(), 0);
   }
-  int match(float th = 1) { return matchProjectedPoints(f, pts, cam, s, th); }
+  int match(float th = 1) { return matchProjectedPoints(f, pts, s, th); }
 };
 
 TEST(MatchProjectedPoints, LevelWindowIsPredictedAndOneBelow) {

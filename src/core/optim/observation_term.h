@@ -1,0 +1,34 @@
+#pragma once
+// One observation in an optimiser (private to src/core/optim): its Ceres cost, stereo or mono, and its
+// outlier threshold. `Stereo` and `Mono` are the AutoDiffCostFunction types; their functors' chi2() take
+// the parameter blocks and then `bool* in_front`, which is all that differs between pose-only and BA terms.
+#include <ceres/cost_function.h>
+
+#include <memory>
+
+namespace binloop::optim_detail {
+
+template <typename Stereo, typename Mono>
+struct ObservationTerm {
+  std::unique_ptr<Stereo> stereo;
+  std::unique_ptr<Mono> mono;
+  double chi2_max = 0;
+
+  ceres::CostFunction* cost() const {
+    return stereo ? static_cast<ceres::CostFunction*>(stereo.get()) : mono.get();
+  }
+  /// chi2(blocks..., &in_front)
+  template <typename... Args>
+  double chi2(Args... args) const {
+    return stereo ? stereo->functor().chi2(args...) : mono->functor().chi2(args...);
+  }
+  /// Behind the camera, or chi2 above the threshold (or not a number).
+  template <typename... Blocks>
+  bool isOutlier(Blocks... blocks) const {
+    bool in_front = false;
+    const double c = chi2(blocks..., &in_front);
+    return !in_front || !(c <= chi2_max);
+  }
+};
+
+}  // namespace binloop::optim_detail
