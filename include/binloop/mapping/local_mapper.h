@@ -9,6 +9,9 @@
 #include <unordered_map>
 #include <vector>
 
+#include "binloop/map/ids.h"
+#include "binloop/mapping/epipolar_matcher.h"
+#include "binloop/mapping/triangulation.h"
 #include "binloop/messages/correction.h"
 #include "binloop/messages/keyframe.h"
 #include "binloop/messages/local_map_update.h"
@@ -22,6 +25,10 @@ struct LocalMapperParams {
   int covisibility_min = 15;       // shared points for an edge of the covisibility graph
   int cull_after_keyframes = 2;    // a new point is judged this many keyframes after its creation...
   int cull_min_observers = 3;      // ... and culled if fewer keyframes see it (ORB-SLAM2, stereo)
+  bool triangulate = true;         // new points from keypoints matched with covisible keyframes
+  int triangulate_neighbors = 10;  // strongest covisible keyframes searched (ORB-SLAM2)
+  EpipolarParams epipolar;
+  TriangulationParams triangulation;
   bool fuse = true;                // merge duplicates with neighbouring keyframes
   int fuse_neighbors = 10;         // first-order neighbours searched (plus 5 of each one's neighbours)
   float fuse_radius = 3;           // level-0 px at level 0
@@ -83,6 +90,7 @@ class LocalMapper {
   void insert(const msg::KeyFrame& kf);
   void updateConnections(KF& kf);
   void cullRecentPoints(msg::LocalMapUpdate& u);
+  void createNewPoints(KF& kf, msg::LocalMapUpdate& u);
   void fuseWithNeighbors(KF& kf, msg::LocalMapUpdate& u);
   void localBundleAdjustment(KF& kf, msg::LocalMapUpdate& u);
   void cullKeyframes(KF& kf, msg::LocalMapUpdate& u);
@@ -104,6 +112,7 @@ class LocalMapper {
   std::deque<MapPointId> recent_;
   std::vector<MapPointId> touched_;  // points whose state goes into this update
   std::atomic<bool> abort_{false};
+  IdCounter point_ids_{IdIssuer::kLocalMapping};
   uint64_t seq_ = 0, updates_ = 0;
   SlamKeyframeId first_kf_ = kNoId;
 };

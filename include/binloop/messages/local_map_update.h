@@ -21,6 +21,7 @@ struct LocalMapUpdate {
   double total_ms = 0, ba_ms = 0;
   int ba_iterations = 0;
   int ba_outliers = 0;
+  int points_triangulated = 0;  // created by two-view triangulation with covisible keyframes
 };
 
 using LocalMapUpdatePtr = std::shared_ptr<const LocalMapUpdate>;

@@ -94,6 +94,9 @@ void LocalMapper::insert(const msg::KeyFrame& in) {
     throw std::invalid_argument("keyframe " + std::to_string(in.id) + ": " + std::to_string(in.keypoints.size()) +
                                 " keypoints but " + std::to_string(in.descriptors.size()) + " descriptors and " +
                                 std::to_string(in.state.point_ids.size()) + " point ids");
+  if (in.id == kNoId || in.state.id != in.id)
+    throw std::invalid_argument("keyframe " + std::to_string(in.id) + ": its state names keyframe " +
+                                std::to_string(in.state.id));
   if (scales_.levels() == 0) scales_ = ScalePyramid(in.scale_factor, in.levels);
   camera_ = in.camera;
   KF& kf = kfs_[in.id];
@@ -211,6 +214,35 @@ std::vector<SlamKeyframeId> LocalMapper::neighbors(const KF& kf, int n) const {
     out.push_back(e.id);
   }
   return out;
+}
+
+void LocalMapper::createNewPoints(KF& kf, msg::LocalMapUpdate& u) {
+  for (SlamKeyframeId k : neighbors(kf, p_.triangulate_neighbors)) {
+    KF& o = kfs_.at(k);
+    // Closer than the stereo baseline: the stereo pair itself already saw these points with more parallax.
+    if ((o.state.T_w_c.translation() - kf.state.T_w_c.translation()).norm() < camera_.baseline_m) continue;
+    const EpipolarView va{&kf.state.T_w_c, &camera_, &kf.keypoints, &kf.descriptors, &kf.state.point_ids};
+    const EpipolarView vb{&o.state.T_w_c, &camera_, &o.keypoints, &o.descriptors, &o.state.point_ids};
+    for (const auto& [i, j] : matchAlongEpipolarLines(va, vb, scales_, p_.epipolar)) {
+      Eigen::Vector3d X;
+      const TriangulationView ta{&kf.state.T_w_c, &camera_, &kf.keypoints[i]};
+      const TriangulationView tb{&o.state.T_w_c, &camera_, &o.keypoints[j]};
+      if (triangulatePair(ta, tb, scales_, p_.triangulation, &X) != TriangulationResult::kOk) continue;
+      const MapPointId id = point_ids_.next();
+      MP& mp = pts_[id];
+      mp.state.id = id;
+      mp.state.p_w = X;
+      mp.state.reference = kf.state.id;
+      mp.state.descriptor = kf.descriptors[i];
+      mp.first_seq = kf.seq;
+      addObservation(mp, kf, i);
+      addObservation(mp, o, j);
+      updatePointShape(mp);
+      recent_.push_back(id);
+      touched_.push_back(id);
+      ++u.points_triangulated;
+    }
+  }
 }
 
 void LocalMapper::replacePoint(MapPointId removed, MapPointId kept, msg::LocalMapUpdate& u) {
@@ -420,6 +452,7 @@ LocalMapper::Output LocalMapper::process(const msg::KeyFrame& in) {
   insert(in);
   KF& kf = kfs_.at(in.id);
   cullRecentPoints(*u);
+  if (p_.triangulate) createNewPoints(kf, *u);
   if (p_.fuse) fuseWithNeighbors(kf, *u);
   if (p_.local_ba && kfs_.size() > 1) localBundleAdjustment(kf, *u);
   if (p_.cull_keyframes) cullKeyframes(kf, *u);

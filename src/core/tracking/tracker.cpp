@@ -96,8 +96,9 @@ Tracker::Output Tracker::track(const StereoFrame& in, int mapping_queue) {
     // The motion model over the time since the last tracked frame, so that frames lost in between (a dropped
     // message, a skipped bad image) do not leave the prediction behind.
     const double dt = f.stamp_s - last_->stamp_s;
+    const bool predict = have_velocity_ && dt <= p_.predict_through_loss_s;
     const Pose3 predicted =
-        have_velocity_ ? orthonormalized(last_pose * scaledMotion(velocity_, dt / velocity_dt_)) : last_pose;
+        predict ? orthonormalized(last_pose * scaledMotion(velocity_, dt / velocity_dt_)) : last_pose;
     f.T_w_c = predicted;
     bool ok = false;
     if (state_ == msg::TrackingState::kOk) {
@@ -148,7 +149,6 @@ Tracker::Output Tracker::track(const StereoFrame& in, int mapping_queue) {
     }
     if (!ok) {
       state_ = msg::TrackingState::kLost;
-      have_velocity_ = false;
       tf.state = state_;
       tf.problem = "lost: " + std::to_string(inliers_) + " inliers";
       tf.T_w_c = f.T_w_c;  // the prediction

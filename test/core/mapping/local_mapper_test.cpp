@@ -1,0 +1,163 @@
+#include "binloop/mapping/local_mapper.h"
+
+#include <gtest/gtest.h>
+
+#include "../optim/optim_test_scene.h"
+
+namespace binloop {
+namespace {
+
+// A synthetic world: points with one descriptor each, seen exactly (no pixel noise) by keyframes that
+// move along the optical axis; keyframe messages are made as tracking makes them.
+class LocalMapperTest : public ::testing::Test {
+ protected:
+  struct ScenePoint {
+    Eigen::Vector3d p_w;
+    Desc256 desc;
+    MapPointId id = kNoId;  // once a keyframe has created it
+  };
+
+  ScenePoint& addPoint(const Eigen::Vector3d& p) {
+    ScenePoint s;
+    s.p_w = p;
+    for (auto& w : s.desc.w) w = rng.next();
+    scene.push_back(s);
+    return scene.back();
+  }
+
+  // A keyframe at (x, 0, z) seeing the scene points `which`; `creates` of them become new stereo points
+  // (ids from the tracking counter), the other already created ones are named, and `mono` ones are
+  // keypoints without stereo and without a point.
+  msg::KeyFrame keyframe(double z, const std::vector<int>& which, bool creates, bool mono = false, double x = 0) {
+    msg::KeyFrame kf;
+    kf.id = kf.state.id = kf_ids.next();
+    kf.frame_index = frame++;
+    kf.stamp_s = 0.1 * static_cast<double>(kf.frame_index);
+    kf.camera = cam;
+    kf.state.T_w_c = Pose3::Identity();
+    kf.state.T_w_c.translation() = Eigen::Vector3d(x, 0, z);
+    for (int i : which) {
+      ScenePoint& s = scene[i];
+      const Eigen::Vector3d p = kf.state.T_w_c.inverse() * s.p_w;
+      msg::KeyPoint k;
+      k.x = static_cast<float>(cam.fx * p.x() / p.z() + cam.cx);
+      k.y = static_cast<float>(cam.fy * p.y() / p.z() + cam.cy);
+      if (!mono) {
+        k.depth = static_cast<float>(p.z());
+        k.right_x = static_cast<float>(k.x - cam.bf() / p.z());
+      }
+      kf.keypoints.push_back(k);
+      kf.descriptors.push_back(s.desc);
+      MapPointId id = mono ? kNoId : s.id;
+      if (!mono && creates && s.id == kNoId) {
+        msg::MapPoint mp;
+        mp.id = s.id = id = point_ids.next();
+        mp.p_w = s.p_w;
+        mp.descriptor = s.desc;
+        mp.reference = kf.id;
+        kf.new_points.push_back(mp);
+      }
+      kf.state.point_ids.push_back(id);
+    }
+    return kf;
+  }
+
+  static std::vector<int> range(int from, int to) {
+    std::vector<int> v;
+    for (int i = from; i < to; ++i) v.push_back(i);
+    return v;
+  }
+
+  static uint32_t weightTo(const msg::KeyframeState& s, SlamKeyframeId other) {
+    for (const auto& e : s.covisible)
+      if (e.id == other) return e.weight;
+    return 0;
+  }
+
+  StereoCamera cam = test::kitti();
+  HashRng rng{3};
+  std::vector<ScenePoint> scene;
+  IdCounter kf_ids{IdIssuer::kTracking}, point_ids{IdIssuer::kTracking};
+  uint64_t frame = 0;
+};
+
+TEST_F(LocalMapperTest, CovisibilityCountsSharedPointsAndTheSpanningTreeFollowsTheStrongest) {
+  for (int i = 0; i < 200; ++i) addPoint({rng.uniform(-6, 6), rng.uniform(-2, 1), rng.uniform(8, 18)});
+  LocalMapperParams p;
+  p.triangulate = p.fuse = p.local_ba = p.cull_keyframes = false;
+  p.cull_min_observers = 1;  // bookkeeping only: keep every point
+  LocalMapper m(p);
+  const msg::KeyFrame k1 = keyframe(0, range(0, 100), true);
+  const msg::KeyFrame k2 = keyframe(0.5, range(40, 140), true);  // shares 60 with k1
+  const msg::KeyFrame k3 = keyframe(1.0, range(90, 200), true);  // 10 with k1 (via k1's 90..99), 50 with k2
+  const auto o1 = m.process(k1);
+  EXPECT_TRUE(o1.refined->state.covisible.empty());
+  const auto o2 = m.process(k2);
+  ASSERT_EQ(o2.refined->state.covisible.size(), 1u);
+  EXPECT_EQ(o2.refined->state.covisible[0].id, k1.id);
+  EXPECT_EQ(o2.refined->state.covisible[0].weight, 60u);
+  EXPECT_EQ(o2.refined->state.parent, k1.id);
+  const auto o3 = m.process(k3);
+  EXPECT_EQ(weightTo(o3.refined->state, k2.id), 50u);
+  EXPECT_EQ(weightTo(o3.refined->state, k1.id), 0u) << "10 shared points are below the edge threshold (15)";
+  EXPECT_EQ(o3.refined->state.parent, k2.id);
+  // k1's own edges as sent to tracking with k2's update; k3's update leaves k1 out (not a neighbour).
+  const msg::KeyframeState* s1 = nullptr;
+  for (const auto& s : o2.update->keyframes)
+    if (s.id == k1.id) s1 = &s;
+  ASSERT_NE(s1, nullptr);
+  EXPECT_EQ(weightTo(*s1, k2.id), 60u);
+  for (const auto& s : o3.update->keyframes) EXPECT_NE(s.id, k1.id);
+  EXPECT_EQ(m.keyframeCount(), 3u);
+  EXPECT_EQ(m.pointCount(), 200u);
+}
+
+TEST_F(LocalMapperTest, KeypointsWithoutStereoSeenFromTwoKeyframesBecomePoints) {
+  // 150 near points both keyframes share (covisibility), 150 far ones 30-60 m away seen without stereo.
+  for (int i = 0; i < 150; ++i) addPoint({rng.uniform(-6, 6), rng.uniform(-2, 1), rng.uniform(8, 18)});
+  for (int i = 0; i < 150; ++i) addPoint({rng.uniform(-15, 15), rng.uniform(-3, 2), rng.uniform(30, 60)});
+  LocalMapperParams p;
+  p.cull_keyframes = false;
+  LocalMapper m(p);
+  auto withMono = [&](msg::KeyFrame kf, const msg::KeyFrame& mono) {
+    kf.keypoints.insert(kf.keypoints.end(), mono.keypoints.begin(), mono.keypoints.end());
+    kf.descriptors.insert(kf.descriptors.end(), mono.descriptors.begin(), mono.descriptors.end());
+    kf.state.point_ids.insert(kf.state.point_ids.end(), mono.state.point_ids.begin(), mono.state.point_ids.end());
+    return kf;
+  };
+  const msg::KeyFrame k1 = withMono(keyframe(0, range(0, 150), true), keyframe(0, range(150, 300), false, true));
+  // Sideways as well as forwards: straight ahead, 4 m of forward motion give far points too little parallax.
+  const msg::KeyFrame k2 =
+      withMono(keyframe(4, range(0, 150), false, false, 2), keyframe(4, range(150, 300), false, true, 2));
+  m.process(k1);
+  const auto o2 = m.process(k2);
+  EXPECT_GT(o2.update->points_triangulated, 120) << "of 150 far keypoints";
+  int checked = 0;
+  for (size_t i = 150; i < 300; ++i) {
+    const MapPointId id = o2.refined->state.point_ids[i];
+    if (id == kNoId) continue;
+    EXPECT_EQ(issuerOf(id), IdIssuer::kLocalMapping);
+    const msg::MapPoint* mp = nullptr;
+    for (const auto& q : o2.update->points)
+      if (q.id == id) mp = &q;
+    ASSERT_NE(mp, nullptr) << "a new point is sent to tracking";
+    const Eigen::Vector3d& truth = scene[i].p_w;
+    EXPECT_LT((mp->p_w - truth).norm(), 0.01 * truth.z()) << "keypoint " << i;
+    ++checked;
+  }
+  EXPECT_EQ(checked, o2.update->points_triangulated);
+}
+
+TEST_F(LocalMapperTest, AKeyframeNamingSizesThatDifferIsRefused) {
+  for (int i = 0; i < 50; ++i) addPoint({rng.uniform(-6, 6), rng.uniform(-2, 1), rng.uniform(8, 18)});
+  msg::KeyFrame k = keyframe(0, range(0, 50), true);
+  k.descriptors.pop_back();
+  LocalMapper m;
+  EXPECT_THROW(m.process(k), std::invalid_argument);
+  msg::KeyFrame k2 = keyframe(0, range(0, 50), true);
+  k2.state.id = kNoId;
+  EXPECT_THROW(m.process(k2), std::invalid_argument);
+}
+
+}  // namespace
+}  // namespace binloop
