@@ -11,6 +11,7 @@
 #include "binloop/optim/pnp_ransac.h"
 #include "binloop/optim/pose_optimizer.h"
 #include "binloop/tracking/frame.h"
+#include "binloop/tracking/keyframe_database.h"
 #include "binloop/tracking/projection_search.h"
 
 namespace binloop {
@@ -31,12 +32,16 @@ struct TrackerParams {
   // because a frame was black, and on repetitive facades a pose found without any prior can be off by one
   // facade (rendered 06: 874 inliers 2.3 m from the truth).
   double predict_through_loss_s = 3.0;
+  float recover_window_px = 80;  // ... where a local-map point is matched by descriptor alone around its prediction
   int min_inliers = 30;             // a frame is tracked with at least this many inliers after the local map
   int min_inliers_after_loss = 50;
   int max_local_keyframes = 80;
   // relocalisation when lost: descriptor matches to the points of recent keyframes, PnP RANSAC, pose
   // optimisation, then the local map
-  int reloc_keyframes = 10;      // most recent keyframes tried, newest first
+  int reloc_keyframes = 10;      // keyframes tried: those the vocabulary finds most alike, else the most recent
+  /// The hbow vocabulary that indexes tracking's keyframes for relocalisation anywhere in the map; without
+  /// one, only the most recent keyframes are tried.
+  std::shared_ptr<const VocabularyTree> vocabulary;
   int reloc_min_matches = 15;    // descriptor matches a keyframe needs before PnP is tried
   PnpRansacParams pnp;
   uint64_t seed = 1;             // for the RANSAC samples
@@ -85,6 +90,9 @@ class Tracker {
   bool trackWithoutPrediction(Frame& f);
   bool poseFromMatches(Frame& f, int matches);
   bool relocalize(Frame& f);
+  bool recoverAroundPrediction(Frame& f);
+  /// PnP RANSAC on the matches in f.points, pose optimisation, a wide search for `pts`, then the local map.
+  bool poseFromScratch(Frame& f, const std::vector<const msg::MapPoint*>& pts);
   bool trackLocalMap(Frame& f, float radius, int min_inliers);
   int optimizePose(Frame& f);
   void updateLocalKeyframes(const Frame& f);
@@ -112,6 +120,7 @@ class Tracker {
   std::vector<SlamKeyframeId> local_keyframes_;
   int inliers_ = 0;
   uint64_t reloc_attempts_ = 0;
+  std::unique_ptr<KeyframeDatabase> keyframe_db_;  // with a vocabulary only
 };
 
 }  // namespace binloop

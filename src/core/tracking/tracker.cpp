@@ -47,7 +47,9 @@ const char* msg::toString(TrackingState s) {
 }
 
 Tracker::Tracker(const StereoCamera& cam, const TrackerParams& p)
-    : cam_(cam), p_(p), builder_(cam, p.orb, p.stereo) {}
+    : cam_(cam), p_(p), builder_(cam, p.orb, p.stereo) {
+  if (p_.vocabulary) keyframe_db_ = std::make_unique<KeyframeDatabase>(p_.vocabulary);
+}
 
 Pose3 Tracker::lastPose() const {
   if (const msg::KeyframeState* ref = map_.keyframe(last_ref_)) return orthonormalized(ref->T_w_c * T_ref_last_);
@@ -140,6 +142,7 @@ Tracker::Output Tracker::track(const StereoFrame& in, int mapping_queue) {
         }
       }
       ok = trackLocalMap(f, p_.lost_radius, p_.min_inliers_after_loss);
+      if (!ok && predict) ok = recoverAroundPrediction(f);
       // Still nothing: the pose is unknown; find it from scratch against recent keyframes.
       bool relocalized = false;
       if (!ok) ok = relocalized = relocalize(f);
@@ -151,7 +154,7 @@ Tracker::Output Tracker::track(const StereoFrame& in, int mapping_queue) {
       state_ = msg::TrackingState::kLost;
       tf.state = state_;
       tf.problem = "lost: " + std::to_string(inliers_) + " inliers";
-      tf.T_w_c = f.T_w_c;  // the prediction
+      tf.T_w_c = predicted;  // not what a failed attempt left in f
       tf.track_ms = msSinceT(t0);
       return out;
     }
@@ -238,63 +241,134 @@ bool Tracker::poseFromMatches(Frame& f, int matches) {
   return matches >= p_.min_last_frame_matches && inliers_ >= 10;
 }
 
-bool Tracker::relocalize(Frame& f) {
+// Each point's best keypoint among `candidates(point)`, if clearly better than the second; the matches go
+// into f.points.
+template <typename Candidates>
+int matchPointsByDescriptor(Frame& f, const std::vector<const msg::MapPoint*>& pts, const Candidates& candidates) {
+  int n = 0;
+  for (const msg::MapPoint* mp : pts) {
+    int best = 256, second = 256, best_j = -1;
+    candidates(*mp, [&](int j) {
+      const int d = hamming(mp->descriptor, f.descriptors[j]);
+      if (d < best) second = best, best = d, best_j = j;
+      else if (d < second) second = d;
+    });
+    if (best_j < 0 || best > 64 || best > 0.8 * second || f.points[best_j] != kNoId) continue;
+    f.points[best_j] = mp->id;
+    ++n;
+  }
+  return n;
+}
+
+bool Tracker::poseFromScratch(Frame& f, const std::vector<const msg::MapPoint*>& pts) {
   const ScalePyramid& s = builder_.scales();
+  std::vector<Eigen::Vector3d> p_w;
+  std::vector<Eigen::Vector2d> uv;
+  std::vector<double> w;
+  std::vector<int> kp_of;
+  for (size_t j = 0; j < f.size(); ++j) {
+    const msg::MapPoint* mp = f.points[j] != kNoId ? map_.point(f.points[j]) : nullptr;
+    if (!mp) continue;
+    p_w.push_back(mp->p_w);
+    uv.emplace_back(f.keypoints[j].x, f.keypoints[j].y);
+    w.push_back(s.inv_sigma2[f.keypoints[j].octave]);
+    kp_of.push_back(static_cast<int>(j));
+  }
+  if (static_cast<int>(p_w.size()) < p_.reloc_min_matches) return false;
+  const PnpRansacResult r = solvePnpRansac(p_w, uv, w, cam_, p_.pnp, hashCombine(p_.seed, ++reloc_attempts_));
+  if (!r.ok) return false;
+  for (size_t i = 0; i < kp_of.size(); ++i)
+    if (!r.inlier[i]) f.points[kp_of[i]] = kNoId;
+  f.T_w_c = r.T_c_w.inverse();
+  if (optimizePose(f) < 10) return false;
+  // The other points, searched wide around the PnP pose (ORB-SLAM2's th = 10), then refined.
+  const Pose3 T_c_w = f.T_w_c.inverse();
+  std::vector<ProjectedPoint> visible;
+  for (const msg::MapPoint* mp : pts) {
+    ProjectedPoint pp;
+    if (projectIntoFrame(*mp, T_c_w, cam_, s, &pp)) visible.push_back(pp);
+  }
+  matchProjectedPoints(f, visible, s, 10, p_.projection);
+  optimizePose(f);
+  return trackLocalMap(f, p_.lost_radius, p_.min_inliers_after_loss);
+}
+
+bool Tracker::recoverAroundPrediction(Frame& f) {
+  // The local map's points that the predicted pose should see, each matched to the keypoints within a
+  // wide window of where it should appear: after a gap the prediction is metres off, too far for the
+  // projection search, yet close enough to rule out the look-alike places a search without it can find.
+  const ScalePyramid& s = builder_.scales();
+  const Pose3 start = f.T_w_c;
+  const Pose3 T_c_w = start.inverse();
+  std::vector<const msg::MapPoint*> pts;
+  std::vector<ProjectedPoint> visible;
+  std::unordered_set<MapPointId> seen;
+  for (SlamKeyframeId k : local_keyframes_) {
+    const msg::KeyframeState* kf = map_.keyframe(k);
+    if (!kf) continue;
+    for (MapPointId id : kf->point_ids) {
+      const msg::MapPoint* mp = id != kNoId ? map_.point(id) : nullptr;
+      if (!mp || !seen.insert(mp->id).second) continue;
+      pts.push_back(mp);
+      ProjectedPoint pp;
+      if (projectIntoFrame(*mp, T_c_w, cam_, s, &pp)) visible.push_back(pp);
+    }
+  }
+  std::unordered_map<MapPointId, const ProjectedPoint*> where;
+  std::vector<const msg::MapPoint*> in_view;
+  for (const ProjectedPoint& pp : visible) {
+    where[pp.point->id] = &pp;
+    in_view.push_back(pp.point);
+  }
+  std::fill(f.points.begin(), f.points.end(), kNoId);
+  std::fill(f.outlier.begin(), f.outlier.end(), 0);
+  const float r = p_.recover_window_px;
+  matchPointsByDescriptor(f, in_view, [&](const msg::MapPoint& mp, const auto& consider) {
+    const ProjectedPoint& pp = *where.at(mp.id);
+    for (int j : f.grid.near(pp.u, pp.v, r)) consider(j);
+  });
+  if (poseFromScratch(f, pts)) return true;
+  f.T_w_c = start;
+  std::fill(f.points.begin(), f.points.end(), kNoId);
+  std::fill(f.outlier.begin(), f.outlier.end(), 0);
+  return false;
+}
+
+bool Tracker::relocalize(Frame& f) {
   std::unique_ptr<Frame> best;
   int best_inliers = 0;
   std::vector<SlamKeyframeId> best_local;
   SlamKeyframeId best_reference = reference_;
   const Pose3 start = f.T_w_c;
-  for (SlamKeyframeId k : map_.recentKeyframes(static_cast<size_t>(p_.reloc_keyframes))) {
+  std::vector<SlamKeyframeId> tries;
+  if (keyframe_db_) {
+    tries = keyframe_db_->candidates(f.descriptors, static_cast<size_t>(p_.reloc_keyframes), [this](SlamKeyframeId k) {
+      std::vector<SlamKeyframeId> n;
+      if (const msg::KeyframeState* kf = map_.keyframe(k))
+        for (const auto& e : kf->covisible)
+          if (n.size() < 10) n.push_back(e.id);
+      return n;
+    });
+  } else {
+    tries = map_.recentKeyframes(static_cast<size_t>(p_.reloc_keyframes));
+  }
+  for (SlamKeyframeId k : tries) {
     const msg::KeyframeState* kf = map_.keyframe(k);
+    if (!kf) continue;
     std::vector<const msg::MapPoint*> pts;
     std::unordered_set<MapPointId> seen;
     for (MapPointId id : kf->point_ids) {
       const msg::MapPoint* mp = id != kNoId ? map_.point(id) : nullptr;
       if (mp && seen.insert(mp->id).second) pts.push_back(mp);
     }
-    // Each point's best keypoint, if clearly better than the second (brute force: this runs once per lost
-    // frame and keyframe, not per tracked frame).
+    // Brute force: this runs once per lost frame and keyframe, not per tracked frame.
     std::fill(f.points.begin(), f.points.end(), kNoId);
     std::fill(f.outlier.begin(), f.outlier.end(), 0);
     f.T_w_c = start;
-    std::vector<Eigen::Vector3d> p_w;
-    std::vector<Eigen::Vector2d> uv;
-    std::vector<double> w;
-    std::vector<int> kp_of;
-    for (const msg::MapPoint* mp : pts) {
-      int best = 256, second = 256, best_j = -1;
-      for (size_t j = 0; j < f.size(); ++j) {
-        const int d = hamming(mp->descriptor, f.descriptors[j]);
-        if (d < best) second = best, best = d, best_j = static_cast<int>(j);
-        else if (d < second) second = d;
-      }
-      if (best_j < 0 || best > 64 || best > 0.8 * second || f.points[best_j] != kNoId) continue;
-      f.points[best_j] = mp->id;
-      p_w.push_back(mp->p_w);
-      uv.emplace_back(f.keypoints[best_j].x, f.keypoints[best_j].y);
-      w.push_back(s.inv_sigma2[f.keypoints[best_j].octave]);
-      kp_of.push_back(best_j);
-    }
-    if (static_cast<int>(p_w.size()) < p_.reloc_min_matches) continue;
-    const PnpRansacResult r = solvePnpRansac(p_w, uv, w, cam_, p_.pnp, hashCombine(p_.seed, ++reloc_attempts_));
-    if (!r.ok) continue;
-    for (size_t i = 0; i < kp_of.size(); ++i)
-      if (!r.inlier[i]) f.points[kp_of[i]] = kNoId;
-    f.T_w_c = r.T_c_w.inverse();
-    if (optimizePose(f) < 10) continue;
-    // The keyframe's other points, searched wide around the PnP pose (ORB-SLAM2's th = 10), then refined.
-    {
-      const Pose3 T_c_w = f.T_w_c.inverse();
-      std::vector<ProjectedPoint> visible;
-      for (const msg::MapPoint* mp : pts) {
-        ProjectedPoint pp;
-        if (projectIntoFrame(*mp, T_c_w, cam_, s, &pp)) visible.push_back(pp);
-      }
-      matchProjectedPoints(f, visible, s, 10, p_.projection);
-      optimizePose(f);
-    }
-    const bool tracked = trackLocalMap(f, p_.lost_radius, p_.min_inliers_after_loss);
+    matchPointsByDescriptor(f, pts, [&](const msg::MapPoint&, const auto& consider) {
+      for (size_t j = 0; j < f.size(); ++j) consider(static_cast<int>(j));
+    });
+    const bool tracked = poseFromScratch(f, pts);
     // Every candidate is tried and the one that explains most of the local map wins: with repeated
     // structure a wrong pose can still gather a few dozen inliers.
     if (tracked && (!best || inliers_ > best_inliers)) {
@@ -449,12 +523,17 @@ msg::KeyFramePtr Tracker::makeKeyframe(Frame& f) {
     ++made;
   }
   map_.add(*kf);
+  if (keyframe_db_) keyframe_db_->add(kf->id, kf->descriptors);
   reference_ = kf->id;
   last_keyframe_frame_ = f.index;
   return kf;
 }
 
-void Tracker::apply(const msg::LocalMapUpdate& u) { map_.apply(u); }
+void Tracker::apply(const msg::LocalMapUpdate& u) {
+  map_.apply(u);
+  if (keyframe_db_)
+    for (SlamKeyframeId k : u.culled_keyframes) keyframe_db_->remove(k);
+}
 
 void Tracker::apply(const msg::Correction& c) { map_.apply(c); }
 
