@@ -43,9 +43,16 @@ if [ -f "$seq/poses.txt" ]; then
   "$bl" eval-traj --gt "$seq/poses.txt" --est "$out/slam/trajectory.kitti.txt" --plot "$out/slam/trajectory.png"
 fi
 
-# Loop detection. hbow's vocabulary (21 MB) is not tracked; it is made once from rendered route 08.
+# Loop detection. hbow's vocabulary (26 MB) is not tracked; it is made once from rendered route 08, and
+# made again when it predates model files that record their extractor (version < 3: trained on OpenCV's
+# ORB, which the SLAM's descriptors do not match).
 models=fabmap,vlad,hmvlad,vladpq
-if [ ! -f "$BINLOOP_ROOT/vocab/kitti08/hbow.bin" ] && [ -f "$BINLOOP_ROOT/../shared/data/kitti/poses/08.txt" ]; then
+hbow_file="$BINLOOP_ROOT/vocab/kitti08/hbow.bin"
+if [ -f "$hbow_file" ] && [ "$(od -An -tu4 -j8 -N4 "$hbow_file" | tr -d ' ')" -lt 3 ]; then
+  echo "demo: $hbow_file was trained with an older extractor; making it again"
+  rm -f "$hbow_file"
+fi
+if [ ! -f "$hbow_file" ] && [ -f "$BINLOOP_ROOT/../shared/data/kitti/poses/08.txt" ]; then
   echo "demo: making the hbow vocabularies once (renders route 08, about 6 minutes): vocab/make_vocab.sh hbow"
   "$BINLOOP_ROOT/vocab/make_vocab.sh" hbow 2> >(grep -v 'libpng warning' >&2)
 fi

@@ -1,23 +1,33 @@
 #!/bin/bash
-# Re-makes the shipped vocabularies exactly as they were made (README, "Shipped vocabularies").
-#   vocab/kitti08/<model>.bin  — every model, trained on rendered KITTI route 08 only (every 8th frame,
-#                                1000 ORB features per frame), as the thesis trained on KITTI 08.
+# Re-makes the shipped vocabularies exactly as they were made (README, "Vocabularies").
+# Every image goes through binloop's ORB-SLAM2-style extractor with the SLAM's settings (config/kitti.yaml's
+# orb: 2000 features, scale 1.2, 8 levels, FAST 20/7, 30-px cells), which `train` uses by default, so the
+# SLAM and `eval-loops` feed these models the descriptors they were trained on; each model file records
+# those settings in its header, and loaders refuse a model trained with others (--force-extractor).
+#   vocab/kitti08/<model>.bin  — every model, trained on rendered KITTI route 08 only (every 8th frame, full
+#                                size 1241x376, as the SLAM sees its keyframes), as the thesis trained on
+#                                KITTI 08.
 #   vocab/photos/<model>.bin   — every model for real images: the Debian photos (opencv-doc, python3-skimage,
 #                                one image per plasma-workspace-wallpapers wallpaper) except those of the
 #                                real-image loop sets (data/loop_sets/*.txt), plus every 16th frame of
-#                                rendered route 08, 2000 ORB features per image.
+#                                rendered route 08; longer side scaled to 1024 first (--max-side 1024, so
+#                                query real images with the same option).
 # Needs ../shared/data/kitti/poses/08.txt for the route; takes about 15 minutes on 2 cores.
-# The hbow files (21-25 MB) are too large to track and are made here; the other four are tracked.
-# `vocab/make_vocab.sh hbow` makes only the two hbow files (render of 08 plus under a minute of training).
+# The hbow files (21-27 MB) are too large to track and are made here; the other four are tracked.
+# `vocab/make_vocab.sh hbow` makes only the two hbow files (render of 08 plus about a minute of training).
 # `vocab/make_vocab.sh photos` makes only vocab/photos/.
+# BINLOOP_TOOLS=<dir> runs the tools from <dir> instead of scripts/binloop (a build of the core alone).
 set -euo pipefail
 source "$(dirname "$0")/../scripts/env.sh"
 cd "$BINLOOP_ROOT"
+bl() {
+  if [ -n "${BINLOOP_TOOLS:-}" ]; then "$BINLOOP_TOOLS/$1" "${@:2}"; else scripts/binloop "$@"; fi
+}
 work="${BINLOOP_VOCAB_WORK:-$BINLOOP_BUILD/vocab-work}"
 seq08="$work/render08"
 shared="${BINLOOP_SHARED_DATA:-$BINLOOP_ROOT/../shared/data}"
 if [ ! -f "$seq08/poses.txt" ]; then
-  scripts/binloop render --route "$shared/kitti/poses/08.txt" --times "$shared/kitti/times/08.txt" \
+  bl render --route "$shared/kitti/poses/08.txt" --times "$shared/kitti/times/08.txt" \
     --calib kitti04 --out "$seq08" --force
 fi
 mkdir -p vocab/kitti08 vocab/photos
@@ -30,7 +40,7 @@ for m in $kitti_models; do
   # revisits and hmvlad found 2 of the 4 revisit segments of rendered route 00; with 4 it finds all 4.
   extra=""
   [ "$m" = hmvlad ] && extra="--k 4"
-  scripts/binloop train "$m" --images "$seq08" --every 8 --seed 1 $extra --out "vocab/kitti08/$m.bin"
+  bl train "$m" --images "$seq08" --every 8 --seed 1 $extra --out "vocab/kitti08/$m.bin"
 done
 stage="$work/photos"
 rm -rf "$stage" && mkdir -p "$stage"
@@ -60,6 +70,6 @@ echo "make_vocab: $i training images for vocab/photos (loop-set images left out)
 for m in $models; do
   extra=""
   [ "$m" = hmvlad ] && extra="--k 4"
-  scripts/binloop train "$m" --images "$stage" --features 2000 --max-side 1024 --seed 1 --skip-unreadable $extra \
+  bl train "$m" --images "$stage" --max-side 1024 --seed 1 --skip-unreadable $extra \
     --out "vocab/photos/$m.bin"
 done

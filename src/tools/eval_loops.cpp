@@ -60,7 +60,8 @@ int main(int argc, char** argv) {
       .option("hbow-min-bar", "hbow's bar never goes below this L1 score", "0.005")
       .option("rank-floor", "ranking: an L1-score bar (hbow) counts as at least this ", "0.02")
       .option("rank-cap", "ranking: a distance bar (vlad, hmvlad, vladpq) counts as at most this fraction of the bits", "0.35")
-      .option("dump-ranked", "also write ranked_<model>.csv: each query's bar and its N best keyframes by raw score", "0");
+      .option("dump-ranked", "also write ranked_<model>.csv: each query's bar and its N best keyframes by raw score", "0")
+      .flag("force-extractor", "use a model trained with other extractor settings than these (warns instead of refusing)");
   declareExtractOptions(args);
   return runTool("eval-loops", [&] {
     if (!args.parse(argc, argv)) return 0;
@@ -79,6 +80,17 @@ int main(int argc, char** argv) {
       for (std::string m; std::getline(ss, m, ',');) models.push_back(m);
     }
     for (const auto& m : models) modelTypeFromName(m);  // unknown names fail before any work
+    const ExtractOptions eo = extractOptionsFrom(args);
+    // Every model file must have been trained on descriptors of these settings (or --force-extractor):
+    // checked before any image is read, from the headers alone.
+    ExtractorCheck extractor_check;
+    extractor_check.expected = extractorSettings(eo);
+    extractor_check.force = args.has("force-extractor");
+    extractor_check.warn = [](const std::string& line) { std::cerr << "eval-loops: warning: " << line << "\n"; };
+    const auto modelFile = [&](const std::string& name) {
+      return (fs::path(args.str("vocab-dir")) / (name + ".bin")).string();
+    };
+    for (const auto& m : models) checkModelExtractor(modelFile(m), extractor_check);
     const auto images = listImages(args.str("sequence"));
     std::vector<Pose3> poses;
     const std::string poses_path = args.has("poses") ? args.str("poses") : (fs::path(args.str("sequence")) / "poses.txt").string();
@@ -119,7 +131,6 @@ int main(int argc, char** argv) {
       segments.back().insert(q);
     }
 
-    const ExtractOptions eo = extractOptionsFrom(args);
     std::vector<std::string> kf_paths;
     for (int f : kf_frames) kf_paths.push_back(images[f]);
     std::vector<Descriptors> desc;
@@ -156,7 +167,9 @@ int main(int argc, char** argv) {
     };
     for (const auto& name : models) {
       RecognizerOptions ro;
-      ro.model_file = (fs::path(args.str("vocab-dir")) / (name + ".bin")).string();
+      ro.model_file = modelFile(name);
+      ro.extractor = extractor_check;
+      ro.extractor.warn = [](const std::string&) {};  // warned once above
       ro.fabmap_l2_offset = args.number("fabmap-l2-offset");
       ro.hbow_min_bar = args.number("hbow-min-bar");
       ro.ranking.score_floor = args.number("rank-floor");

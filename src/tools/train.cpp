@@ -37,12 +37,14 @@ int main(int argc, char** argv) {
       if (type != binloop::ModelType::kHbow) throw binloop::CliError("--import makes hbow models only");
       const auto tree = binloop::importDbow2(args.str("import"));
       binloop::ModelHeader h;
+      h.extractor.kind = binloop::ExtractorKind::kDbow2Import;  // another BRIEF pattern than binloop's
       binloop::saveHbowModel(tree, h, args.str("out"));
       std::cout << "imported " << args.str("import") << ": k=" << tree.k() << " L=" << tree.levels() << ", "
                 << tree.words() << " words -> " << args.str("out") << "\n";
       return 0;
     }
     if (!args.has("images")) throw binloop::CliError("--images (or --import) is required");
+    binloop::ExtractOptions eo = binloop::extractOptionsFrom(args);
     std::vector<std::string> paths;
     const long every = args.integer("every");
     if (every < 1) throw binloop::CliError("--every must be >= 1");
@@ -50,7 +52,6 @@ int main(int argc, char** argv) {
       const auto files = binloop::listImages(dir);
       for (size_t i = 0; i < files.size(); i += every) paths.push_back(files[i]);
     }
-    binloop::ExtractOptions eo = binloop::extractOptionsFrom(args);
     std::vector<std::string> skipped;
     eo.skip_unreadable = args.has("skip-unreadable");
     eo.skipped = &skipped;
@@ -68,6 +69,7 @@ int main(int argc, char** argv) {
     o.pca_dims = static_cast<int>(args.integer("pca"));
     o.seed = static_cast<uint64_t>(args.integer("seed"));
     o.max_descriptors = static_cast<size_t>(args.integer("max-descriptors"));
+    o.extractor = binloop::extractorSettings(eo);  // recorded in the header; loaders compare it
     binloop::ProgressBar bar("training " + args.str("model"));
     const auto h = binloop::trainModel(type, images, o, args.str("out"), [&](size_t d, size_t n) { bar.update(d, n); });
     bar.finish();

@@ -57,3 +57,39 @@ TEST(EvalLoopsTool, BadInputGivesOneClearLine) {
   EXPECT_NE(model.code, 0);
   EXPECT_NE(model.out.find("sift"), std::string::npos) << model.out;
 }
+
+// A model trained with other extractor settings than the run's is refused before any image is read, with
+// both settings and the way out named; --force-extractor runs it with a warning.
+TEST(EvalLoopsTool, RefusesAModelOfOtherExtractorSettingsUnlessForced) {
+  const std::string desk = binloop::test::sharedData("tum_desk");
+  BINLOOP_REQUIRE_DATA(desk);
+  binloop::test::TempDir tmp;
+  const auto train = binloop::test::runCommand(std::string(BINLOOP_TOOL_DIR) + "/train vlad --images " + desk +
+                                               " --features 500 --out " + (tmp / "vlad.bin"));
+  ASSERT_EQ(train.code, 0) << train.out;
+  EXPECT_NE(train.out.find("from binloop ORB (500 features, scale 1.2, 8 levels, FAST 20/7, 30-px cells, full-size images)"),
+            std::string::npos) << train.out;
+  binloop::test::writeText(tmp / "gt.txt", "9 0\n");
+  const std::string common = "--sequence " + desk + " --gt " + (tmp / "gt.txt") + " --models vlad --vocab-dir " + tmp.path() +
+                             " --window 0 --reference 1 --out " + (tmp / "out");
+  const auto refused = run(common);
+  EXPECT_EQ(refused.code, 1) << refused.out;
+  EXPECT_NE(refused.out.find("eval-loops: error: " + (tmp / "vlad.bin") +
+                             ": trained on descriptors of binloop ORB (500 features, scale 1.2, 8 levels, FAST 20/7, "
+                             "30-px cells, full-size images), but they will come from binloop ORB (2000 features, "
+                             "scale 1.2, 8 levels, FAST 20/7, 30-px cells, full-size images) (differ: features 500 vs "
+                             "2000); a vocabulary only fits descriptors like those it was trained on: retrain it with "
+                             "these settings, or use it anyway with --force-extractor"),
+            std::string::npos)
+      << refused.out;
+  EXPECT_EQ(refused.out.find("keyframes"), std::string::npos) << "refused before reading images:\n" << refused.out;
+  const auto forced = run(common + " --force-extractor");
+  EXPECT_EQ(forced.code, 0) << forced.out;
+  EXPECT_NE(forced.out.find("eval-loops: warning: " + (tmp / "vlad.bin") + ": trained on descriptors of binloop ORB (500"),
+            std::string::npos) << forced.out;
+  EXPECT_NE(forced.out.find("used anyway (--force-extractor)"), std::string::npos) << forced.out;
+  // The same settings as training: no warning.
+  const auto same = run(common + " --features 500");
+  EXPECT_EQ(same.code, 0) << same.out;
+  EXPECT_EQ(same.out.find("warning"), std::string::npos) << same.out;
+}

@@ -10,12 +10,21 @@
 // isotropic Gaussian (sigma = 31/5 px, BRIEF's "G II" layout) by HashRng with a fixed seed, each point kept
 // inside the radius-15 orientation disc so a rotated point never leaves the keypoint's border. Descriptors
 // are therefore NOT comparable with ORB-SLAM2's or OpenCV's: vocabularies must be trained on this extractor.
+// It is the one extractor of binloop: SLAM, `train`, `eval-loops` and the benchmarks all use it (with the
+// same settings by default), and every model file records the settings it was trained with.
 #include <opencv2/core/mat.hpp>
+#include <opencv2/core/types.hpp>
 #include <vector>
 
-#include "binloop/features/orb_extractor.h"
+#include "binloop/place/binary_descriptor.h"
+#include "binloop/place/model_file.h"
 
 namespace binloop {
+
+struct OrbFeatures {
+  std::vector<cv::KeyPoint> keypoints;
+  Descriptors descriptors;
+};
 
 struct OrbSlamParams {
   int features = 2000;        // budget over all levels (the result may exceed it by a few, as ORB-SLAM2's)
@@ -28,6 +37,11 @@ struct OrbSlamParams {
   bool operator==(const OrbSlamParams& o) const;
   bool operator!=(const OrbSlamParams& o) const { return !(*this == o); }
 };
+
+/// What a model header records for descriptors of OrbSlamExtractor(p) on images scaled down to a longer
+/// side of `max_side` first (0: full size, as SLAM extracts). Pass it as RecognizerOptions::extractor.expected
+/// (or ExtractorCheck::expected) when loading a model that this extractor's descriptors will feed.
+ExtractorSettings extractorSettings(const OrbSlamParams& p, int max_side = 0);
 
 /// Level 0 is the image itself (its header shares the caller's pixels); level i is level i-1 resized
 /// (bilinear) to round(size / scale_factor^i).

@@ -17,7 +17,6 @@
 //   every match when the median is 0 (noise-free images, e.g. rendered or shifted ones).
 #include <vector>
 
-#include "binloop/features/orb_extractor.h"
 #include "binloop/features/orb_slam_extractor.h"
 #include "binloop/types/stereo_camera.h"
 

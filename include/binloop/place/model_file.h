@@ -3,7 +3,8 @@
 //
 //   header (fixed 128 bytes): magic "BINLOOPM", format version, model type, descriptor bits, weighting,
 //     k, levels, words, training seed, training-data hash, training descriptor and image counts, payload
-//     size and payload checksum;
+//     size and payload checksum; version 3 adds the extractor the training descriptors came from and its
+//     settings (bytes 88-119; versions 1 and 2 record none: "extractor unknown");
 //   payload: tagged sections, each {tag (4 chars), element size, count, bytes}, in the order the model
 //     writes them. Version 2 pads so that every section's bytes start at a multiple of 64 in the file.
 //
@@ -14,6 +15,7 @@
 // 1M-word vocabulary load in milliseconds. Version-1 files are still read (their sections are copied).
 #include <cstdint>
 #include <cstring>
+#include <functional>
 #include <memory>
 #include <string>
 #include <vector>
@@ -29,8 +31,40 @@ ModelType modelTypeFromName(const std::string& name);
 
 enum class Weighting : uint32_t { kTfIdf = 0, kTf = 1, kIdf = 2, kBinary = 3 };
 
+/// Which extractor made the descriptors a model was trained on. A vocabulary only works on descriptors like
+/// those it was trained on: another BRIEF pattern gives unrelated bits, and other settings (feature count,
+/// pyramid, image size) other statistics.
+enum class ExtractorKind : uint32_t {
+  kUnknown = 0,      // not recorded: model files of versions 1-2, or trained from descriptors of unknown origin
+  kBinloopOrb = 1,   // binloop's ORB-SLAM2-style extractor (features/orb_slam_extractor.h), which SLAM uses
+  kDbow2Import = 2,  // an imported DBoW2 vocabulary (ORB-SLAM2's or OpenCV's ORB pattern; settings not known)
+};
+
+/// The extractor and its settings, as the model header records them (kBinloopOrb: every field; otherwise
+/// only `kind`). features/orb_slam_extractor.h makes one from OrbSlamParams (extractorSettings()).
+struct ExtractorSettings {
+  ExtractorKind kind = ExtractorKind::kUnknown;
+  uint32_t features = 0;
+  float scale_factor = 0;
+  uint32_t levels = 0;
+  uint32_t ini_fast = 0;
+  uint32_t min_fast = 0;
+  uint32_t cell_px = 0;
+  uint32_t max_side = 0;  // images were scaled down to this longer side first; 0 = never (full size)
+
+  bool known() const { return kind != ExtractorKind::kUnknown; }
+  bool operator==(const ExtractorSettings& o) const;
+  bool operator!=(const ExtractorSettings& o) const { return !(*this == o); }
+  /// One line, e.g. "binloop ORB (2000 features, scale 1.2, 8 levels, FAST 20/7, 30-px cells, full-size
+  /// images)".
+  std::string describe() const;
+  /// The fields that differ from `o`, e.g. "features 1000 vs 2000, max side 1024 vs none"; "" when equal.
+  std::string differences(const ExtractorSettings& o) const;
+};
+
 struct ModelHeader {
-  static constexpr uint32_t kVersion = 2;  // written; versions 1 and 2 are read
+  static constexpr uint32_t kVersion = 3;  // written; versions 1, 2 and 3 are read
+  uint32_t version = kVersion;             // of the file read (ModelReader); save() always writes kVersion
   ModelType type = ModelType::kHbow;
   uint32_t descriptor_bits = 256;
   Weighting weighting = Weighting::kTfIdf;
@@ -41,9 +75,40 @@ struct ModelHeader {
   uint64_t training_hash = 0;
   uint64_t training_descriptors = 0;
   uint64_t training_images = 0;
+  ExtractorSettings extractor;  // what made the training descriptors (version 3; unknown before)
 
   std::string describe() const;
 };
+
+/// Reads and checks only the 128-byte header (magic, version, descriptor size): no mapping, no checksum,
+/// so a caller can look at a model before loading it. Throws PlaceError as ModelReader does.
+ModelHeader readModelHeader(const std::string& path);
+
+/// What a caller that loads a model will feed it, so that a model trained on other descriptors is caught
+/// at load time instead of silently finding nothing. `expected` unknown = no check.
+struct ExtractorCheck {
+  ExtractorSettings expected;
+  /// A mismatch then warns and the model is loaded anyway (the tools' --force-extractor).
+  bool force = false;
+  /// How the user forces it, named in the refusal.
+  std::string force_hint = "--force-extractor";
+  /// Where warnings go (one line each, no "warning:" prefix); empty: std::cerr as "warning: <line>".
+  std::function<void(const std::string&)> warn;
+};
+
+/// Compares the header's extractor with `c.expected` (nothing when `expected` is unknown):
+/// - equal: nothing;
+/// - different, c.force false: throws PlaceError "<path>: trained on descriptors of <its settings>, but
+///   they will come from <expected> (differ: <fields>); a vocabulary only fits descriptors like those it
+///   was trained on: retrain it with these settings, or use it anyway with <force_hint>";
+/// - different, c.force true: warns "<path>: trained on descriptors of <...>, but they will come from
+///   <...> (differ: <fields>); used anyway (<force_hint>)";
+/// - header records no extractor (file versions 1-2): warns "<path>: the model file (version N) does not
+///   record which extractor it was trained with; descriptors will come from <expected> (retrain it if
+///   they differ)".
+void checkModelExtractor(const std::string& path, const ModelHeader& h, const ExtractorCheck& c);
+/// The same, reading the header from `path` first.
+void checkModelExtractor(const std::string& path, const ExtractorCheck& c);
 
 /// Collects sections in memory; save() writes header + payload to `path` through a temporary file.
 class ModelWriter {

@@ -20,6 +20,8 @@ struct TrainOptions {
   uint64_t seed = 1;
   size_t max_descriptors = 200000;  // sample for the flat and VLAD vocabularies
   size_t fabmap_samples = 200;      // training places kept for sampled evidence
+  /// Recorded in the header: the extractor that made `images` (unknown when not said).
+  ExtractorSettings extractor{};
 };
 
 /// Trains `type` on `images` (one descriptor set per image) and writes `out`. Returns the header written.

@@ -13,6 +13,7 @@
 #include <vector>
 
 #include "binloop/place/binary_descriptor.h"
+#include "binloop/place/model_file.h"
 #include "binloop/place/ranking.h"
 
 namespace binloop {
@@ -138,10 +139,15 @@ struct RecognizerOptions {
   double fabmap_l2_offset = 0.05;  // see FabmapRecognizer
   double hbow_min_bar = 0.005;     // see HbowRecognizer
   RankingParams ranking{};
+  /// The extractor whose descriptors add() will get (extractor.expected; e.g.
+  /// extractorSettings(OrbSlamParams) from features/orb_slam_extractor.h) and what to do when the model
+  /// file was trained on others: see checkModelExtractor. Unset (unknown) = no check.
+  ExtractorCheck extractor{};
 };
 
 /// `name` is one of hbow, fabmap, vlad, hmvlad, vladpq; throws PlaceError for another name, or when the
-/// model file is missing, of another model type, truncated or corrupt.
+/// model file is missing, of another model type, truncated or corrupt, or (when opts.extractor.expected
+/// is set and force is not) trained on descriptors of another extractor or other settings.
 std::unique_ptr<PlaceRecognizer> makePlaceRecognizer(const std::string& name, const RecognizerOptions& opts);
 const std::vector<std::string>& placeModelNames();
 

@@ -23,8 +23,11 @@ std::vector<std::string> listImages(const std::string& dir) {
   return files;
 }
 
+ExtractorSettings extractorSettings(const ExtractOptions& o) { return extractorSettings(o.orb, o.max_side); }
+
 std::vector<Descriptors> extractDescriptors(const std::vector<std::string>& paths, const ExtractOptions& o,
                                             const ProgressFn& progress) {
+  const OrbSlamExtractor extractor(o.orb);  // checks the settings before any image is read; thread-safe
   std::vector<Descriptors> out(paths.size());
   std::atomic<size_t> next{0}, done{0};
   std::exception_ptr error;
@@ -38,7 +41,7 @@ std::vector<Descriptors> extractDescriptors(const std::vector<std::string>& path
           const double s = double(o.max_side) / side;
           cv::resize(img, img, cv::Size(), s, s, cv::INTER_AREA);
         }
-        out[i] = extractOrb(img, o.orb).descriptors;
+        out[i] = extractor.extract(img).descriptors;
       } catch (const DataError& e) {
         std::lock_guard<std::mutex> l(m);
         if (o.skip_unreadable) {

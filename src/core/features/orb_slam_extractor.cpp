@@ -282,6 +282,19 @@ bool OrbSlamParams::operator==(const OrbSlamParams& o) const {
          min_fast == o.min_fast && cell_px == o.cell_px;
 }
 
+ExtractorSettings extractorSettings(const OrbSlamParams& p, int max_side) {
+  ExtractorSettings e;
+  e.kind = ExtractorKind::kBinloopOrb;
+  e.features = static_cast<uint32_t>(std::max(0, p.features));
+  e.scale_factor = p.scale_factor;
+  e.levels = static_cast<uint32_t>(std::max(0, p.levels));
+  e.ini_fast = static_cast<uint32_t>(std::max(0, p.ini_fast));
+  e.min_fast = static_cast<uint32_t>(std::max(0, p.min_fast));
+  e.cell_px = static_cast<uint32_t>(std::max(0, p.cell_px));
+  e.max_side = static_cast<uint32_t>(std::max(0, max_side));
+  return e;
+}
+
 ImagePyramid buildPyramid(const cv::Mat& gray, int levels, float scale_factor) {
   checkImage(gray);
   require(levels >= 1, "levels must be >= 1, got " + std::to_string(levels));

@@ -3,6 +3,7 @@
 #include <algorithm>
 #include <cstdio>
 #include <filesystem>
+#include <iostream>
 #include <memory>
 #include <sstream>
 #include <fcntl.h>
@@ -42,6 +43,55 @@ struct HeaderCodec {
 
 const char* const kTypeNames[] = {"", "hbow", "fabmap", "vlad", "hmvlad", "vladpq"};
 
+// The header fields of the first `size` bytes of a file (size < 128: only enough to report the fault).
+// Throws for a bad magic, a short file or an unknown version.
+ModelHeader decodeHeader(const std::string& path, const uint8_t* file, size_t size, uint64_t* payload,
+                         uint64_t* checksum) {
+  if (size == 0 || std::memcmp(file, kMagic, std::min<size_t>(size, 8)) != 0)
+    throw PlaceError(path + ": not a binloop model file (bad magic; DBoW2 vocabularies are converted with "
+                            "'binloop train hbow --import <file>')");
+  if (size < kHeaderBytes)
+    throw PlaceError(path + ": truncated model file (" + std::to_string(size) + " bytes, the header alone is 128)");
+  HeaderCodec c;
+  std::memcpy(c.bytes, file, kHeaderBytes);
+  c.pos = 8;
+  ModelHeader h;
+  h.version = c.get<uint32_t>();
+  if (h.version < 1 || h.version > ModelHeader::kVersion)
+    throw PlaceError(path + ": model file version " + std::to_string(h.version) + ", this build reads versions 1 to " +
+                     std::to_string(ModelHeader::kVersion));
+  h.type = static_cast<ModelType>(c.get<uint32_t>());
+  h.descriptor_bits = c.get<uint32_t>();
+  h.weighting = static_cast<Weighting>(c.get<uint32_t>());
+  h.k = c.get<uint32_t>();
+  h.levels = c.get<uint32_t>();
+  h.words = c.get<uint64_t>();
+  h.seed = c.get<uint64_t>();
+  h.training_hash = c.get<uint64_t>();
+  h.training_descriptors = c.get<uint64_t>();
+  h.training_images = c.get<uint64_t>();
+  *payload = c.get<uint64_t>();
+  *checksum = c.get<uint64_t>();
+  if (h.version >= 3) {  // versions 1-2 left these bytes zero: extractor unknown
+    ExtractorSettings& e = h.extractor;
+    e.kind = static_cast<ExtractorKind>(c.get<uint32_t>());
+    e.features = c.get<uint32_t>();
+    e.scale_factor = c.get<float>();
+    e.levels = c.get<uint32_t>();
+    e.ini_fast = c.get<uint32_t>();
+    e.min_fast = c.get<uint32_t>();
+    e.cell_px = c.get<uint32_t>();
+    e.max_side = c.get<uint32_t>();
+  }
+  return h;
+}
+
+void checkDescriptorBits(const std::string& path, const ModelHeader& h) {
+  if (h.descriptor_bits != 256)
+    throw PlaceError(path + ": vocabulary of " + std::to_string(h.descriptor_bits) +
+                     "-bit descriptors; binloop uses 256-bit ORB descriptors");
+}
+
 }  // namespace
 
 std::string modelTypeName(ModelType t) {
@@ -55,12 +105,94 @@ ModelType modelTypeFromName(const std::string& name) {
   throw PlaceError("unknown model '" + name + "' (known: hbow, fabmap, vlad, hmvlad, vladpq)");
 }
 
+bool ExtractorSettings::operator==(const ExtractorSettings& o) const {
+  return kind == o.kind && features == o.features && scale_factor == o.scale_factor && levels == o.levels &&
+         ini_fast == o.ini_fast && min_fast == o.min_fast && cell_px == o.cell_px && max_side == o.max_side;
+}
+
+namespace {
+
+std::string kindName(ExtractorKind k) {
+  switch (k) {
+    case ExtractorKind::kUnknown: return "unknown";
+    case ExtractorKind::kBinloopOrb: return "binloop ORB";
+    case ExtractorKind::kDbow2Import: return "imported DBoW2";
+  }
+  return "kind " + std::to_string(static_cast<uint32_t>(k));
+}
+
+std::string sideName(uint32_t max_side) { return max_side ? std::to_string(max_side) : "none"; }
+
+}  // namespace
+
+std::string ExtractorSettings::describe() const {
+  std::ostringstream s;
+  switch (kind) {
+    case ExtractorKind::kUnknown: return "an unknown extractor (not recorded)";
+    case ExtractorKind::kDbow2Import:
+      return "the ORB of an imported DBoW2 vocabulary (ORB-SLAM2's or OpenCV's pattern, settings not recorded)";
+    case ExtractorKind::kBinloopOrb:
+      s << "binloop ORB (" << features << " features, scale " << scale_factor << ", " << levels << " levels, FAST "
+        << ini_fast << "/" << min_fast << ", " << cell_px << "-px cells, "
+        << (max_side ? "images scaled to a longer side <= " + std::to_string(max_side) + " px" : "full-size images")
+        << ")";
+      return s.str();
+  }
+  return "extractor kind " + std::to_string(static_cast<uint32_t>(kind));
+}
+
+std::string ExtractorSettings::differences(const ExtractorSettings& o) const {
+  if (kind != o.kind) return "extractor " + kindName(kind) + " vs " + kindName(o.kind);
+  std::ostringstream s;
+  auto field = [&](const char* name, const auto& a, const auto& b) {
+    if (a == b) return;
+    s << (s.tellp() > 0 ? ", " : "") << name << " " << a << " vs " << b;
+  };
+  field("features", features, o.features);
+  field("scale factor", scale_factor, o.scale_factor);
+  field("levels", levels, o.levels);
+  field("ini FAST", ini_fast, o.ini_fast);
+  field("min FAST", min_fast, o.min_fast);
+  field("cell px", cell_px, o.cell_px);
+  field("max side", sideName(max_side), sideName(o.max_side));
+  return s.str();
+}
+
 std::string ModelHeader::describe() const {
   std::ostringstream s;
   s << modelTypeName(type) << " model, " << descriptor_bits << "-bit descriptors, k=" << k << " levels=" << levels
     << " words=" << words << ", trained with seed " << seed << " on " << training_descriptors << " descriptors of "
-    << training_images << " images (data hash " << std::hex << training_hash << ")";
+    << training_images << " images (data hash " << std::hex << training_hash << std::dec << ") from "
+    << extractor.describe();
   return s.str();
+}
+
+void checkModelExtractor(const std::string& path, const ModelHeader& h, const ExtractorCheck& c) {
+  if (!c.expected.known() || h.extractor == c.expected) return;
+  const auto warn = [&](const std::string& line) {
+    if (c.warn) {
+      c.warn(line);
+    } else {
+      std::cerr << "warning: " << line << std::endl;
+    }
+  };
+  if (!h.extractor.known()) {
+    warn(path + ": the model file (version " + std::to_string(h.version) +
+         ") does not record which extractor it was trained with; descriptors will come from " +
+         c.expected.describe() + " (retrain it if they differ)");
+    return;
+  }
+  const std::string what = path + ": trained on descriptors of " + h.extractor.describe() +
+                           ", but they will come from " + c.expected.describe() + " (differ: " +
+                           h.extractor.differences(c.expected) + ")";
+  if (!c.force)
+    throw PlaceError(what + "; a vocabulary only fits descriptors like those it was trained on: retrain it with "
+                            "these settings, or use it anyway with " + c.force_hint);
+  warn(what + "; used anyway (" + c.force_hint + ")");
+}
+
+void checkModelExtractor(const std::string& path, const ExtractorCheck& c) {
+  if (c.expected.known()) checkModelExtractor(path, readModelHeader(path), c);
 }
 
 uint64_t hashBytes(const void* data, size_t n, uint64_t seed) {
@@ -126,6 +258,15 @@ void ModelWriter::save(const std::string& path) const {
   c.put(header_.training_images);
   c.put(static_cast<uint64_t>(payload_.size()));
   c.put(checksum64(payload_.data(), payload_.size()));
+  const ExtractorSettings& e = header_.extractor;  // version 3, bytes 88-119
+  c.put(static_cast<uint32_t>(e.kind));
+  c.put(e.features);
+  c.put(e.scale_factor);
+  c.put(e.levels);
+  c.put(e.ini_fast);
+  c.put(e.min_fast);
+  c.put(e.cell_px);
+  c.put(e.max_side);
   const std::string tmp = path + ".partial";
   std::unique_ptr<FILE, int (*)(FILE*)> f(std::fopen(tmp.c_str(), "wb"), &std::fclose);
   if (!f) throw PlaceError(path + ": cannot write");
@@ -163,40 +304,29 @@ ModelReader::ModelReader(const std::string& path) : path_(path), storage_(std::m
   if (size > 0 && storage_->map == MAP_FAILED) throw PlaceError(path + ": cannot map model file into memory");
   file_ = static_cast<const uint8_t*>(storage_->map);
   file_size_ = size;
-  if (size == 0 || std::memcmp(file_, kMagic, std::min<size_t>(size, 8)) != 0)
-    throw PlaceError(path + ": not a binloop model file (bad magic; DBoW2 vocabularies are converted with "
-                            "'binloop train hbow --import <file>')");
-  if (size < kHeaderBytes)
-    throw PlaceError(path + ": truncated model file (" + std::to_string(size) + " bytes, the header alone is 128)");
-  HeaderCodec c;
-  std::memcpy(c.bytes, file_, kHeaderBytes);
-  c.pos = 8;
-  version_ = c.get<uint32_t>();
-  if (version_ != 1 && version_ != 2)
-    throw PlaceError(path + ": model file version " + std::to_string(version_) + ", this build reads versions 1 and " +
-                     std::to_string(ModelHeader::kVersion));
-  header_.type = static_cast<ModelType>(c.get<uint32_t>());
-  header_.descriptor_bits = c.get<uint32_t>();
-  header_.weighting = static_cast<Weighting>(c.get<uint32_t>());
-  header_.k = c.get<uint32_t>();
-  header_.levels = c.get<uint32_t>();
-  header_.words = c.get<uint64_t>();
-  header_.seed = c.get<uint64_t>();
-  header_.training_hash = c.get<uint64_t>();
-  header_.training_descriptors = c.get<uint64_t>();
-  header_.training_images = c.get<uint64_t>();
-  const auto payload = c.get<uint64_t>();
-  const auto checksum = c.get<uint64_t>();
+  uint64_t payload = 0, checksum = 0;
+  header_ = decodeHeader(path, file_, size, &payload, &checksum);
+  version_ = header_.version;
   if (size != kHeaderBytes + payload)
     throw PlaceError(path + ": truncated model file: header promises " + std::to_string(kHeaderBytes + payload) +
                      " bytes, file has " + std::to_string(size));
   const uint64_t computed =
       version_ == 1 ? hashBytes(file_ + kHeaderBytes, payload) : checksum64(file_ + kHeaderBytes, payload);
   if (computed != checksum) throw PlaceError(path + ": corrupt model file (payload checksum differs)");
-  if (header_.descriptor_bits != 256)
-    throw PlaceError(path + ": vocabulary of " + std::to_string(header_.descriptor_bits) +
-                     "-bit descriptors; binloop uses 256-bit ORB descriptors");
+  checkDescriptorBits(path, header_);
   pos_ = kHeaderBytes;
+}
+
+ModelHeader readModelHeader(const std::string& path) {
+  uint8_t bytes[kHeaderBytes] = {};
+  std::unique_ptr<FILE, int (*)(FILE*)> f(std::fopen(path.c_str(), "rb"), &std::fclose);
+  std::error_code ec;
+  if (!f || !std::filesystem::is_regular_file(path, ec)) throw PlaceError(path + ": cannot open model file");
+  const size_t n = std::fread(bytes, 1, kHeaderBytes, f.get());
+  uint64_t payload = 0, checksum = 0;
+  ModelHeader h = decodeHeader(path, bytes, n, &payload, &checksum);
+  checkDescriptorBits(path, h);
+  return h;
 }
 
 void ModelReader::expectType(ModelType t) const {

@@ -31,6 +31,7 @@ ModelHeader trainModel(ModelType type, const std::vector<Descriptors>& images, c
   ModelHeader h;
   h.type = type;
   h.seed = o.seed;
+  h.extractor = o.extractor;
   h.training_hash = trainingHash(images);
   h.training_images = images.size();
   for (const auto& im : images) h.training_descriptors += im.size();

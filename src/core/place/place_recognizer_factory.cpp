@@ -35,6 +35,7 @@ std::unique_ptr<PlaceRecognizer> make(ModelType type, const RecognizerOptions& o
 std::unique_ptr<PlaceRecognizer> makePlaceRecognizer(const std::string& name, const RecognizerOptions& o) {
   const ModelType type = modelTypeFromName(name);  // throws on an unknown name
   if (o.model_file.empty()) throw PlaceError(name + ": no model file given");
+  checkModelExtractor(o.model_file, o.extractor);  // reads the header only; before the (large) load
   auto rec = make(type, o);
   if (!rec) throw PlaceError("unknown model '" + name + "'");
   rec->setRanking(o.ranking);

@@ -10,12 +10,15 @@ namespace binloop {
 CliArgs::CliArgs(std::string tool, std::string usage) : tool_(std::move(tool)), usage_(std::move(usage)) {}
 
 CliArgs& CliArgs::option(const std::string& name, const std::string& help, const std::string& def) {
-  opts_[name] = {help, def, false};
+  // Two declarations of one name (a tool's own option and a shared set's) would silently merge.
+  if (!opts_.emplace(name, Opt{help, def, false}).second)
+    throw std::logic_error(tool_ + ": option --" + name + " declared twice");
   return *this;
 }
 
 CliArgs& CliArgs::flag(const std::string& name, const std::string& help) {
-  opts_[name] = {help, "", true};
+  if (!opts_.emplace(name, Opt{help, "", true}).second)
+    throw std::logic_error(tool_ + ": option --" + name + " declared twice");
   return *this;
 }
 

@@ -7,6 +7,7 @@
 #include <fstream>
 #include <iterator>
 
+#include "binloop/features/orb_slam_extractor.h"
 #include "binloop/place/hbow_recognizer.h"
 #include "binloop/place/model_training.h"
 #include "binloop/place/place_recognizer.h"
@@ -18,12 +19,13 @@ using namespace binloop::test;
 
 namespace {
 
-std::string trainSmallHbow(const TempDir& dir) {
+std::string trainSmallHbow(const TempDir& dir, const ExtractorSettings& extractor = {}) {
   std::vector<Descriptors> images;
   for (int p = 0; p < 10; ++p) images.push_back(randomPlace(3, p, 100));
   TrainOptions o;
   o.k = 4;
   o.levels = 2;
+  o.extractor = extractor;
   trainModel(ModelType::kHbow, images, o, dir / "hbow.bin");
   return dir / "hbow.bin";
 }
@@ -93,7 +95,8 @@ TEST(ModelFile, EmptyDescriptorSetAndDuplicateKeyframeAreRefused) {
 
 namespace {
 
-// Rewrites a version-2 model file as version 1 wrote it: no padding before sections, the one-word hash.
+// Rewrites a version-3 model file as version 1 wrote it: no padding before sections, the one-word hash (the
+// extractor record in bytes 88-119 is left; version 1 never reads it).
 void rewriteAsVersion1(const std::string& v2, const std::string& v1) {
   std::ifstream in(v2, std::ios::binary);
   std::vector<uint8_t> f((std::istreambuf_iterator<char>(in)), std::istreambuf_iterator<char>());
@@ -150,4 +153,143 @@ TEST(ModelFile, ReadsVersion1Files) {
   s.put('\x33');
   s.close();
   EXPECT_THROW_WITH(HbowRecognizer::loadVocabulary(v1), PlaceError, "payload checksum differs");
+}
+
+namespace {
+
+// The SLAM's extractor settings (OrbSlamParams defaults, config/kitti.yaml) and, optionally, other ones.
+ExtractorSettings slamExtractor(int features = 2000, int max_side = 0) {
+  OrbSlamParams p;
+  p.features = features;
+  return extractorSettings(p, max_side);
+}
+
+// Rewrites a version-3 file as version 2 wrote it: the same layout, with no extractor record.
+void rewriteAsVersion2(const std::string& v3, const std::string& v2) {
+  std::ifstream in(v3, std::ios::binary);
+  std::vector<uint8_t> f((std::istreambuf_iterator<char>(in)), std::istreambuf_iterator<char>());
+  const uint32_t version = 2;
+  std::memcpy(&f[8], &version, 4);
+  std::fill(f.begin() + 88, f.begin() + 128, 0);
+  std::ofstream(v2, std::ios::binary).write(reinterpret_cast<const char*>(f.data()), static_cast<long>(f.size()));
+}
+
+}  // namespace
+
+TEST(ModelFile, HeaderRecordsTheExtractorAndItsSettings) {
+  TempDir dir;
+  OrbSlamParams p;
+  p.features = 1500;
+  p.scale_factor = 1.25f;
+  p.levels = 6;
+  p.ini_fast = 18;
+  p.min_fast = 5;
+  p.cell_px = 40;
+  const ExtractorSettings e = extractorSettings(p, 1024);
+  const std::string f = trainSmallHbow(dir, e);
+  for (const ModelHeader& h : {ModelReader(f).header(), readModelHeader(f)}) {
+    EXPECT_EQ(h.version, 3u);
+    EXPECT_EQ(h.extractor.kind, ExtractorKind::kBinloopOrb);
+    EXPECT_EQ(h.extractor.features, 1500u);
+    EXPECT_EQ(h.extractor.scale_factor, 1.25f);
+    EXPECT_EQ(h.extractor.levels, 6u);
+    EXPECT_EQ(h.extractor.ini_fast, 18u);
+    EXPECT_EQ(h.extractor.min_fast, 5u);
+    EXPECT_EQ(h.extractor.cell_px, 40u);
+    EXPECT_EQ(h.extractor.max_side, 1024u);
+    EXPECT_EQ(h.extractor, e);
+    EXPECT_EQ(h.k, 4u);  // the fields before the record are where they were
+    EXPECT_EQ(h.training_images, 10u);
+  }
+  EXPECT_NE(ModelReader(f).header().describe().find(
+                "from binloop ORB (1500 features, scale 1.25, 6 levels, FAST 18/5, 40-px cells, images scaled to a "
+                "longer side <= 1024 px)"),
+            std::string::npos)
+      << ModelReader(f).header().describe();
+  EXPECT_EQ(slamExtractor().describe(),
+            "binloop ORB (2000 features, scale 1.2, 8 levels, FAST 20/7, 30-px cells, full-size images)");
+  // A model trained from descriptors of unknown origin says so.
+  TempDir dir2;
+  EXPECT_FALSE(ModelReader(trainSmallHbow(dir2)).header().extractor.known());
+  EXPECT_NE(ModelReader(dir2 / "hbow.bin").header().describe().find("from an unknown extractor (not recorded)"),
+            std::string::npos);
+}
+
+TEST(ModelFile, OtherExtractorSettingsAreRefusedWithBothNamed) {
+  TempDir dir;
+  const std::string f = trainSmallHbow(dir, slamExtractor(1000, 1024));
+  RecognizerOptions o{f};
+  o.extractor.expected = slamExtractor();
+  EXPECT_THROW_WITH(
+      makePlaceRecognizer("hbow", o), PlaceError,
+      f + ": trained on descriptors of binloop ORB (1000 features, scale 1.2, 8 levels, FAST 20/7, 30-px cells, "
+          "images scaled to a longer side <= 1024 px), but they will come from binloop ORB (2000 features, scale 1.2, "
+          "8 levels, FAST 20/7, 30-px cells, full-size images) (differ: features 1000 vs 2000, max side 1024 vs "
+          "none); a vocabulary only fits descriptors like those it was trained on: retrain it with these settings, "
+          "or use it anyway with --force-extractor");
+  // The hint names what the caller offers (e.g. a SLAM config key).
+  o.extractor.force_hint = "orb.force_vocabulary: true";
+  EXPECT_THROW_WITH(makePlaceRecognizer("hbow", o), PlaceError, "use it anyway with orb.force_vocabulary: true");
+  // Without an expectation nothing is checked (models trained in memory, tests).
+  EXPECT_NO_THROW(makePlaceRecognizer("hbow", {f}));
+  // An imported DBoW2 vocabulary was trained on another BRIEF pattern.
+  ExtractorSettings imported;
+  imported.kind = ExtractorKind::kDbow2Import;
+  TempDir dir2;
+  EXPECT_THROW_WITH(checkModelExtractor(trainSmallHbow(dir2, imported), o.extractor), PlaceError,
+                    "(differ: extractor imported DBoW2 vs binloop ORB)");
+}
+
+TEST(ModelFile, ForcedExtractorMismatchWarnsAndLoads) {
+  TempDir dir;
+  const std::string f = trainSmallHbow(dir, slamExtractor(1000));
+  std::vector<std::string> warnings;
+  RecognizerOptions o{f};
+  o.extractor.expected = slamExtractor();
+  o.extractor.force = true;
+  o.extractor.warn = [&](const std::string& w) { warnings.push_back(w); };
+  std::unique_ptr<PlaceRecognizer> rec;
+  ASSERT_NO_THROW(rec = makePlaceRecognizer("hbow", o));
+  ASSERT_TRUE(rec);
+  rec->add(1, randomPlace(3, 1, 50));
+  ASSERT_EQ(warnings.size(), 1u);
+  EXPECT_EQ(warnings[0], f + ": trained on descriptors of binloop ORB (1000 features, scale 1.2, 8 levels, FAST 20/7, "
+                             "30-px cells, full-size images), but they will come from binloop ORB (2000 features, "
+                             "scale 1.2, 8 levels, FAST 20/7, 30-px cells, full-size images) (differ: features 1000 vs "
+                             "2000); used anyway (--force-extractor)");
+  // Equal settings: no warning.
+  warnings.clear();
+  TempDir dir2;
+  o.model_file = trainSmallHbow(dir2, slamExtractor());
+  o.extractor.force = false;
+  EXPECT_NO_THROW(makePlaceRecognizer("hbow", o));
+  EXPECT_TRUE(warnings.empty());
+}
+
+TEST(ModelFile, ReadsVersion2FilesAsExtractorUnknownAndWarns) {
+  TempDir dir;
+  const std::string v3 = trainSmallHbow(dir, slamExtractor()), v2 = dir / "v2.bin";
+  rewriteAsVersion2(v3, v2);
+  const ModelReader r(v2);
+  EXPECT_EQ(r.header().version, 2u);
+  EXPECT_FALSE(r.header().extractor.known());
+  EXPECT_EQ(r.header().k, 4u);
+  EXPECT_EQ(HbowRecognizer::loadVocabulary(v2)->words(), HbowRecognizer::loadVocabulary(v3)->words());
+  std::vector<std::string> warnings;
+  RecognizerOptions o{v2};
+  o.extractor.expected = slamExtractor();
+  o.extractor.warn = [&](const std::string& w) { warnings.push_back(w); };
+  EXPECT_NO_THROW(makePlaceRecognizer("hbow", o));  // not forced, still loaded: it may well fit
+  ASSERT_EQ(warnings.size(), 1u);
+  EXPECT_EQ(warnings[0], v2 + ": the model file (version 2) does not record which extractor it was trained with; "
+                              "descriptors will come from binloop ORB (2000 features, scale 1.2, 8 levels, FAST 20/7, "
+                              "30-px cells, full-size images) (retrain it if they differ)");
+  // A version from the future is refused.
+  std::fstream s(v2, std::ios::in | std::ios::out | std::ios::binary);
+  const uint32_t v4 = 4;
+  s.seekp(8);
+  s.write(reinterpret_cast<const char*>(&v4), 4);
+  s.close();
+  EXPECT_THROW_WITH(readModelHeader(v2), PlaceError, "model file version 4, this build reads versions 1 to 3");
+  EXPECT_THROW_WITH(ModelReader{v2}, PlaceError, "model file version 4, this build reads versions 1 to 3");
 }
