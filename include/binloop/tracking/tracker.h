@@ -32,7 +32,6 @@ struct TrackerParams {
   // because a frame was black, and on repetitive facades a pose found without any prior can be off by one
   // facade (rendered 06: 874 inliers 2.3 m from the truth).
   double predict_through_loss_s = 3.0;
-  float recover_window_px = 80;  // ... where a local-map point is matched by descriptor alone around its prediction
   int min_inliers = 30;             // a frame is tracked with at least this many inliers after the local map
   int min_inliers_after_loss = 50;
   int max_local_keyframes = 80;
@@ -90,7 +89,6 @@ class Tracker {
   bool trackWithoutPrediction(Frame& f);
   bool poseFromMatches(Frame& f, int matches);
   bool relocalize(Frame& f);
-  bool recoverAroundPrediction(Frame& f);
   /// PnP RANSAC on the matches in f.points, pose optimisation, a wide search for `pts`, then the local map.
   bool poseFromScratch(Frame& f, const std::vector<const msg::MapPoint*>& pts);
   bool trackLocalMap(Frame& f, float radius, int min_inliers);

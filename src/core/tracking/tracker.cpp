@@ -142,7 +142,6 @@ Tracker::Output Tracker::track(const StereoFrame& in, int mapping_queue) {
         }
       }
       ok = trackLocalMap(f, p_.lost_radius, p_.min_inliers_after_loss);
-      if (!ok && predict) ok = recoverAroundPrediction(f);
       // Still nothing: the pose is unknown; find it from scratch against recent keyframes.
       bool relocalized = false;
       if (!ok) ok = relocalized = relocalize(f);
@@ -291,47 +290,6 @@ bool Tracker::poseFromScratch(Frame& f, const std::vector<const msg::MapPoint*>&
   matchProjectedPoints(f, visible, s, 10, p_.projection);
   optimizePose(f);
   return trackLocalMap(f, p_.lost_radius, p_.min_inliers_after_loss);
-}
-
-bool Tracker::recoverAroundPrediction(Frame& f) {
-  // The local map's points that the predicted pose should see, each matched to the keypoints within a
-  // wide window of where it should appear: after a gap the prediction is metres off, too far for the
-  // projection search, yet close enough to rule out the look-alike places a search without it can find.
-  const ScalePyramid& s = builder_.scales();
-  const Pose3 start = f.T_w_c;
-  const Pose3 T_c_w = start.inverse();
-  std::vector<const msg::MapPoint*> pts;
-  std::vector<ProjectedPoint> visible;
-  std::unordered_set<MapPointId> seen;
-  for (SlamKeyframeId k : local_keyframes_) {
-    const msg::KeyframeState* kf = map_.keyframe(k);
-    if (!kf) continue;
-    for (MapPointId id : kf->point_ids) {
-      const msg::MapPoint* mp = id != kNoId ? map_.point(id) : nullptr;
-      if (!mp || !seen.insert(mp->id).second) continue;
-      pts.push_back(mp);
-      ProjectedPoint pp;
-      if (projectIntoFrame(*mp, T_c_w, cam_, s, &pp)) visible.push_back(pp);
-    }
-  }
-  std::unordered_map<MapPointId, const ProjectedPoint*> where;
-  std::vector<const msg::MapPoint*> in_view;
-  for (const ProjectedPoint& pp : visible) {
-    where[pp.point->id] = &pp;
-    in_view.push_back(pp.point);
-  }
-  std::fill(f.points.begin(), f.points.end(), kNoId);
-  std::fill(f.outlier.begin(), f.outlier.end(), 0);
-  const float r = p_.recover_window_px;
-  matchPointsByDescriptor(f, in_view, [&](const msg::MapPoint& mp, const auto& consider) {
-    const ProjectedPoint& pp = *where.at(mp.id);
-    for (int j : f.grid.near(pp.u, pp.v, r)) consider(j);
-  });
-  if (poseFromScratch(f, pts)) return true;
-  f.T_w_c = start;
-  std::fill(f.points.begin(), f.points.end(), kNoId);
-  std::fill(f.outlier.begin(), f.outlier.end(), 0);
-  return false;
 }
 
 bool Tracker::relocalize(Frame& f) {
