@@ -12,6 +12,8 @@
 #include "binloop/io/kitti_sequence.h"
 #include "binloop/io/trajectory_io.h"
 #include "binloop/pipeline/slam_config.h"
+#include "binloop/place/hbow_recognizer.h"
+#include "binloop/features/orb_slam_extractor.h"
 #include "binloop/pipeline/slam_pipeline.h"
 #include "binloop/util/cli_args.h"
 #include "binloop/util/percentile.h"
@@ -40,7 +42,7 @@ std::string jsonEscape(const std::string& s) {
 int main(int argc, char** argv) {
   CliArgs args("run",
                "scripts/binloop run <sequence_dir> --out <dir> [--config config/kitti.yaml] [--detector none]\n"
-               "    [--lockstep] [--seed N] [--start N] [--end N]\n"
+               "    [--lockstep] [--seed N] [--start N] [--end N] [--reloc-vocab vocab/kitti08/hbow.bin|none]\n"
                "Tracks and maps a KITTI-layout stereo sequence (image_0/, image_1/, calib.txt, times.txt) and writes\n"
                "trajectory.kitti.txt / .tum.txt (every frame), keyframes.kitti.txt / .tum.txt, timing.csv, summary.json.");
   args.positional("sequence_dir", "KITTI-layout sequence folder")
@@ -50,7 +52,12 @@ int main(int argc, char** argv) {
       .flag("lockstep", "map every keyframe before the next frame (bit-identical reruns); default: mapping on its own thread")
       .option("seed", "seed for every random choice (recorded in summary.json)", "1")
       .option("start", "first frame", "0")
-      .option("end", "one past the last frame (default: all)", "-1");
+      .option("end", "one past the last frame (default: all)", "-1")
+      .option("reloc-vocab",
+              "hbow vocabulary that indexes the keyframes for relocalisation anywhere in the map; 'none': only the "
+              "most recent keyframes are tried (also when the default file is missing, with a warning)",
+              "vocab/kitti08/hbow.bin")
+      .flag("force-extractor", "use a vocabulary trained with other extractor settings than config's orb section");
   return runTool("run", [&] {
     if (!args.parse(argc, argv)) return 0;
     if (!args.has("out")) throw CliError("--out is required");
@@ -58,6 +65,20 @@ int main(int argc, char** argv) {
       throw CliError("--detector " + args.str("detector") + ": only 'none' is available until loop closing is built");
     SlamConfig config = args.has("config") ? loadSlamConfig(args.str("config")) : SlamConfig{};
     config.tracker.seed = static_cast<uint64_t>(args.integer("seed"));
+    const std::string reloc_vocab = args.str("reloc-vocab");
+    if (reloc_vocab != "none") {
+      if (!fs::exists(reloc_vocab) && !args.has("reloc-vocab")) {
+        std::cerr << "warning: " << reloc_vocab
+                  << " not found (vocab/make_vocab.sh hbow makes it): relocalisation tries only the most recent "
+                     "keyframes\n";
+      } else {
+        ExtractorCheck check;
+        check.expected = extractorSettings(config.tracker.orb, 0);
+        check.force = args.has("force-extractor");
+        checkModelExtractor(reloc_vocab, check);
+        config.tracker.vocabulary = HbowRecognizer::loadVocabulary(reloc_vocab);
+      }
+    }
     const KittiSequence seq = KittiSequence::open(args.str("sequence_dir"));
     const long start = args.integer("start");
     long end = args.integer("end");
@@ -126,8 +147,8 @@ int main(int argc, char** argv) {
     std::map<SlamKeyframeId, const SlamPipeline::MappingTime*> map_time;
     for (const auto& m : slam.mappingTimes()) map_time[m.keyframe] = &m;
     std::ofstream timing(out / "timing.csv");
-    timing << "frame,state,features,stereo_matches,tracked_points,keyframe,extract_ms,stereo_ms,track_ms,mapping_ms,ba_ms\n";
-    std::vector<double> ex, stt, tr, mp, ba;
+    timing << "frame,state,features,stereo_matches,tracked_points,keyframe,extract_ms,stereo_ms,track_ms,mapping_ms,ba_ms,triangulation_ms,points_triangulated\n";
+    std::vector<double> ex, stt, tr, mp, ba, tri;
     int lost = 0, relocalized = 0;
     for (const msg::TrackedFrame& tf : frames) {
       const auto it = map_time.find(tf.new_keyframe);
@@ -135,7 +156,7 @@ int main(int argc, char** argv) {
       timing << tf.frame_index << "," << msg::toString(tf.state) << "," << tf.features << "," << tf.stereo_matches << ","
              << tf.tracked_points << "," << (tf.new_keyframe != kNoId) << "," << tf.extract_ms << "," << tf.stereo_ms
              << "," << tf.track_ms << "," << (kf ? it->second->total_ms : 0) << "," << (kf ? it->second->ba_ms : 0)
-             << "\n";
+             << "," << (kf ? it->second->triangulation_ms : 0) << "," << (kf ? it->second->points_triangulated : 0) << "\n";
       if (tf.features > 0) {
         ex.push_back(tf.extract_ms);
         stt.push_back(tf.stereo_ms);
@@ -147,6 +168,7 @@ int main(int argc, char** argv) {
     for (const auto& m : slam.mappingTimes()) {
       mp.push_back(m.total_ms);
       ba.push_back(m.ba_ms);
+      tri.push_back(m.triangulation_ms);
     }
     std::ofstream js(out / "summary.json");
     js << std::setprecision(6) << "{\n  \"sequence\": \"" << jsonEscape(seq.directory()) << "\",\n"
@@ -156,7 +178,8 @@ int main(int argc, char** argv) {
        << ",\n  \"relocalizations\": " << relocalized << ",\n  \"problems\": " << problems
        << ",\n  \"wall_s\": " << wall_s << ",\n  \"frames_per_s\": " << frames.size() / std::max(wall_s, 1e-9)
        << ",\n  \"mode\": \"" << (lockstep ? "lockstep" : "threaded") << "\",\n  \"seed\": " << args.integer("seed")
-       << ",\n  \"detector\": \"none\",\n";
+       << ",\n  \"detector\": \"none\",\n  \"reloc_vocab\": \""
+       << (config.tracker.vocabulary ? reloc_vocab : std::string("none")) << "\",\n";
     auto stat = [&](const char* name, const std::vector<double>& v, bool last) {
       js << "  \"" << name << "_ms_median\": " << percentile(v, 0.5) << ",\n  \"" << name
          << "_ms_p95\": " << percentile(v, 0.95) << (last ? "\n" : ",\n");
@@ -166,6 +189,7 @@ int main(int argc, char** argv) {
     stat("tracking_total", tr, false);
     stat("local_mapping", mp, false);
     stat("local_ba", ba, false);
+    stat("triangulation", tri, false);
     js << "  \"settings\": {";
     std::istringstream lines(describe(config));
     std::string line;

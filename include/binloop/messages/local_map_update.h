@@ -18,7 +18,7 @@ struct LocalMapUpdate {
   std::vector<MapPointId> culled_points;
   std::vector<SlamKeyframeId> culled_keyframes;
   // what it cost, for timing.csv and the ROS diagnostics
-  double total_ms = 0, ba_ms = 0;
+  double total_ms = 0, ba_ms = 0, triangulation_ms = 0;
   int ba_iterations = 0;
   int ba_outliers = 0;
   int points_triangulated = 0;  // created by two-view triangulation with covisible keyframes

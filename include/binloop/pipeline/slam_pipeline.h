@@ -41,7 +41,8 @@ class SlamPipeline {
   struct MappingTime {
     SlamKeyframeId keyframe;
     uint64_t frame_index;
-    double total_ms, ba_ms;
+    double total_ms, ba_ms, triangulation_ms;
+    int points_triangulated;
   };
   const std::vector<MappingTime>& mappingTimes() const { return mapping_times_; }
 

@@ -217,6 +217,7 @@ std::vector<SlamKeyframeId> LocalMapper::neighbors(const KF& kf, int n) const {
 }
 
 void LocalMapper::createNewPoints(KF& kf, msg::LocalMapUpdate& u) {
+  const auto t0 = std::chrono::steady_clock::now();
   for (SlamKeyframeId k : neighbors(kf, p_.triangulate_neighbors)) {
     KF& o = kfs_.at(k);
     // Closer than the stereo baseline: the stereo pair itself already saw these points with more parallax.
@@ -243,6 +244,7 @@ void LocalMapper::createNewPoints(KF& kf, msg::LocalMapUpdate& u) {
       ++u.points_triangulated;
     }
   }
+  u.triangulation_ms = msSinceT(t0);
 }
 
 void LocalMapper::replacePoint(MapPointId removed, MapPointId kept, msg::LocalMapUpdate& u) {

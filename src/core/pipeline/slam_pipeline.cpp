@@ -16,7 +16,8 @@ SlamPipeline::~SlamPipeline() { finish(); }
 
 void SlamPipeline::map(const msg::KeyFramePtr& kf) {
   LocalMapper::Output out = mapper_.process(*kf);
-  mapping_times_.push_back({kf->id, kf->frame_index, out.update->total_ms, out.update->ba_ms});
+  mapping_times_.push_back({kf->id, kf->frame_index, out.update->total_ms, out.update->ba_ms,
+                            out.update->triangulation_ms, out.update->points_triangulated});
   if (on_keyframe) on_keyframe(out.refined);
   updates_.push(out.update);
   --pending_;
