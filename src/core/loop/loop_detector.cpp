@@ -1,0 +1,131 @@
+#include "binloop/loop/loop_detector.h"
+
+#include <algorithm>
+#include <chrono>
+#include <stdexcept>
+
+namespace binloop {
+
+LoopDetector::LoopDetector(const LoopDetectorParams& p, ModelFactory make)
+    : p_(p), make_(std::move(make)), active_(makeModel(p.model)), active_name_(p.model) {}
+
+LoopDetector::Model LoopDetector::makeModel(const std::string& name) const {
+  Model m{name, make_(name), ConsistencyGroups(p_.consistency)};
+  if (!m.recognizer) throw PlaceError("loop detector: no model made for '" + name + "'");
+  // hbow sums scores over a candidate's group: its covisible keyframes, as the detector knows them.
+  m.recognizer->setGroupFunction([this](KeyframeId k) {
+    std::vector<KeyframeId> out;
+    if (k >= order_.size()) return out;
+    auto it = covisible_.find(order_[k]);
+    if (it == covisible_.end()) return out;
+    for (const auto& [id, w] : it->second) {
+      auto d = dense_.find(id);
+      if (d != dense_.end()) out.push_back(d->second);
+    }
+    return out;
+  });
+  return m;
+}
+
+void LoopDetector::fillFrom(Model& m) const {
+  for (size_t k = 0; k < order_.size(); ++k) m.recognizer->add(static_cast<KeyframeId>(k), descriptors_[k]);
+}
+
+void LoopDetector::switchModel(const std::string& name) {
+  pending_ = std::make_unique<Model>(makeModel(name));
+}
+
+void LoopDetector::setShadowModels(const std::vector<std::string>& names) {
+  std::vector<Model> models;
+  for (const std::string& n : names) {
+    if (n == active_name_) continue;
+    models.push_back(makeModel(n));
+    fillFrom(models.back());
+  }
+  shadow_ = std::move(models);
+}
+
+std::vector<KeyframeId> LoopDetector::referenceOf(SlamKeyframeId id) const {
+  std::vector<std::pair<uint32_t, SlamKeyframeId>> by_weight;
+  auto it = covisible_.find(id);
+  if (it != covisible_.end())
+    for (const auto& [k, w] : it->second) by_weight.emplace_back(w, k);
+  std::sort(by_weight.begin(), by_weight.end(), [](const auto& a, const auto& b) {
+    return a.first != b.first ? a.first > b.first : a.second < b.second;
+  });
+  std::vector<KeyframeId> out;
+  for (const auto& [w, k] : by_weight) {
+    if (static_cast<int>(out.size()) >= p_.max_reference) break;
+    auto d = dense_.find(k);
+    if (d != dense_.end()) out.push_back(d->second);
+  }
+  return out;
+}
+
+std::set<SlamKeyframeId> LoopDetector::groupOf(SlamKeyframeId id) const {
+  std::set<SlamKeyframeId> g{id};
+  auto it = covisible_.find(id);
+  if (it != covisible_.end())
+    for (const auto& [k, w] : it->second) g.insert(k);
+  return g;
+}
+
+std::shared_ptr<msg::LoopCandidates> LoopDetector::query(Model& m, SlamKeyframeId id, uint64_t frame, bool shadow) const {
+  const KeyframeId q = dense_.at(id);
+  QueryScope scope;
+  scope.reference = referenceOf(id);
+  for (KeyframeId k = q > static_cast<KeyframeId>(p_.ignore_recent) ? q - p_.ignore_recent : 0; k < q; ++k)
+    scope.ignore.push_back(k);
+  const QueryResult r = m.recognizer->query(q, scope);
+  auto out = std::make_shared<msg::LoopCandidates>();
+  out->query = id;
+  out->query_frame = frame;
+  out->model = m.name;
+  out->shadow = shadow;
+  out->status = statusName(r.status);
+  out->detail = r.detail;
+  std::vector<ConsistencyGroups::Proposal> proposals;
+  for (const Candidate& c : r.candidates) {
+    const SlamKeyframeId cid = order_.at(c.id);
+    out->candidates.push_back({cid, c.score, c.confidence});
+    proposals.push_back({cid, groupOf(cid)});
+  }
+  const ConsistencyGroups::Result cr = m.consistency.update(proposals);
+  out->consistency = cr.longest;
+  out->accepted = cr.accepted;
+  for (const StepTime& t : r.timings) out->timings.push_back({t.step, t.ms});
+  out->total_ms = r.total_ms;
+  return out;
+}
+
+LoopDetector::Output LoopDetector::process(const msg::KeyFrame& kf) {
+  if (kf.descriptors.empty())
+    throw std::invalid_argument("keyframe " + std::to_string(kf.id) + " has no descriptors");
+  for (const msg::CovisibleEdge& e : kf.state.covisible) {
+    covisible_[kf.id][e.id] = e.weight;
+    covisible_[e.id][kf.id] = e.weight;
+  }
+  if (pending_) {
+    fillFrom(*pending_);
+    active_ = std::move(*pending_);
+    active_name_ = active_.name;
+    pending_.reset();
+  }
+  Output out;
+  if (dense_.count(kf.id)) return out;  // a later revision: covisibility only
+  const auto t0 = std::chrono::steady_clock::now();
+  const KeyframeId dense = static_cast<KeyframeId>(order_.size());
+  // add() throws only for an empty set or a known id, both ruled out above.
+  active_.recognizer->add(dense, kf.descriptors);
+  for (Model& m : shadow_) m.recognizer->add(dense, kf.descriptors);
+  dense_[kf.id] = dense;
+  order_.push_back(kf.id);
+  descriptors_.push_back(kf.descriptors);
+  auto active = query(active_, kf.id, kf.frame_index, false);
+  active->total_ms = msSince(t0);  // the add included
+  out.active = active;
+  for (Model& m : shadow_) out.shadow.push_back(query(m, kf.id, kf.frame_index, true));
+  return out;
+}
+
+}  // namespace binloop
