@@ -1,0 +1,51 @@
+#pragma once
+// Geometric verification of a loop candidate (SPEC, pipeline step 4, first half): do the query keyframe
+// and the candidate keyframe see the same 3-D structure, and where is one camera relative to the other?
+// Stereo gives both keyframes metric 3-D points of their own, so the answer is a rigid transform:
+//   1. descriptor matches between their stereo keypoints (best below max_hamming, clearly better than the
+//      second: brute force over ~1000 x 1000, a few milliseconds);
+//   2. RANSAC (seeded) over Horn's closed form on the matched 3-D points;
+//   3. refinement by pose optimisation: the candidate's points, in its camera frame, reprojected into the
+//      query's keypoints (optim/pose_optimizer.h, robust loss, outliers dropped);
+//   4. guided search: the candidate's unmatched stereo points projected into the query with that pose, a
+//      match searched near each, and the pose refined again;
+//   5. accepted when the final inliers reach min_inliers (ORB-SLAM2: 40).
+// A rejection says at which step.
+#include <string>
+#include <vector>
+
+#include "binloop/messages/keyframe.h"
+#include "binloop/optim/rigid_alignment.h"
+#include "binloop/types/pose.h"
+
+namespace binloop {
+
+enum class LoopRejection { kNone, kTooFewMatches, kNoConsensus, kTooFewInliers };
+const char* rejectionName(LoopRejection r);
+
+struct LoopVerifierParams {
+  int max_hamming = 50;     // ORB-SLAM2's TH_LOW
+  float ratio = 0.75f;      // best vs second best
+  int min_matches = 20;     // descriptor matches needed before RANSAC
+  RigidRansacParams ransac;
+  float search_radius = 10;  // guided search, level-0 px times the level's scale
+  int min_inliers = 40;
+  uint64_t seed = 1;
+};
+
+struct LoopVerification {
+  bool accepted = false;
+  LoopRejection rejection = LoopRejection::kNone;
+  std::string detail;                 // the numbers behind the result, one line
+  Pose3 T_query_candidate = Pose3::Identity();  // candidate camera -> query camera
+  int matches = 0;                    // step 1
+  int ransac_inliers = 0;             // step 2
+  int inliers = 0;                    // after step 4
+  std::vector<std::pair<int, int>> pairs;  // final inlier (query keypoint, candidate keypoint) pairs
+  double ms = 0;
+};
+
+/// Both keyframes must carry keypoints with stereo depth; `scale_factor` and `levels` from the messages.
+LoopVerification verifyLoop(const msg::KeyFrame& query, const msg::KeyFrame& candidate, const LoopVerifierParams& p);
+
+}  // namespace binloop

@@ -1,0 +1,140 @@
+#include "binloop/loop/loop_verifier.h"
+
+#include <chrono>
+#include <limits>
+
+#include "binloop/optim/pose_optimizer.h"
+#include "binloop/tracking/keypoint_grid.h"
+#include "binloop/tracking/scale_pyramid.h"
+#include "binloop/util/hash_random.h"
+
+namespace binloop {
+
+const char* rejectionName(LoopRejection r) {
+  switch (r) {
+    case LoopRejection::kNone: return "accepted";
+    case LoopRejection::kTooFewMatches: return "too_few_matches";
+    case LoopRejection::kNoConsensus: return "no_consensus";
+    case LoopRejection::kTooFewInliers: return "too_few_inliers";
+  }
+  return "unknown";
+}
+
+namespace {
+
+Eigen::Vector3d pointOf(const msg::KeyFrame& kf, const msg::KeyPoint& k) {
+  const StereoCamera& c = kf.camera;
+  return {(k.x - c.cx) / c.fx * k.depth, (k.y - c.cy) / c.fy * k.depth, static_cast<double>(k.depth)};
+}
+
+bool stereo(const msg::KeyPoint& k) { return k.depth > 0 && k.right_x >= 0; }
+
+// Pose optimisation of T_query_candidate on the pairs; drops the outliers from `pairs`.
+int refine(const msg::KeyFrame& q, const msg::KeyFrame& c, const ScalePyramid& s, Pose3* T,
+           std::vector<std::pair<int, int>>* pairs) {
+  std::vector<PoseObservation> obs;
+  for (const auto& [qi, ci] : *pairs) {
+    const msg::KeyPoint& kq = q.keypoints[qi];
+    PoseObservation o;
+    o.p_w = pointOf(c, c.keypoints[ci]);
+    o.uv = {kq.x, kq.y};
+    o.u_right = kq.right_x;
+    o.inv_sigma2 = s.inv_sigma2[kq.octave];
+    obs.push_back(o);
+  }
+  if (obs.size() < 3) return 0;
+  const PoseOptimizationResult r = optimizePose(q.camera, *T, obs);
+  *T = r.T_c_w;
+  std::vector<std::pair<int, int>> kept;
+  for (size_t i = 0; i < pairs->size(); ++i)
+    if (!r.outlier[i]) kept.push_back((*pairs)[i]);
+  *pairs = std::move(kept);
+  return static_cast<int>(pairs->size());
+}
+
+}  // namespace
+
+LoopVerification verifyLoop(const msg::KeyFrame& q, const msg::KeyFrame& c, const LoopVerifierParams& p) {
+  const auto t0 = std::chrono::steady_clock::now();
+  LoopVerification v;
+  auto done = [&](LoopRejection r, const std::string& detail) {
+    v.rejection = r;
+    v.accepted = r == LoopRejection::kNone;
+    v.detail = detail;
+    v.ms = std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - t0).count();
+    return v;
+  };
+  const ScalePyramid s(q.scale_factor, q.levels);
+
+  // 1. Descriptor matches between stereo keypoints, each candidate keypoint used once.
+  std::vector<int> best_of_c(c.keypoints.size(), -1), dist_of_c(c.keypoints.size(), std::numeric_limits<int>::max());
+  for (size_t i = 0; i < q.keypoints.size(); ++i) {
+    if (!stereo(q.keypoints[i])) continue;
+    int best = 256, second = 256, best_j = -1;
+    for (size_t j = 0; j < c.keypoints.size(); ++j) {
+      if (!stereo(c.keypoints[j])) continue;
+      const int d = hamming(q.descriptors[i], c.descriptors[j]);
+      if (d < best) second = best, best = d, best_j = static_cast<int>(j);
+      else if (d < second) second = d;
+    }
+    if (best_j < 0 || best > p.max_hamming || best > p.ratio * second) continue;
+    if (best < dist_of_c[best_j]) dist_of_c[best_j] = best, best_of_c[best_j] = static_cast<int>(i);
+  }
+  std::vector<std::pair<int, int>> pairs;
+  for (size_t j = 0; j < c.keypoints.size(); ++j)
+    if (best_of_c[j] >= 0) pairs.emplace_back(best_of_c[j], static_cast<int>(j));
+  v.matches = static_cast<int>(pairs.size());
+  if (v.matches < p.min_matches)
+    return done(LoopRejection::kTooFewMatches, std::to_string(v.matches) + " matches < " + std::to_string(p.min_matches));
+
+  // 2. RANSAC over Horn on the 3-D pairs.
+  std::vector<Eigen::Vector3d> a, b;
+  for (const auto& [qi, ci] : pairs) {
+    a.push_back(pointOf(q, q.keypoints[qi]));
+    b.push_back(pointOf(c, c.keypoints[ci]));
+  }
+  const RigidRansacResult rr = rigidRansac(a, b, p.ransac, hashCombine(p.seed, hashCombine(q.id, c.id)));
+  v.ransac_inliers = rr.inliers;
+  if (!rr.ok)
+    return done(LoopRejection::kNoConsensus, std::to_string(v.matches) + " matches, best consensus " +
+                                                 std::to_string(rr.inliers) + " < " + std::to_string(p.ransac.min_inliers));
+  std::vector<std::pair<int, int>> in;
+  for (size_t i = 0; i < pairs.size(); ++i)
+    if (rr.inlier[i]) in.push_back(pairs[i]);
+
+  // 3. Refinement by reprojection.
+  Pose3 T = rr.T_a_b;
+  refine(q, c, s, &T, &in);
+
+  // 4. Guided search for the candidate's other stereo points.
+  std::vector<char> q_used(q.keypoints.size(), 0), c_used(c.keypoints.size(), 0);
+  for (const auto& [qi, ci] : in) q_used[qi] = c_used[ci] = 1;
+  const KeypointGrid grid(q.keypoints, q.camera.width, q.camera.height);
+  for (size_t j = 0; j < c.keypoints.size(); ++j) {
+    if (c_used[j] || !stereo(c.keypoints[j])) continue;
+    const Eigen::Vector3d pq = T * pointOf(c, c.keypoints[j]);
+    if (pq.z() <= 0) continue;
+    const float u = static_cast<float>(q.camera.fx * pq.x() / pq.z() + q.camera.cx);
+    const float w = static_cast<float>(q.camera.fy * pq.y() / pq.z() + q.camera.cy);
+    const int level = c.keypoints[j].octave;
+    const float r = p.search_radius * s.scale[level];
+    int best = 256, best_i = -1;
+    for (int i : grid.near(u, w, r, level - 1, level + 1)) {
+      if (q_used[i]) continue;
+      const int d = hamming(q.descriptors[i], c.descriptors[j]);
+      if (d < best) best = d, best_i = i;
+    }
+    if (best_i < 0 || best > p.max_hamming) continue;
+    q_used[best_i] = 1;
+    in.emplace_back(best_i, static_cast<int>(j));
+  }
+  v.inliers = refine(q, c, s, &T, &in);
+  v.T_query_candidate = T;
+  v.pairs = in;
+  const std::string numbers = std::to_string(v.matches) + " matches, " + std::to_string(v.ransac_inliers) +
+                              " RANSAC inliers, " + std::to_string(v.inliers) + " after guided search";
+  if (v.inliers < p.min_inliers) return done(LoopRejection::kTooFewInliers, numbers + " < " + std::to_string(p.min_inliers));
+  return done(LoopRejection::kNone, numbers);
+}
+
+}  // namespace binloop

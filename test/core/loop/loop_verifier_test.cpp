@@ -1,0 +1,107 @@
+#include "binloop/loop/loop_verifier.h"
+
+#include <gtest/gtest.h>
+
+#include "../optim/optim_test_scene.h"
+
+namespace binloop {
+namespace {
+
+// A street of 600 points seen by the candidate keyframe (at the origin) and by the query keyframe, 1.5 m
+// to the side and turned 8 degrees: a revisit in a neighbouring lane. Each point has a descriptor; each
+// view flips 3 of its bits. Both keyframes also have 300 keypoints of their own (clutter).
+class LoopVerifierTest : public ::testing::Test {
+ protected:
+  void SetUp() override {
+    T_w_q.linear() = Eigen::AngleAxisd(8 * test::kPi / 180, Eigen::Vector3d::UnitY()).toRotationMatrix();
+    T_w_q.translation() = Eigen::Vector3d(1.5, 0.1, 0.8);
+    for (int i = 0; i < 600; ++i) {
+      points.emplace_back(rng.uniform(-12, 12), rng.uniform(-3, 1.5), rng.uniform(4, 35));
+      Desc256 d;
+      for (auto& w : d.w) w = rng.next();
+      descs.push_back(d);
+    }
+  }
+  Desc256 view(Desc256 d) {
+    for (int f = 0; f < 3; ++f) {
+      const int bit = rng.below(256);
+      d.w[bit / 64] ^= uint64_t{1} << (bit % 64);
+    }
+    return d;
+  }
+  void addKeypoint(msg::KeyFrame& kf, const Eigen::Vector3d& p_c, const Desc256& d) {
+    msg::KeyPoint k;
+    k.x = static_cast<float>(cam.fx * p_c.x() / p_c.z() + cam.cx);
+    k.y = static_cast<float>(cam.fy * p_c.y() / p_c.z() + cam.cy);
+    if (k.x < 0 || k.x >= cam.width || k.y < 0 || k.y >= cam.height) return;
+    k.depth = static_cast<float>(p_c.z());
+    k.right_x = static_cast<float>(k.x - cam.bf() / p_c.z());
+    kf.keypoints.push_back(k);
+    kf.descriptors.push_back(d);
+    kf.state.point_ids.push_back(kNoId);
+  }
+  msg::KeyFrame keyframe(uint64_t id, const Pose3& T_w_c, int shared_points) {
+    msg::KeyFrame kf;
+    kf.id = kf.state.id = id;
+    kf.camera = cam;
+    kf.state.T_w_c = T_w_c;
+    for (int i = 0; i < shared_points; ++i) {
+      const Eigen::Vector3d p = T_w_c.inverse() * points[i];
+      if (p.z() > 1) addKeypoint(kf, p, view(descs[i]));
+    }
+    for (int i = 0; i < 300; ++i) {
+      Desc256 d;
+      for (auto& w : d.w) w = rng.next();
+      addKeypoint(kf, Eigen::Vector3d(rng.uniform(-10, 10), rng.uniform(-3, 2), rng.uniform(4, 40)), d);
+    }
+    return kf;
+  }
+
+  StereoCamera cam = test::kitti();
+  HashRng rng{21};
+  Pose3 T_w_q = Pose3::Identity();
+  std::vector<Eigen::Vector3d> points;
+  Descriptors descs;
+};
+
+TEST_F(LoopVerifierTest, ARevisitIsAcceptedWithTheTrueRelativePose) {
+  const msg::KeyFrame c = keyframe(1, Pose3::Identity(), 600), q = keyframe(2, T_w_q, 600);
+  const LoopVerification v = verifyLoop(q, c, {});
+  ASSERT_TRUE(v.accepted) << rejectionName(v.rejection) << ": " << v.detail;
+  const Pose3 truth = T_w_q.inverse();  // candidate camera = world
+  EXPECT_LT((v.T_query_candidate.translation() - truth.translation()).norm(), 0.05);
+  EXPECT_LT(test::rotationErrorDeg(v.T_query_candidate, truth), 0.2);
+  EXPECT_GT(v.inliers, 200) << v.detail;
+  EXPECT_GE(v.inliers, v.ransac_inliers / 2);
+}
+
+TEST_F(LoopVerifierTest, UnrelatedKeyframesAreRejectedForTooFewMatches) {
+  const msg::KeyFrame c = keyframe(1, Pose3::Identity(), 0), q = keyframe(2, T_w_q, 0);
+  const LoopVerification v = verifyLoop(q, c, {});
+  EXPECT_FALSE(v.accepted);
+  EXPECT_EQ(v.rejection, LoopRejection::kTooFewMatches) << v.detail;
+}
+
+TEST_F(LoopVerifierTest, MatchesWithoutACommonGeometryFindNoConsensus) {
+  msg::KeyFrame c = keyframe(1, Pose3::Identity(), 600);
+  const msg::KeyFrame q = keyframe(2, T_w_q, 600);
+  // The candidate's descriptors shuffled among its keypoints: every match lands on the wrong 3-D point.
+  HashRng shuffle(4);
+  for (size_t i = c.descriptors.size(); i > 1; --i) std::swap(c.descriptors[i - 1], c.descriptors[shuffle.below(static_cast<int>(i))]);
+  const LoopVerification v = verifyLoop(q, c, {});
+  EXPECT_FALSE(v.accepted);
+  EXPECT_EQ(v.rejection, LoopRejection::kNoConsensus) << v.detail;
+}
+
+TEST_F(LoopVerifierTest, AFewSharedPointsAreTooFewInliers) {
+  const msg::KeyFrame c = keyframe(1, Pose3::Identity(), 45), q = keyframe(2, T_w_q, 45);
+  LoopVerifierParams p;
+  p.ransac.min_inliers = 10;
+  const LoopVerification v = verifyLoop(q, c, p);
+  EXPECT_FALSE(v.accepted);
+  EXPECT_EQ(v.rejection, LoopRejection::kTooFewInliers) << v.detail;
+  EXPECT_GT(v.inliers, 10) << "the few shared points are found: " << v.detail;
+}
+
+}  // namespace
+}  // namespace binloop
