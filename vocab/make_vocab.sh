@@ -17,6 +17,7 @@
 # `vocab/make_vocab.sh hbow` makes only the two hbow files (render of 08 plus about a minute of training).
 # `vocab/make_vocab.sh photos` makes only vocab/photos/.
 # BINLOOP_TOOLS=<dir> runs the tools from <dir> instead of scripts/binloop (a build of the core alone).
+# BINLOOP_VOCAB_OUT=<dir> writes <dir>/kitti08 and <dir>/photos instead of vocab/ (to compare before replacing).
 set -euo pipefail
 source "$(dirname "$0")/../scripts/env.sh"
 cd "$BINLOOP_ROOT"
@@ -30,7 +31,8 @@ if [ ! -f "$seq08/poses.txt" ]; then
   bl render --route "$shared/kitti/poses/08.txt" --times "$shared/kitti/times/08.txt" \
     --calib kitti04 --out "$seq08" --force
 fi
-mkdir -p vocab/kitti08 vocab/photos
+out="${BINLOOP_VOCAB_OUT:-vocab}"
+mkdir -p "$out/kitti08" "$out/photos"
 models="hbow fabmap vlad hmvlad vladpq"
 [ "${1:-}" = hbow ] && models=hbow
 kitti_models="$models"
@@ -40,7 +42,7 @@ for m in $kitti_models; do
   # revisits and hmvlad found 2 of the 4 revisit segments of rendered route 00; with 4 it finds all 4.
   extra=""
   [ "$m" = hmvlad ] && extra="--k 4"
-  bl train "$m" --images "$seq08" --every 8 --seed 1 $extra --out "vocab/kitti08/$m.bin"
+  bl train "$m" --images "$seq08" --every 8 --seed 1 $extra --out "$out/kitti08/$m.bin"
 done
 stage="$work/photos"
 rm -rf "$stage" && mkdir -p "$stage"
@@ -71,5 +73,5 @@ for m in $models; do
   extra=""
   [ "$m" = hmvlad ] && extra="--k 4"
   bl train "$m" --images "$stage" --max-side 1024 --seed 1 --skip-unreadable $extra \
-    --out "vocab/photos/$m.bin"
+    --out "$out/photos/$m.bin"
 done

@@ -10,8 +10,13 @@
 // isotropic Gaussian (sigma = 31/5 px, BRIEF's "G II" layout) by HashRng with a fixed seed, each point kept
 // inside the radius-15 orientation disc so a rotated point never leaves the keypoint's border. Descriptors
 // are therefore NOT comparable with ORB-SLAM2's or OpenCV's: vocabularies must be trained on this extractor.
+// Its bits are biased and correlated; `learn-pattern` (features/brief_pattern_learning.h) learns a pattern
+// as ORB learned rBRIEF.
 // It is the one extractor of binloop: SLAM, `train`, `eval-loops` and the benchmarks all use it (with the
 // same settings by default), and every model file records the settings it was trained with.
+#include <array>
+#include <cmath>
+#include <cstdint>
 #include <opencv2/core/mat.hpp>
 #include <opencv2/core/types.hpp>
 #include <vector>
@@ -20,6 +25,31 @@
 #include "binloop/place/model_file.h"
 
 namespace binloop {
+
+/// One BRIEF test: bit = I(a) < I(b) on the smoothed level (briefSmoothed), with a = (ax, ay) and b = (bx, by)
+/// in level pixels relative to the keypoint, rotated by its angle first. |a|, |b| <= 15.
+struct BriefTest {
+  int8_t ax, ay, bx, by;
+};
+using BriefPattern = std::array<BriefTest, 256>;
+
+/// The extractor's pattern: bit i of a descriptor is test i (bit i % 64 of word i / 64).
+const BriefPattern& briefPattern();
+
+/// The level BRIEF reads: Gaussian 7x7, sigma 2, reflected border (ORB-SLAM2's), so that single-pixel tests
+/// are stable under noise.
+void briefSmoothed(const cv::Mat& level, cv::Mat& out);
+
+/// Where test point (x, y) lands around a keypoint with `angle_deg`, exactly as the extractor rounds it.
+/// cs, sn: cos and sin of the angle, as briefRotation() gives them.
+inline cv::Point rotatedTestPoint(float x, float y, float cs, float sn) {
+  return {cvRound(x * cs - y * sn), cvRound(x * sn + y * cs)};
+}
+inline void briefRotation(float angle_deg, float* cs, float* sn) {
+  const float a = angle_deg * static_cast<float>(CV_PI / 180.0);
+  *cs = std::cos(a);
+  *sn = std::sin(a);
+}
 
 struct OrbFeatures {
   std::vector<cv::KeyPoint> keypoints;

@@ -21,9 +21,8 @@ constexpr int kHalfPatch = 15;
 // corners land at least kEdge from the border: the orientation disc and the rotated pattern (radius 15)
 // then never read outside the level.
 constexpr int kEdge = 19;
-constexpr uint64_t kPatternSeed = 0x62696e6c6f6f70ull;  // "binloop"; changing it changes every descriptor
 
-using Pattern = std::array<cv::Point, 2 * Desc256::kBits>;
+constexpr uint64_t kPatternSeed = 0x62696e6c6f6f70ull;  // "binloop"; changing it changes every descriptor
 
 cv::Point gaussianPoint(HashRng& rng) {
   const double sigma = kPatchSize / 5.0;
@@ -32,26 +31,6 @@ cv::Point gaussianPoint(HashRng& rng) {
                       static_cast<int>(std::lround(sigma * rng.normal())));
     if (q.dot(q) <= kHalfPatch * kHalfPatch) return q;
   }
-}
-
-// Drawn once; a repeated or degenerate pair would waste a bit on a constant or a copy.
-const Pattern& briefPattern() {
-  static const Pattern pattern = [] {
-    Pattern p;
-    HashRng rng(kPatternSeed);
-    for (int b = 0; b < Desc256::kBits;) {
-      const cv::Point a = gaussianPoint(rng), c = gaussianPoint(rng);
-      bool fresh = a != c;
-      for (int k = 0; fresh && k < b; ++k)
-        fresh = !((p[2 * k] == a && p[2 * k + 1] == c) || (p[2 * k] == c && p[2 * k + 1] == a));
-      if (!fresh) continue;
-      p[2 * b] = a;
-      p[2 * b + 1] = c;
-      ++b;
-    }
-    return p;
-  }();
-  return pattern;
 }
 
 // Half-widths of the orientation disc per row: pixel centres within radius 15.5. The test is symmetric in
@@ -94,10 +73,12 @@ struct PatternXY {
 const PatternXY& patternXY() {
   static const PatternXY xy = [] {
     PatternXY t;
-    const Pattern& p = briefPattern();
-    for (size_t i = 0; i < p.size(); ++i) {
-      t.x[i] = static_cast<float>(p[i].x);
-      t.y[i] = static_cast<float>(p[i].y);
+    const BriefPattern& p = briefPattern();
+    for (size_t b = 0; b < p.size(); ++b) {
+      t.x[2 * b] = p[b].ax;
+      t.y[2 * b] = p[b].ay;
+      t.x[2 * b + 1] = p[b].bx;
+      t.y[2 * b + 1] = p[b].by;
     }
     return t;
   }();
@@ -106,12 +87,15 @@ const PatternXY& patternXY() {
 
 Desc256 rotatedBrief(const cv::Mat& blurred, const cv::KeyPoint& kp) {
   const PatternXY& pat = patternXY();
-  const float a = kp.angle * static_cast<float>(CV_PI / 180.0), cs = std::cos(a), sn = std::sin(a);
+  float cs, sn;
+  briefRotation(kp.angle, &cs, &sn);
   const uint8_t* c = blurred.ptr<uint8_t>(cvRound(kp.pt.y)) + cvRound(kp.pt.x);
   const int step = static_cast<int>(blurred.step1());
   std::array<int, 2 * Desc256::kBits> offset;
-  for (size_t i = 0; i < offset.size(); ++i)
-    offset[i] = cvRound(pat.x[i] * sn + pat.y[i] * cs) * step + cvRound(pat.x[i] * cs - pat.y[i] * sn);
+  for (size_t i = 0; i < offset.size(); ++i) {
+    const cv::Point q = rotatedTestPoint(pat.x[i], pat.y[i], cs, sn);
+    offset[i] = q.y * step + q.x;
+  }
   Desc256 d;
   for (int w = 0; w < 4; ++w) {
     uint64_t bits = 0;
@@ -277,6 +261,31 @@ void require(bool ok, const std::string& what) {
 
 }  // namespace
 
+// Drawn once; a repeated or degenerate pair would waste a bit on a constant or a copy.
+const BriefPattern& briefPattern() {
+  static const BriefPattern pattern = [] {
+    BriefPattern p;
+    HashRng rng(kPatternSeed);
+    for (int b = 0; b < Desc256::kBits;) {
+      const cv::Point a = gaussianPoint(rng), c = gaussianPoint(rng);
+      bool fresh = a != c;
+      for (int k = 0; fresh && k < b; ++k) {
+        const cv::Point pa(p[k].ax, p[k].ay), pc(p[k].bx, p[k].by);
+        fresh = !((pa == a && pc == c) || (pa == c && pc == a));
+      }
+      if (!fresh) continue;
+      p[b] = {static_cast<int8_t>(a.x), static_cast<int8_t>(a.y), static_cast<int8_t>(c.x), static_cast<int8_t>(c.y)};
+      ++b;
+    }
+    return p;
+  }();
+  return pattern;
+}
+
+void briefSmoothed(const cv::Mat& level, cv::Mat& out) {
+  cv::GaussianBlur(level, out, cv::Size(7, 7), 2, 2, cv::BORDER_REFLECT_101);
+}
+
 bool OrbSlamParams::operator==(const OrbSlamParams& o) const {
   return features == o.features && scale_factor == o.scale_factor && levels == o.levels && ini_fast == o.ini_fast &&
          min_fast == o.min_fast && cell_px == o.cell_px;
@@ -360,7 +369,7 @@ OrbFeatures OrbSlamExtractor::extract(const ImagePyramid& pyr) const {
     std::vector<cv::KeyPoint> kps = tree.strongestPerNode();
     // BRIEF compares single pixels, so it reads a smoothed level; the angle uses the raw one as ORB-SLAM2.
     cv::Mat blurred = blur_buffer(cv::Rect(0, 0, img.cols, img.rows));
-    cv::GaussianBlur(img, blurred, cv::Size(7, 7), 2, 2, cv::BORDER_REFLECT_101);
+    briefSmoothed(img, blurred);
     const float scale = pyr.scale[level];
     for (auto& k : kps) {
       k.octave = level;
