@@ -1,0 +1,117 @@
+#include "binloop/optim/pose_graph.h"
+
+#include <ceres/autodiff_cost_function.h>
+#include <ceres/loss_function.h>
+#include <ceres/problem.h>
+#include <ceres/rotation.h>
+#include <ceres/solver.h>
+
+#include <Eigen/Core>
+#include <array>
+#include <stdexcept>
+#include <string>
+
+namespace binloop {
+
+namespace {
+
+// R, t of a node: Exp(w) R0, Exp(w) t0 + rho (reprojection_costs.h).
+template <typename T>
+void nodePose(const T* xi, const Eigen::Matrix3d& R0, const Eigen::Vector3d& t0, Eigen::Matrix<T, 3, 3>* R,
+              Eigen::Matrix<T, 3, 1>* t) {
+  Eigen::Matrix<T, 3, 3> dR;
+  ceres::AngleAxisToRotationMatrix(xi, dR.data());  // column-major, as Eigen's default
+  *R = dR * R0.cast<T>();
+  *t = dR * t0.cast<T>() + Eigen::Matrix<T, 3, 1>(xi[3], xi[4], xi[5]);
+}
+
+struct RelativePoseCost {
+  Eigen::Matrix3d R0i, R0j, Rm_t;  // Rm_t: the measurement's rotation, transposed
+  Eigen::Vector3d t0i, t0j, tm;
+  double inv_rot, inv_trans;
+
+  template <typename T>
+  bool operator()(const T* xi_i, const T* xi_j, T* r) const {
+    Eigen::Matrix<T, 3, 3> Ri, Rj;
+    Eigen::Matrix<T, 3, 1> ti, tj;
+    nodePose(xi_i, R0i, t0i, &Ri, &ti);
+    nodePose(xi_j, R0j, t0j, &Rj, &tj);
+    const Eigen::Matrix<T, 3, 3> Rij = Ri * Rj.transpose();
+    const Eigen::Matrix<T, 3, 1> tij = ti - Rij * tj;
+    const Eigen::Matrix<T, 3, 3> Re = Rm_t.cast<T>() * Rij;
+    const Eigen::Matrix<T, 3, 1> te = Rm_t.cast<T>() * (tij - tm.cast<T>());
+    T aa[3];
+    ceres::RotationMatrixToAngleAxis(Re.data(), aa);
+    for (int k = 0; k < 3; ++k) {
+      r[k] = aa[k] * T(inv_rot);
+      r[3 + k] = te[k] * T(inv_trans);
+    }
+    return true;
+  }
+};
+
+}  // namespace
+
+PoseGraphResult optimizePoseGraph(const std::vector<PoseGraphNode>& nodes, const std::vector<PoseGraphEdge>& edges,
+                                  const PoseGraphParams& p) {
+  bool any_fixed = false;
+  for (const auto& n : nodes) any_fixed = any_fixed || n.fixed;
+  if (!any_fixed) throw std::invalid_argument("pose graph: no fixed node");
+  std::vector<std::array<double, 6>> xi(nodes.size(), std::array<double, 6>{0, 0, 0, 0, 0, 0});
+  ceres::Problem::Options po;
+  ceres::Problem problem(po);
+  std::vector<ceres::ResidualBlockId> blocks;
+  std::vector<RelativePoseCost*> costs;
+  for (const PoseGraphEdge& e : edges) {
+    if (e.i >= nodes.size() || e.j >= nodes.size() || e.i == e.j)
+      throw std::invalid_argument("pose graph: edge " + std::to_string(e.i) + "-" + std::to_string(e.j) + " of " +
+                                  std::to_string(nodes.size()) + " nodes");
+    auto* c = new RelativePoseCost;
+    c->R0i = nodes[e.i].T_c_w.linear();
+    c->t0i = nodes[e.i].T_c_w.translation();
+    c->R0j = nodes[e.j].T_c_w.linear();
+    c->t0j = nodes[e.j].T_c_w.translation();
+    c->Rm_t = e.T_i_j.linear().transpose();
+    c->tm = e.T_i_j.translation();
+    c->inv_rot = 1.0 / e.sigma_rot_rad;
+    c->inv_trans = 1.0 / e.sigma_trans_m;
+    costs.push_back(c);
+    ceres::LossFunction* loss = e.robust ? new ceres::HuberLoss(p.huber_delta) : nullptr;
+    blocks.push_back(problem.AddResidualBlock(new ceres::AutoDiffCostFunction<RelativePoseCost, 6, 6, 6>(c), loss,
+                                              xi[e.i].data(), xi[e.j].data()));
+  }
+  for (size_t n = 0; n < nodes.size(); ++n)
+    if (problem.HasParameterBlock(xi[n].data()) && nodes[n].fixed) problem.SetParameterBlockConstant(xi[n].data());
+
+  PoseGraphResult r;
+  ceres::Solver::Options so;
+  so.linear_solver_type = ceres::SPARSE_NORMAL_CHOLESKY;
+  so.max_num_iterations = p.max_iterations;
+  so.num_threads = 1;
+  ceres::Solver::Summary summary;
+  if (!blocks.empty()) ceres::Solve(so, &problem, &summary);
+  r.initial_cost = summary.initial_cost;
+  r.final_cost = summary.final_cost;
+  r.iterations = static_cast<int>(summary.iterations.size());
+  r.converged = summary.termination_type == ceres::CONVERGENCE;
+  for (size_t n = 0; n < nodes.size(); ++n) {
+    Eigen::Matrix3d R;
+    Eigen::Vector3d t;
+    nodePose(xi[n].data(), nodes[n].T_c_w.linear(), nodes[n].T_c_w.translation(), &R, &t);
+    Pose3 T = Pose3::Identity();
+    T.linear() = R;
+    T.translation() = t;
+    r.T_c_w.push_back(nodes[n].fixed ? nodes[n].T_c_w : orthonormalized(T));
+  }
+  for (size_t k = 0; k < edges.size(); ++k) {
+    double res[6];
+    const double* params[2] = {xi[edges[k].i].data(), xi[edges[k].j].data()};
+    (*costs[k])(params[0], params[1], res);
+    double chi2 = 0;
+    for (double v : res) chi2 += v * v;
+    r.edge_chi2.push_back(chi2);
+  }
+  return r;
+}
+
+}  // namespace binloop
