@@ -32,6 +32,7 @@ int main(int argc, char** argv) {
       .option("tie-margin", "grey levels within which a test's two values are a near-tie", "5")
       .option("max-tie-share", "leave out tests that are near-ties on more than this share of keypoints (1: off)", "1")
       .option("seed", "keypoint sampling seed", "1")
+      .option("data-note", "what the images are, for the table's header", "")
       .flag("skip-unreadable", "skip images that cannot be read as 8-bit instead of stopping");
   binloop::declareExtractOptions(args);
   return binloop::runTool("learn-pattern", [&] {
@@ -125,7 +126,9 @@ int main(int argc, char** argv) {
            "// features/brief_pattern_learning.h).\n"
            "// Command: "
         << command << "\n// Data: " << used << " images (" << all.keypoints() << " oriented keypoints, seed " << seed
-        << "), extractor " << binloop::extractorSettings(eo).describe() << ".\n// " << summary.str() << ".\n";
+        << "), extractor " << binloop::extractorSettings(eo).describe() << ".\n";
+    if (!args.str("data-note").empty()) out << "// " << args.str("data-note") << "\n";
+    out << "// " << summary.str() << ".\n";
     for (size_t b = 0; b < lp.tests.size(); ++b) {
       const auto& t = lp.tests[b];
       out << "    {" << int(t.ax) << ", " << int(t.ay) << ", " << int(t.bx) << ", " << int(t.by) << "},  // " << b
