@@ -82,7 +82,7 @@ int main(int argc, char** argv) {
     for (const auto& m : models) modelTypeFromName(m);  // unknown names fail before any work
     const ExtractOptions eo = extractOptionsFrom(args);
     // Every model file must have been trained on descriptors of these settings (or --force-extractor):
-    // checked before any image is read, from the headers alone.
+    // checked from the headers alone, below.
     ExtractorCheck extractor_check;
     extractor_check.expected = extractorSettings(eo);
     extractor_check.force = args.has("force-extractor");
@@ -90,7 +90,6 @@ int main(int argc, char** argv) {
     const auto modelFile = [&](const std::string& name) {
       return (fs::path(args.str("vocab-dir")) / (name + ".bin")).string();
     };
-    for (const auto& m : models) checkModelExtractor(modelFile(m), extractor_check);
     const auto images = listImages(args.str("sequence"));
     std::vector<Pose3> poses;
     const std::string poses_path = args.has("poses") ? args.str("poses") : (fs::path(args.str("sequence")) / "poses.txt").string();
@@ -131,6 +130,8 @@ int main(int argc, char** argv) {
       segments.back().insert(q);
     }
 
+    // After the arguments and the ground truth (their errors say more), before any image is decoded.
+    for (const auto& m : models) checkModelExtractor(modelFile(m), extractor_check);
     std::vector<std::string> kf_paths;
     for (int f : kf_frames) kf_paths.push_back(images[f]);
     std::vector<Descriptors> desc;
