@@ -12,6 +12,8 @@ LoopDetector::LoopDetector(const LoopDetectorParams& p, ModelFactory make)
 LoopDetector::Model LoopDetector::makeModel(const std::string& name) const {
   Model m{name, make_(name), ConsistencyGroups(p_.consistency)};
   if (!m.recognizer) throw PlaceError("loop detector: no model made for '" + name + "'");
+  // The stage's own store is the one copy of the descriptors (models are replaced on a switch).
+  m.recognizer->setKeepDescriptors(false);
   // hbow sums scores over a candidate's group: its covisible keyframes, as the detector knows them.
   m.recognizer->setGroupFunction([this](KeyframeId k) {
     std::vector<KeyframeId> out;

@@ -7,6 +7,7 @@
 #include <stdexcept>
 #include <unordered_set>
 
+#include "binloop/mapping/reprojection_chi2.h"
 #include "binloop/tracking/projection_search.h"
 
 namespace binloop {
@@ -15,20 +16,6 @@ namespace {
 
 double msSinceT(std::chrono::steady_clock::time_point t0) {
   return std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - t0).count();
-}
-
-double chi2Of(const StereoCamera& cam, const Pose3& T_c_w, const Eigen::Vector3d& p_w, const msg::KeyPoint& k,
-              float inv_sigma2, bool* in_front) {
-  const Eigen::Vector3d p = T_c_w * p_w;
-  *in_front = p.z() > 0;
-  if (!*in_front) return std::numeric_limits<double>::infinity();
-  const double u = cam.fx * p.x() / p.z() + cam.cx, v = cam.fy * p.y() / p.z() + cam.cy;
-  double e2 = (u - k.x) * (u - k.x) + (v - k.y) * (v - k.y);
-  if (k.right_x >= 0) {
-    const double ur = u - cam.bf() / p.z();
-    e2 += (ur - k.right_x) * (ur - k.right_x);
-  }
-  return e2 * inv_sigma2;
 }
 
 }  // namespace
@@ -290,7 +277,7 @@ void LocalMapper::fuseWithNeighbors(KF& kf, msg::LocalMapUpdate& u) {
       for (int i : t.grid.near(pp.u, pp.v, r, level - 1, level + 1)) {
         const msg::KeyPoint& k = t.keypoints[i];
         bool front = false;
-        const double chi2 = chi2Of(camera_, T_c_w, mp.state.p_w, k, scales_.inv_sigma2[k.octave], &front);
+        const double chi2 = reprojectionChi2(camera_, T_c_w, mp.state.p_w, k, scales_.inv_sigma2[k.octave], &front);
         if (chi2 > (k.right_x >= 0 ? 7.815 : 5.991)) continue;
         const int d = hamming(mp.state.descriptor, t.descriptors[i]);
         if (d < best) best = d, best_i = i;

@@ -3,6 +3,8 @@
 #include <Eigen/SVD>
 #include <cmath>
 
+#include "binloop/mapping/reprojection_chi2.h"
+
 namespace binloop {
 
 std::optional<Eigen::Vector3d> triangulateLinear(const Pose3& T_c1_w, const Pose3& T_c2_w, const Eigen::Vector2d& x1,
@@ -39,22 +41,6 @@ Eigen::Vector3d unprojectStereo(const TriangulationView& v) {
   return *v.T_w_c * Eigen::Vector3d(x.x() * k.depth, x.y() * k.depth, k.depth);
 }
 
-// Squared reprojection error in level-0 pixels over the keypoint's level variance; infinite behind.
-double chi2(const TriangulationView& v, const Eigen::Vector3d& p_w, const ScalePyramid& s, bool* behind) {
-  const Eigen::Vector3d p = v.T_w_c->inverse() * p_w;
-  *behind = p.z() <= 0;
-  if (*behind) return INFINITY;
-  const StereoCamera& c = *v.camera;
-  const msg::KeyPoint& k = *v.keypoint;
-  const double u = c.fx * p.x() / p.z() + c.cx, w = c.fy * p.y() / p.z() + c.cy;
-  double e2 = (u - k.x) * (u - k.x) + (w - k.y) * (w - k.y);
-  if (k.right_x >= 0) {
-    const double ur = u - c.bf() / p.z();
-    e2 += (ur - k.right_x) * (ur - k.right_x);
-  }
-  return e2 * s.inv_sigma2[k.octave];
-}
-
 }  // namespace
 
 TriangulationResult triangulatePair(const TriangulationView& a, const TriangulationView& b, const ScalePyramid& s,
@@ -81,9 +67,10 @@ TriangulationResult triangulatePair(const TriangulationView& a, const Triangulat
     return TriangulationResult::kParallel;
   }
 
-  bool behind_a = false, behind_b = false;
-  const double ea = chi2(a, X, s, &behind_a), eb = chi2(b, X, s, &behind_b);
-  if (behind_a || behind_b) return TriangulationResult::kBehind;
+  bool front_a = false, front_b = false;
+  const double ea = reprojectionChi2(*a.camera, a.T_w_c->inverse(), X, ka, s.inv_sigma2[ka.octave], &front_a);
+  const double eb = reprojectionChi2(*b.camera, b.T_w_c->inverse(), X, kb, s.inv_sigma2[kb.octave], &front_b);
+  if (!front_a || !front_b) return TriangulationResult::kBehind;
   if (ea > (ka.right_x >= 0 ? p.chi2_stereo : p.chi2_mono) || eb > (kb.right_x >= 0 ? p.chi2_stereo : p.chi2_mono))
     return TriangulationResult::kReprojection;
 
