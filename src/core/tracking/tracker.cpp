@@ -240,24 +240,24 @@ bool Tracker::poseFromMatches(Frame& f, int matches) {
   return matches >= p_.min_last_frame_matches && inliers_ >= 10;
 }
 
-// Each point's best keypoint among `candidates(point)`, if clearly better than the second; the matches go
-// into f.points.
-template <typename Candidates>
-int matchPointsByDescriptor(Frame& f, const std::vector<const msg::MapPoint*>& pts, const Candidates& candidates) {
-  int n = 0;
+namespace {
+
+// Each point's best keypoint of the whole frame, if clearly better than the second (brute force: this runs
+// once per lost frame and keyframe, not per tracked frame); the matches go into f.points.
+void matchPointsByDescriptor(Frame& f, const std::vector<const msg::MapPoint*>& pts) {
   for (const msg::MapPoint* mp : pts) {
     int best = 256, second = 256, best_j = -1;
-    candidates(*mp, [&](int j) {
+    for (size_t j = 0; j < f.size(); ++j) {
       const int d = hamming(mp->descriptor, f.descriptors[j]);
-      if (d < best) second = best, best = d, best_j = j;
+      if (d < best) second = best, best = d, best_j = static_cast<int>(j);
       else if (d < second) second = d;
-    });
+    }
     if (best_j < 0 || best > 64 || best > 0.8 * second || f.points[best_j] != kNoId) continue;
     f.points[best_j] = mp->id;
-    ++n;
   }
-  return n;
 }
+
+}  // namespace
 
 bool Tracker::poseFromScratch(Frame& f, const std::vector<const msg::MapPoint*>& pts) {
   const ScalePyramid& s = builder_.scales();
@@ -319,13 +319,10 @@ bool Tracker::relocalize(Frame& f) {
       const msg::MapPoint* mp = id != kNoId ? map_.point(id) : nullptr;
       if (mp && seen.insert(mp->id).second) pts.push_back(mp);
     }
-    // Brute force: this runs once per lost frame and keyframe, not per tracked frame.
     std::fill(f.points.begin(), f.points.end(), kNoId);
     std::fill(f.outlier.begin(), f.outlier.end(), 0);
     f.T_w_c = start;
-    matchPointsByDescriptor(f, pts, [&](const msg::MapPoint&, const auto& consider) {
-      for (size_t j = 0; j < f.size(); ++j) consider(static_cast<int>(j));
-    });
+    matchPointsByDescriptor(f, pts);
     const bool tracked = poseFromScratch(f, pts);
     // Every candidate is tried and the one that explains most of the local map wins: with repeated
     // structure a wrong pose can still gather a few dozen inliers.
