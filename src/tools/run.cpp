@@ -14,6 +14,7 @@
 #include "binloop/pipeline/slam_config.h"
 #include "binloop/place/hbow_recognizer.h"
 #include "binloop/features/orb_slam_extractor.h"
+#include "binloop/pipeline/loop_log.h"
 #include "binloop/pipeline/slam_pipeline.h"
 #include "binloop/util/cli_args.h"
 #include "binloop/util/percentile.h"
@@ -41,14 +42,19 @@ std::string jsonEscape(const std::string& s) {
 
 int main(int argc, char** argv) {
   CliArgs args("run",
-               "scripts/binloop run <sequence_dir> --out <dir> [--config config/kitti.yaml] [--detector none]\n"
+               "scripts/binloop run <sequence_dir> --out <dir> [--config config/kitti.yaml]\n"
+               "    [--detector hbow|fabmap|vlad|hmvlad|vladpq|none] [--shadow all|M,M] [--switch-detector-at KF:M]\n"
                "    [--lockstep] [--seed N] [--start N] [--end N] [--reloc-vocab vocab/kitti08/hbow.bin|none]\n"
-               "Tracks and maps a KITTI-layout stereo sequence (image_0/, image_1/, calib.txt, times.txt) and writes\n"
-               "trajectory.kitti.txt / .tum.txt (every frame), keyframes.kitti.txt / .tum.txt, timing.csv, summary.json.");
+               "Tracks and maps a KITTI-layout stereo sequence (image_0/, image_1/, calib.txt, times.txt), closes loops,\n"
+               "and writes trajectory.kitti.txt / .tum.txt (every frame, loop-corrected), keyframes.kitti.txt / .tum.txt,\n"
+               "timing.csv, loops.csv (one row per keyframe and model queried), summary.json.");
   args.positional("sequence_dir", "KITTI-layout sequence folder")
       .option("out", "output folder (created)")
       .option("config", "SLAM settings (YAML; see config/kitti.yaml); default: the built-in defaults, which that file repeats")
-      .option("detector", "loop detector: none (loop closing is not built yet)", "none")
+      .option("detector", "loop detector: hbow, fabmap, vlad, hmvlad, vladpq, or none (no loop closing)", "hbow")
+      .option("vocab-dir", "where the detectors' model files are (<dir>/<model>.bin)", "vocab/kitti08")
+      .option("shadow", "models run beside the active one and only logged: 'all' or a comma list")
+      .option("switch-detector-at", "KF:model[,KF:model...]: switch the active detector when it has seen KF keyframes")
       .flag("lockstep", "map every keyframe before the next frame (bit-identical reruns); default: mapping on its own thread")
       .option("seed", "seed for every random choice (recorded in summary.json)", "1")
       .option("start", "first frame", "0")
@@ -61,8 +67,20 @@ int main(int argc, char** argv) {
   return runTool("run", [&] {
     if (!args.parse(argc, argv)) return 0;
     if (!args.has("out")) throw CliError("--out is required");
-    if (args.str("detector") != "none")
-      throw CliError("--detector " + args.str("detector") + ": only 'none' is available until loop closing is built");
+    std::string detector = args.str("detector");
+    const fs::path default_model = fs::path(args.str("vocab-dir")) / (detector + ".bin");
+    if (detector == "hbow" && !args.has("detector") && !fs::exists(default_model)) {
+      std::cerr << "warning: " << default_model.string()
+                << " not found (vocab/make_vocab.sh hbow makes it, about 6 minutes): running without loop closing; "
+                   "--detector fabmap|vlad|hmvlad|vladpq use the tracked model files\n";
+      detector = "none";
+    }
+    const auto& names = placeModelNames();
+    auto checkName = [&](const std::string& n, const std::string& what) {
+      if (std::find(names.begin(), names.end(), n) == names.end())
+        throw CliError(what + " '" + n + "': not one of hbow, fabmap, vlad, hmvlad, vladpq");
+    };
+    if (detector != "none") checkName(detector, "--detector");
     SlamConfig config = args.has("config") ? loadSlamConfig(args.str("config")) : SlamConfig{};
     config.tracker.seed = static_cast<uint64_t>(args.integer("seed"));
     const std::string reloc_vocab = args.str("reloc-vocab");
@@ -92,8 +110,56 @@ int main(int argc, char** argv) {
               << (lockstep ? "lock-step" : "threaded") << "\n"
               << seq.camera().describe();
 
+    std::optional<LoopClosingSetup> loops;
+    if (detector != "none") {
+      LoopClosingSetup l;
+      l.detector = config.detector;
+      l.detector.model = detector;
+      l.closer = config.closer;
+      l.closer.verify.seed = config.tracker.seed;
+      const std::string dir = args.str("vocab-dir");
+      const bool force = args.has("force-extractor");
+      const ExtractorSettings expected = extractorSettings(config.tracker.orb, 0);
+      l.make_model = [dir, force, expected](const std::string& name) {
+        RecognizerOptions ro;
+        ro.model_file = (fs::path(dir) / (name + ".bin")).string();
+        ro.extractor.expected = expected;
+        ro.extractor.force = force;
+        return makePlaceRecognizer(name, ro);
+      };
+      if (args.has("shadow")) {
+        std::string s = args.str("shadow");
+        if (s == "all") {
+          l.shadow = names;
+        } else {
+          std::stringstream ss(s);
+          std::string n;
+          while (std::getline(ss, n, ',')) {
+            checkName(n, "--shadow");
+            l.shadow.push_back(n);
+          }
+        }
+      }
+      if (args.has("switch-detector-at")) {
+        std::stringstream ss(args.str("switch-detector-at"));
+        std::string item;
+        while (std::getline(ss, item, ',')) {
+          const auto colon = item.find(':');
+          if (colon == std::string::npos) throw CliError("--switch-detector-at '" + item + "': expected KF:model");
+          size_t at = 0;
+          try {
+            at = std::stoul(item.substr(0, colon));
+          } catch (const std::exception&) {
+            throw CliError("--switch-detector-at '" + item + "': KF is not a number");
+          }
+          checkName(item.substr(colon + 1), "--switch-detector-at");
+          l.switches.emplace_back(at, item.substr(colon + 1));
+        }
+      }
+      loops = l;
+    }
     SlamPipeline slam(seq.camera(), config.tracker, config.mapper,
-                      lockstep ? PipelineMode::kLockStep : PipelineMode::kThreaded);
+                      lockstep ? PipelineMode::kLockStep : PipelineMode::kThreaded, 3, loops);
     std::vector<msg::TrackedFrame> frames;
     ProgressBar bar("run", static_cast<size_t>(end - start));
     const auto t0 = std::chrono::steady_clock::now();
@@ -178,7 +244,7 @@ int main(int argc, char** argv) {
        << ",\n  \"relocalizations\": " << relocalized << ",\n  \"problems\": " << problems
        << ",\n  \"wall_s\": " << wall_s << ",\n  \"frames_per_s\": " << frames.size() / std::max(wall_s, 1e-9)
        << ",\n  \"mode\": \"" << (lockstep ? "lockstep" : "threaded") << "\",\n  \"seed\": " << args.integer("seed")
-       << ",\n  \"detector\": \"none\",\n  \"reloc_vocab\": \""
+       << ",\n  \"detector\": \"" << detector << "\",\n  \"reloc_vocab\": \""
        << (config.tracker.vocabulary ? reloc_vocab : std::string("none")) << "\",\n";
     auto stat = [&](const char* name, const std::vector<double>& v, bool last) {
       js << "  \"" << name << "_ms_median\": " << percentile(v, 0.5) << ",\n  \"" << name
@@ -190,6 +256,42 @@ int main(int argc, char** argv) {
     stat("local_mapping", mp, false);
     stat("local_ba", ba, false);
     stat("triangulation", tri, false);
+    if (slam.closesLoops()) {
+      writeLoopLog((out / "loops.csv").string(), slam.loopLog());
+      std::map<std::string, int> by_status;
+      std::map<std::string, std::vector<double>> detect_ms;
+      std::vector<double> verify_ms, optimize_ms, correction_ms, switch_ms;
+      int queries = 0, proposals = 0;
+      for (const auto& e : slam.loopLog()) {
+        if (e.active) {
+          ++queries;
+          proposals += e.active->accepted != kNoId;
+          detect_ms[e.active->model].push_back(e.active->total_ms);
+        }
+        for (const auto& s : e.shadow) detect_ms[s->model + "_shadow"].push_back(s->total_ms);
+        for (const auto& c : e.closures) {
+          ++by_status[c->status];
+          if (c->verify_ms > 0) verify_ms.push_back(c->verify_ms);
+          if (c->optimize_ms > 0) optimize_ms.push_back(c->optimize_ms);
+        }
+        if (e.correction_ms > 0) correction_ms.push_back(e.correction_ms);
+        if (e.switch_ms > 0) switch_ms.push_back(e.switch_ms);
+      }
+      js << "  \"loop_queries\": " << queries << ",\n  \"loop_proposals\": " << proposals
+         << ",\n  \"loops_accepted\": " << by_status["accepted"] << ",\n  \"loops_by_status\": {";
+      bool first_status = true;
+      for (const auto& [s, n] : by_status) {
+        js << (first_status ? "" : ", ") << "\"" << s << "\": " << n;
+        first_status = false;
+      }
+      js << "},\n";
+      for (const auto& [m, v] : detect_ms) stat(("detect_" + m).c_str(), v, false);
+      stat("verify", verify_ms, false);
+      stat("pose_graph", optimize_ms, false);
+      stat("correction_apply", correction_ms, false);
+      if (!switch_ms.empty()) stat("switch_rebuild", switch_ms, false);
+      std::cout << "loops_accepted: " << by_status["accepted"] << "\n";
+    }
     js << "  \"settings\": {";
     std::istringstream lines(describe(config));
     std::string line;

@@ -17,7 +17,7 @@ struct LoopEdge {
 };
 
 struct EssentialGraphParams {
-  uint32_t min_covisibility = 100;  // ORB-SLAM2
+  int min_covisibility = 100;  // ORB-SLAM2
   double sigma_rot_rad = 0.01, sigma_trans_m = 0.05;  // odometry-like edges
   double loop_sigma_rot_rad = 0.01, loop_sigma_trans_m = 0.05;
 };

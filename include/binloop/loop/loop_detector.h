@@ -38,6 +38,7 @@ class LoopDetector {
   struct Output {
     msg::LoopCandidatesPtr active;
     std::vector<msg::LoopCandidatesPtr> shadow;
+    double switch_ms = 0;  // building a switched-to model's index from the stored keyframes, when one took over
   };
 
   /// Throws PlaceError when the first model cannot be made.

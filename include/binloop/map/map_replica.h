@@ -1,12 +1,12 @@
 #pragma once
-// A stage's own copy of the map, kept up to date from messages (its own keyframes, LocalMapUpdate,
-// Correction). Tracking uses one to find its local map; it never reads another stage's memory.
+// A stage's own copy of the map, kept up to date from messages (its own keyframes and LocalMapUpdates,
+// loop corrections included: local mapping forwards them as updates). Tracking uses one to find its local
+// map; it never reads another stage's memory.
 // Fused points are remembered (removed -> kept), so a frame that still names a removed point finds the one
 // that replaced it.
 #include <unordered_map>
 #include <vector>
 
-#include "binloop/messages/correction.h"
 #include "binloop/messages/keyframe.h"
 #include "binloop/messages/local_map_update.h"
 
@@ -22,7 +22,6 @@ class MapReplica {
   /// A keyframe as its creator sent it: its state and the points made with it.
   void add(const msg::KeyFrame& kf);
   void apply(const msg::LocalMapUpdate& u);
-  void apply(const msg::Correction& c);
 
   /// The point an id now stands for (following fusions), or kNoId when it was culled or never known.
   MapPointId resolve(MapPointId id) const;

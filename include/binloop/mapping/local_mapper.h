@@ -9,6 +9,7 @@
 #include <unordered_map>
 #include <vector>
 
+#include "binloop/map/correction_history.h"
 #include "binloop/map/ids.h"
 #include "binloop/mapping/epipolar_matcher.h"
 #include "binloop/mapping/triangulation.h"
@@ -52,7 +53,11 @@ class LocalMapper {
   /// Inserts the keyframe and runs the local-mapping steps on it. Never throws for a keyframe that names
   /// unknown points (they are dropped); throws std::invalid_argument for a malformed message (sizes differ).
   Output process(const msg::KeyFrame& kf);
-  void apply(const msg::Correction& c);
+  /// A loop correction (messages/correction.h): keyframes and points move, the loop's points merge. Returns
+  /// the update for tracking: the whole corrected map. Throws std::invalid_argument for a correction out of
+  /// sequence.
+  msg::LocalMapUpdatePtr apply(const msg::Correction& c);
+  uint64_t correctionsApplied() const { return history_.applied(); }
   /// Set from another thread to cut a running local BA short (a new keyframe is waiting).
   std::atomic<bool>& abortFlag() { return abort_; }
 
@@ -92,6 +97,9 @@ class LocalMapper {
   void cullRecentPoints(msg::LocalMapUpdate& u);
   void createNewPoints(KF& kf, msg::LocalMapUpdate& u);
   void fuseWithNeighbors(KF& kf, msg::LocalMapUpdate& u);
+  /// Projects `points` into keyframe `t`; a match either adds an observation or merges two points.
+  void fuseInto(KF& t, const std::vector<MapPointId>& points, msg::LocalMapUpdate& u);
+  std::vector<MapPointId> pointsOf(const std::vector<SlamKeyframeId>& keyframes) const;
   void localBundleAdjustment(KF& kf, msg::LocalMapUpdate& u);
   void cullKeyframes(KF& kf, msg::LocalMapUpdate& u);
   void updatePointShape(MP& mp);
@@ -115,6 +123,7 @@ class LocalMapper {
   IdCounter point_ids_{IdIssuer::kLocalMapping};
   uint64_t seq_ = 0, updates_ = 0;
   SlamKeyframeId first_kf_ = kNoId;
+  CorrectionHistory history_;
 };
 
 }  // namespace binloop

@@ -31,6 +31,9 @@ struct KeyFrame {
   Descriptors descriptors;     // one per keypoint
   KeyframeState state;         // pose, map point per keypoint, covisibility (empty at revision 0), parent
   std::vector<MapPoint> new_points;  // the points its creator made with it (ids in point_ids)
+  // Loop corrections its creator had applied when it made it (Correction::sequence). A receiver that has
+  // applied more moves the pose and new points with the parent's correction (messages/correction.h).
+  uint64_t corrections_seen = 0;
 };
 
 using KeyFramePtr = std::shared_ptr<const KeyFrame>;

@@ -17,11 +17,14 @@ struct LocalMapUpdate {
   std::vector<std::pair<MapPointId, MapPointId>> fused;  // (removed, kept): the same point seen twice
   std::vector<MapPointId> culled_points;
   std::vector<SlamKeyframeId> culled_keyframes;
+  uint64_t corrections_seen = 0;  // loop corrections applied before it was made (Correction::sequence)
+  bool correction = false;        // the whole map after a loop correction, not one keyframe's processing
   // what it cost, for timing.csv and the ROS diagnostics
   double total_ms = 0, ba_ms = 0, triangulation_ms = 0;
   int ba_iterations = 0;
   int ba_outliers = 0;
   int points_triangulated = 0;  // created by two-view triangulation with covisible keyframes
+  int points_fused_across_loop = 0;  // a correction's merges
 };
 
 using LocalMapUpdatePtr = std::shared_ptr<const LocalMapUpdate>;

@@ -38,6 +38,7 @@ struct PoseGraphParams {
 struct PoseGraphResult {
   std::vector<Pose3> T_c_w;       // per node
   std::vector<double> edge_chi2;  // per edge, at the solution
+  std::vector<double> initial_edge_chi2;  // per edge, at the starting poses
   double initial_cost = 0, final_cost = 0;
   int iterations = 0;
   bool converged = false;

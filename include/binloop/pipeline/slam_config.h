@@ -5,6 +5,8 @@
 #include <stdexcept>
 #include <string>
 
+#include "binloop/loop/loop_closer.h"
+#include "binloop/loop/loop_detector.h"
 #include "binloop/mapping/local_mapper.h"
 #include "binloop/tracking/tracker.h"
 
@@ -18,6 +20,8 @@ class ConfigError : public std::runtime_error {
 struct SlamConfig {
   TrackerParams tracker;
   LocalMapperParams mapper;
+  LoopDetectorParams detector;  // its `model` comes from the runner's --detector, not from the file
+  LoopCloserParams closer;
 };
 
 /// Keys the file gives override the defaults; keys it leaves out keep them.

@@ -1,14 +1,21 @@
 #pragma once
 // The stages wired in one process, for the offline runner and the tests. Two modes:
-// - lock-step: each keyframe is mapped and its update applied before the next frame is tracked, so a run
-//   depends only on its input (bit-identical reruns);
-// - threaded: local mapping on its own thread behind a bounded queue, tracking on the caller's; updates
-//   reach tracking when they are ready, as between nodelets.
+// - lock-step: each keyframe is mapped, searched for loops and any correction applied before the next
+//   frame is tracked, so a run depends only on its input (bit-identical reruns);
+// - threaded: local mapping and the loop stages (detection, then closing) each on their own thread behind
+//   queues, tracking on the caller's; updates reach tracking when they are ready, as between nodelets.
 // Stages only exchange the messages of messages/*.h; this class owns the queues between them.
+#include <atomic>
 #include <functional>
 #include <memory>
+#include <mutex>
+#include <optional>
+#include <string>
 #include <thread>
+#include <variant>
 
+#include "binloop/loop/loop_closer.h"
+#include "binloop/loop/loop_detector.h"
 #include "binloop/mapping/local_mapper.h"
 #include "binloop/pipeline/bounded_queue.h"
 #include "binloop/tracking/tracker.h"
@@ -17,21 +24,35 @@ namespace binloop {
 
 enum class PipelineMode { kLockStep, kThreaded };
 
+/// Loop closing, when wanted: the detector's settings and how it makes models, the closer's settings,
+/// shadow models, and switches of the active model at given keyframe counts.
+struct LoopClosingSetup {
+  LoopDetectorParams detector;
+  LoopDetector::ModelFactory make_model;
+  LoopCloserParams closer;
+  std::vector<std::string> shadow;
+  std::vector<std::pair<size_t, std::string>> switches;  // (keyframes seen by the detector, model)
+};
+
 class SlamPipeline {
  public:
+  /// Throws PlaceError when loop closing's first model cannot be made.
   SlamPipeline(const StereoCamera& cam, const TrackerParams& tp, const LocalMapperParams& mp, PipelineMode mode,
-               size_t queue_capacity = 3);
+               size_t queue_capacity = 3, std::optional<LoopClosingSetup> loops = std::nullopt);
   ~SlamPipeline();
   SlamPipeline(const SlamPipeline&) = delete;
   SlamPipeline& operator=(const SlamPipeline&) = delete;
 
   /// Tracks one frame (on the caller's thread). Never throws for bad input (see Tracker::track).
   msg::TrackedFrame process(const StereoFrame& frame);
-  /// Waits until mapping has processed every keyframe and tracking has applied every update.
+  /// Waits until every stage has processed everything sent to it and tracking has applied every update.
   void finish();
 
-  /// Called on the mapping thread with each refined keyframe (the loop stages' input); set before the
-  /// first frame.
+  /// The model loop detection uses from its next keyframe on (any thread). Throws PlaceError for a model
+  /// that cannot be made; the running one stays.
+  void switchDetector(const std::string& model);
+
+  /// Called on the mapping thread with each refined keyframe; set before the first frame.
   std::function<void(const msg::KeyFramePtr&)> on_keyframe;
 
   const Tracker& tracker() const { return tracker_; }
@@ -46,18 +67,43 @@ class SlamPipeline {
   };
   const std::vector<MappingTime>& mappingTimes() const { return mapping_times_; }
 
+  /// Per keyframe searched for loops: what each model proposed and what loop closing made of it.
+  struct LoopLogEntry {
+    msg::LoopCandidatesPtr active;
+    std::vector<msg::LoopCandidatesPtr> shadow;
+    std::vector<msg::LoopClosurePtr> closures;
+    double correction_ms = 0;  // local mapping applying an accepted loop's correction
+    double switch_ms = 0;      // rebuilding a newly switched model's index before this query
+  };
+  /// Only once finish() has returned.
+  const std::vector<LoopLogEntry>& loopLog() const { return loop_log_; }
+  bool closesLoops() const { return detector_ != nullptr; }
+
  private:
-  void map(const msg::KeyFramePtr& kf);
+  using MappingInput = std::variant<msg::KeyFramePtr, msg::CorrectionPtr>;
+  struct LoopInput {
+    msg::KeyFramePtr refined;        // null for an update alone
+    msg::LocalMapUpdatePtr update;
+  };
+  void map(const MappingInput& in);
+  void searchLoops(const LoopInput& in);
   void drainUpdates();
 
   PipelineMode mode_;
   Tracker tracker_;
   LocalMapper mapper_;
-  BoundedQueue<msg::KeyFramePtr> keyframes_;
+  std::unique_ptr<LoopDetector> detector_;
+  std::unique_ptr<LoopCloser> closer_;
+  std::vector<std::pair<size_t, std::string>> switches_;
+  std::mutex switch_mutex_;
+  std::string switch_to_;  // set by switchDetector, taken by the loop thread
+  BoundedQueue<MappingInput> mapping_inbox_;
+  BoundedQueue<LoopInput> loop_inbox_;
   BoundedQueue<msg::LocalMapUpdatePtr> updates_;
   std::atomic<int> pending_{0};  // keyframes sent to mapping and not yet processed
   std::vector<MappingTime> mapping_times_;
-  std::thread mapping_thread_;
+  std::vector<LoopLogEntry> loop_log_;
+  std::thread mapping_thread_, loop_thread_;
   bool finished_ = false;
 };
 

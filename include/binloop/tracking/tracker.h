@@ -1,7 +1,7 @@
 #pragma once
 // The tracking stage (SPEC, pipeline step 1): stereo frames in, a pose per frame and keyframes out.
 // It owns its state: the last frame, the motion model, and a MapReplica built only from the keyframes it
-// made and the LocalMapUpdate / Correction messages it is given. It never waits for another stage, so the
+// made and the LocalMapUpdate messages it is given (loop corrections arrive as one). It never waits for another stage, so the
 // pipeline can run it in lock-step or on its own thread.
 #include <memory>
 #include <string>
@@ -77,7 +77,6 @@ class Tracker {
   Output track(const StereoFrame& in, int mapping_queue = 0);
 
   void apply(const msg::LocalMapUpdate& u);
-  void apply(const msg::Correction& c);
 
   msg::TrackingState state() const { return state_; }
   const MapReplica& map() const { return map_; }
@@ -118,6 +117,7 @@ class Tracker {
   std::vector<SlamKeyframeId> local_keyframes_;
   int inliers_ = 0;
   uint64_t reloc_attempts_ = 0;
+  uint64_t corrections_seen_ = 0;  // loop corrections applied (through local mapping's updates)
   std::unique_ptr<KeyframeDatabase> keyframe_db_;  // with a vocabulary only
 };
 

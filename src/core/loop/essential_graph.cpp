@@ -48,7 +48,7 @@ EssentialGraph buildEssentialGraph(const std::vector<msg::KeyframeState>& keyfra
     if (parent != index.end())
       g.tree_edges += add(parent->second, i, current(parent->second, i), p.sigma_rot_rad, p.sigma_trans_m, false);
     for (const msg::CovisibleEdge& e : k.covisible) {
-      if (e.weight < p.min_covisibility) continue;
+      if (static_cast<int>(e.weight) < p.min_covisibility) continue;
       auto o = index.find(e.id);
       if (o == index.end()) continue;
       g.covisibility_edges += add(i, o->second, current(i, o->second), p.sigma_rot_rad, p.sigma_trans_m, false);

@@ -78,6 +78,11 @@ std::shared_ptr<msg::LoopCandidates> LoopDetector::query(Model& m, SlamKeyframeI
   scope.reference = referenceOf(id);
   for (KeyframeId k = q > static_cast<KeyframeId>(p_.ignore_recent) ? q - p_.ignore_recent : 0; k < q; ++k)
     scope.ignore.push_back(k);
+  // Keyframes that already share points with the query are the same place, not a loop (ORB-SLAM2).
+  for (SlamKeyframeId k : groupOf(id)) {
+    auto d = dense_.find(k);
+    if (d != dense_.end() && d->second != q) scope.ignore.push_back(d->second);
+  }
   const QueryResult r = m.recognizer->query(q, scope);
   auto out = std::make_shared<msg::LoopCandidates>();
   out->query = id;
@@ -107,13 +112,15 @@ LoopDetector::Output LoopDetector::process(const msg::KeyFrame& kf) {
     covisible_[kf.id][e.id] = e.weight;
     covisible_[e.id][kf.id] = e.weight;
   }
+  Output out;
   if (pending_) {
+    const auto ts = std::chrono::steady_clock::now();
     fillFrom(*pending_);
+    out.switch_ms = msSince(ts);
     active_ = std::move(*pending_);
     active_name_ = active_.name;
     pending_.reset();
   }
-  Output out;
   if (dense_.count(kf.id)) return out;  // a later revision: covisibility only
   const auto t0 = std::chrono::steady_clock::now();
   const KeyframeId dense = static_cast<KeyframeId>(order_.size());

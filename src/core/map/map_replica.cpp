@@ -110,12 +110,6 @@ void MapReplica::apply(const msg::LocalMapUpdate& u) {
   for (const auto& k : u.keyframes) upsertKeyframe(k);
 }
 
-void MapReplica::apply(const msg::Correction& c) {
-  for (const auto& [removed, kept] : c.fused) fuse(removed, kept);
-  for (const auto& p : c.points) upsertPoint(p);
-  for (const auto& k : c.keyframes) upsertKeyframe(k);
-}
-
 MapPointId MapReplica::resolve(MapPointId id) const {
   for (int hops = 0; hops < 64; ++hops) {  // fusion chains are short; the bound guards a cycle
     auto it = replaced_.find(id);

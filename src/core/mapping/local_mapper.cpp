@@ -86,9 +86,13 @@ void LocalMapper::insert(const msg::KeyFrame& in) {
                                 std::to_string(in.state.id));
   if (scales_.levels() == 0) scales_ = ScalePyramid(in.scale_factor, in.levels);
   camera_ = in.camera;
+  // Made before a loop correction tracking had not heard of yet: it moves as its parent did.
+  const bool is_late = in.corrections_seen < history_.applied();
+  const Pose3 late = is_late ? history_.adopt(in.corrections_seen, in.id, in.state.parent) : Pose3::Identity();
   KF& kf = kfs_[in.id];
   kf.state = in.state;
   kf.state.covisible.clear();
+  if (is_late) kf.state.T_w_c = orthonormalized(late * kf.state.T_w_c);
   kf.frame_index = in.frame_index;
   kf.stamp_s = in.stamp_s;
   kf.seq = ++seq_;
@@ -101,6 +105,10 @@ void LocalMapper::insert(const msg::KeyFrame& in) {
   for (const msg::MapPoint& np : in.new_points) {
     MP& mp = pts_[np.id];
     mp.state = np;
+    if (is_late) {
+      mp.state.p_w = late * np.p_w;
+      mp.state.normal = (late.linear().cast<float>() * np.normal).normalized();
+    }
     mp.first_seq = kf.seq;
     recent_.push_back(np.id);
     created.insert(np.id);
@@ -252,6 +260,48 @@ void LocalMapper::replacePoint(MapPointId removed, MapPointId kept, msg::LocalMa
   touched_.push_back(kept);
 }
 
+std::vector<MapPointId> LocalMapper::pointsOf(const std::vector<SlamKeyframeId>& keyframes) const {
+  std::vector<MapPointId> out;
+  std::unordered_set<MapPointId> seen;
+  for (SlamKeyframeId k : keyframes)
+    for (MapPointId id : kfs_.at(k).state.point_ids)
+      if (id != kNoId && seen.insert(id).second) out.push_back(id);
+  return out;
+}
+
+void LocalMapper::fuseInto(KF& t, const std::vector<MapPointId>& points, msg::LocalMapUpdate& u) {
+  const Pose3 T_c_w = t.state.T_w_c.inverse();
+  for (MapPointId id0 : points) {
+    const MapPointId id = resolve(id0);
+    if (id == kNoId) continue;
+    MP& mp = pts_.at(id);
+    if (mp.obs.count(t.state.id)) continue;
+    ProjectedPoint pp;  // in front, inside the image, within the distance range, less than 60 deg off
+    if (!projectIntoFrame(mp.state, T_c_w, camera_, scales_, &pp)) continue;
+    const int level = pp.level;
+    const float r = p_.fuse_radius * scales_.scale[level];
+    int best = std::numeric_limits<int>::max(), best_i = -1;
+    for (int i : t.grid.near(pp.u, pp.v, r, level - 1, level + 1)) {
+      const msg::KeyPoint& k = t.keypoints[i];
+      bool front = false;
+      const double chi2 = reprojectionChi2(camera_, T_c_w, mp.state.p_w, k, scales_.inv_sigma2[k.octave], &front);
+      if (chi2 > (k.right_x >= 0 ? 7.815 : 5.991)) continue;
+      const int d = hamming(mp.state.descriptor, t.descriptors[i]);
+      if (d < best) best = d, best_i = i;
+    }
+    if (best_i < 0 || best > p_.fuse_max_hamming) continue;
+    const MapPointId there = t.state.point_ids[best_i];
+    if (there == kNoId) {
+      addObservation(mp, t, best_i);
+      touched_.push_back(id);
+    } else if (there != id) {
+      // Keep the better-observed point (ORB-SLAM2).
+      if (pts_.at(there).obs.size() >= mp.obs.size()) replacePoint(id, there, u);
+      else replacePoint(there, id, u);
+    }
+  }
+}
+
 void LocalMapper::fuseWithNeighbors(KF& kf, msg::LocalMapUpdate& u) {
   // Targets: the strongest neighbours and, for each, its 5 strongest (ORB-SLAM2's SearchInNeighbors).
   std::vector<SlamKeyframeId> targets;
@@ -261,49 +311,11 @@ void LocalMapper::fuseWithNeighbors(KF& kf, msg::LocalMapUpdate& u) {
     for (SlamKeyframeId k2 : neighbors(kfs_.at(k), 5))
       if (in.insert(k2).second) targets.push_back(k2);
   }
-  // Projects `points` into keyframe `t`; a match either adds an observation or merges two points.
-  auto fuseInto = [&](KF& t, const std::vector<MapPointId>& points) {
-    const Pose3 T_c_w = t.state.T_w_c.inverse();
-    for (MapPointId id0 : points) {
-      const MapPointId id = resolve(id0);
-      if (id == kNoId) continue;
-      MP& mp = pts_.at(id);
-      if (mp.obs.count(t.state.id)) continue;
-      ProjectedPoint pp;  // in front, inside the image, within the distance range, less than 60 deg off
-      if (!projectIntoFrame(mp.state, T_c_w, camera_, scales_, &pp)) continue;
-      const int level = pp.level;
-      const float r = p_.fuse_radius * scales_.scale[level];
-      int best = std::numeric_limits<int>::max(), best_i = -1;
-      for (int i : t.grid.near(pp.u, pp.v, r, level - 1, level + 1)) {
-        const msg::KeyPoint& k = t.keypoints[i];
-        bool front = false;
-        const double chi2 = reprojectionChi2(camera_, T_c_w, mp.state.p_w, k, scales_.inv_sigma2[k.octave], &front);
-        if (chi2 > (k.right_x >= 0 ? 7.815 : 5.991)) continue;
-        const int d = hamming(mp.state.descriptor, t.descriptors[i]);
-        if (d < best) best = d, best_i = i;
-      }
-      if (best_i < 0 || best > p_.fuse_max_hamming) continue;
-      const MapPointId there = t.state.point_ids[best_i];
-      if (there == kNoId) {
-        addObservation(mp, t, best_i);
-        touched_.push_back(id);
-      } else if (there != id) {
-        // Keep the better-observed point (ORB-SLAM2).
-        if (pts_.at(there).obs.size() >= mp.obs.size()) replacePoint(id, there, u);
-        else replacePoint(there, id, u);
-      }
-    }
-  };
   std::vector<MapPointId> own;
   for (MapPointId id : kf.state.point_ids)
     if (id != kNoId) own.push_back(id);
-  for (SlamKeyframeId k : targets) fuseInto(kfs_.at(k), own);
-  std::vector<MapPointId> theirs;
-  std::unordered_set<MapPointId> seen;
-  for (SlamKeyframeId k : targets)
-    for (MapPointId id : kfs_.at(k).state.point_ids)
-      if (id != kNoId && seen.insert(id).second) theirs.push_back(id);
-  fuseInto(kf, theirs);
+  for (SlamKeyframeId k : targets) fuseInto(kfs_.at(k), own, u);
+  fuseInto(kf, pointsOf(targets), u);
   for (MapPointId id : kf.state.point_ids)
     if (id != kNoId) touched_.push_back(id);
   for (MapPointId& id : touched_) id = resolve(id);
@@ -460,6 +472,7 @@ LocalMapper::Output LocalMapper::process(const msg::KeyFrame& in) {
     auto it = pts_.find(id);
     if (it != pts_.end()) u->points.push_back(it->second.state);
   }
+  u->corrections_seen = history_.applied();
   u->total_ms = msSinceT(t0);
 
   auto refined = std::make_shared<msg::KeyFrame>(in);
@@ -492,20 +505,88 @@ bool LocalMapper::keyframePose(SlamKeyframeId id, Pose3* T_w_c) const {
   return false;
 }
 
-void LocalMapper::apply(const msg::Correction& c) {
+msg::LocalMapUpdatePtr LocalMapper::apply(const msg::Correction& c) {
+  const auto t0 = std::chrono::steady_clock::now();
+  history_.begin(c.sequence);  // throws for a correction out of order
+  auto u = std::make_shared<msg::LocalMapUpdate>();
+  u->sequence = ++updates_;
+  u->keyframe = c.query;
+  u->correction = true;
+  touched_.clear();
+
+  // Each keyframe moves by its own correction or, when loop closing did not know it yet, by its nearest
+  // corrected ancestor's in the spanning tree; a culled keyframe's children went to its parent, and a point
+  // whose reference keyframe was culled moves with that keyframe's parent.
+  std::unordered_map<SlamKeyframeId, Pose3> delta;
+  for (const msg::KeyframeCorrection& k : c.keyframes) delta[k.id] = k.T_w_c_after * k.T_w_c_before.inverse();
+  std::unordered_map<SlamKeyframeId, Pose3> resolved;
+  auto deltaOf = [&](SlamKeyframeId id) {
+    std::vector<SlamKeyframeId> path;
+    Pose3 d = Pose3::Identity();
+    for (int hops = 0; hops < 100000 && id != kNoId; ++hops) {
+      if (auto r = resolved.find(id); r != resolved.end()) {
+        d = r->second;
+        break;
+      }
+      if (auto g = delta.find(id); g != delta.end()) {
+        d = g->second;
+        resolved[id] = d;
+        break;
+      }
+      path.push_back(id);
+      if (auto k = kfs_.find(id); k != kfs_.end()) id = k->second.state.parent;
+      else if (auto cu = culled_.find(id); cu != culled_.end()) id = cu->second.first;
+      else break;
+    }
+    for (SlamKeyframeId p : path) resolved[p] = d;
+    return d;
+  };
+  std::vector<SlamKeyframeId> ids;
+  for (const auto& [id, kf] : kfs_) ids.push_back(id);
+  std::sort(ids.begin(), ids.end());
+  for (SlamKeyframeId id : ids) {
+    const Pose3 d = deltaOf(id);
+    history_.note(id, d);
+    KF& kf = kfs_.at(id);
+    kf.state.T_w_c = orthonormalized(d * kf.state.T_w_c);
+  }
+  for (auto& [id, mp] : pts_) {
+    SlamKeyframeId ref = mp.state.reference;
+    if (!kfs_.count(ref) && !culled_.count(ref) && !mp.obs.empty()) ref = mp.obs.begin()->first;
+    const Pose3 d = deltaOf(ref);
+    mp.state.p_w = d * mp.state.p_w;
+    mp.state.normal = (d.linear().cast<float>() * mp.state.normal).normalized();
+  }
+
+  // Merge what the loop matched, then search the match's neighbourhood for the query's (and back).
   for (const auto& [removed, kept] : c.fused) {
-    if (resolve(removed) == kNoId || resolve(kept) == kNoId) continue;
-    msg::LocalMapUpdate ignored;
-    replacePoint(resolve(removed), resolve(kept), ignored);
+    const MapPointId a = resolve(removed), b = resolve(kept);
+    if (a != kNoId && b != kNoId) replacePoint(a, b, *u);
   }
-  for (const auto& p : c.points) {
-    auto it = pts_.find(resolve(p.id));
-    if (it != pts_.end()) it->second.state.p_w = p.p_w;
+  auto q = kfs_.find(c.query), m = kfs_.find(c.match);
+  if (c.fuse_by_projection && q != kfs_.end() && m != kfs_.end()) {
+    std::vector<SlamKeyframeId> near_q{c.query}, near_m{c.match};
+    for (SlamKeyframeId k : neighbors(q->second, p_.fuse_neighbors)) near_q.push_back(k);
+    for (SlamKeyframeId k : neighbors(m->second, p_.fuse_neighbors)) near_m.push_back(k);
+    const std::vector<MapPointId> from_match = pointsOf(near_m);
+    for (SlamKeyframeId k : near_q) fuseInto(kfs_.at(k), from_match, *u);
+    for (MapPointId& id : touched_) id = resolve(id);
+    std::sort(touched_.begin(), touched_.end());
+    touched_.erase(std::unique(touched_.begin(), touched_.end()), touched_.end());
+    for (MapPointId id : touched_)
+      if (id != kNoId) updatePointShape(pts_.at(id));
+    for (SlamKeyframeId k : near_q) updateConnections(kfs_.at(k));
+    u->points_fused_across_loop = static_cast<int>(u->fused.size());
   }
-  for (const auto& k : c.keyframes) {
-    auto it = kfs_.find(k.id);
-    if (it != kfs_.end()) it->second.state.T_w_c = k.T_w_c;
-  }
+
+  // Tracking gets the whole corrected map: every keyframe and every point moved.
+  for (SlamKeyframeId id : ids)
+    if (auto it = kfs_.find(id); it != kfs_.end()) u->keyframes.push_back(it->second.state);
+  for (const auto& [id, mp] : pts_) u->points.push_back(mp.state);
+  std::sort(u->points.begin(), u->points.end(), [](const auto& a, const auto& b) { return a.id < b.id; });
+  u->corrections_seen = history_.applied();
+  u->total_ms = msSinceT(t0);
+  return u;
 }
 
 }  // namespace binloop

@@ -84,6 +84,14 @@ PoseGraphResult optimizePoseGraph(const std::vector<PoseGraphNode>& nodes, const
     if (problem.HasParameterBlock(xi[n].data()) && nodes[n].fixed) problem.SetParameterBlockConstant(xi[n].data());
 
   PoseGraphResult r;
+  auto edgeChi2 = [&](size_t k) {
+    double res[6];
+    (*costs[k])(xi[edges[k].i].data(), xi[edges[k].j].data(), res);
+    double chi2 = 0;
+    for (double v : res) chi2 += v * v;
+    return chi2;
+  };
+  for (size_t k = 0; k < edges.size(); ++k) r.initial_edge_chi2.push_back(edgeChi2(k));
   ceres::Solver::Options so;
   so.linear_solver_type = ceres::SPARSE_NORMAL_CHOLESKY;
   so.max_num_iterations = p.max_iterations;
@@ -103,14 +111,7 @@ PoseGraphResult optimizePoseGraph(const std::vector<PoseGraphNode>& nodes, const
     T.translation() = t;
     r.T_c_w.push_back(nodes[n].fixed ? nodes[n].T_c_w : orthonormalized(T));
   }
-  for (size_t k = 0; k < edges.size(); ++k) {
-    double res[6];
-    const double* params[2] = {xi[edges[k].i].data(), xi[edges[k].j].data()};
-    (*costs[k])(params[0], params[1], res);
-    double chi2 = 0;
-    for (double v : res) chi2 += v * v;
-    r.edge_chi2.push_back(chi2);
-  }
+  for (size_t k = 0; k < edges.size(); ++k) r.edge_chi2.push_back(edgeChi2(k));
   return r;
 }
 

@@ -24,6 +24,8 @@ struct Setting {
 std::map<std::string, std::map<std::string, Setting>> settingsOf(SlamConfig& c) {
   TrackerParams& t = c.tracker;
   LocalMapperParams& m = c.mapper;
+  LoopDetectorParams& d = c.detector;
+  LoopCloserParams& l = c.closer;
   using S = Setting;
   return {
       {"orb",
@@ -68,6 +70,25 @@ std::map<std::string, std::map<std::string, Setting>> settingsOf(SlamConfig& c) 
         {"ba_refine_iterations", {S::kInt, &m.ba.refine_iterations, 0}},
         {"cull_keyframes", {S::kBool, &m.cull_keyframes, 0}},
         {"redundant_ratio", {S::kFloat, &m.redundant_ratio, 0}}}},
+      {"loop_detection",
+       {{"max_reference", {S::kInt, &d.max_reference, 1}},
+        {"ignore_recent", {S::kInt, &d.ignore_recent, 0}},
+        {"consistency", {S::kInt, &d.consistency, 1}}}},
+      {"loop_closing",
+       {{"max_hamming", {S::kInt, &l.verify.max_hamming, 0}},
+        {"ratio", {S::kFloat, &l.verify.ratio, 0}},
+        {"min_matches", {S::kInt, &l.verify.min_matches, 3}},
+        {"ransac_iterations", {S::kInt, &l.verify.ransac.iterations, 1}},
+        {"ransac_min_inliers", {S::kInt, &l.verify.ransac.min_inliers, 3}},
+        {"min_inliers", {S::kInt, &l.verify.min_inliers, 3}},
+        {"covisibility_min", {S::kInt, &l.graph.min_covisibility, 1}},
+        {"drift_base_m", {S::kDouble, &l.drift_base_m, 0}},
+        {"drift_per_m", {S::kDouble, &l.drift_per_m, 0}},
+        {"confirm_min_travel_m", {S::kDouble, &l.confirm_min_travel_m, 0}},
+        {"hold_keyframes", {S::kInt, &l.hold_keyframes, 1}},
+        {"max_residual_ratio", {S::kDouble, &l.max_residual_ratio, 0}},
+        {"min_keyframes_between_loops", {S::kInt, &l.min_keyframes_between_loops, 0}},
+        {"fuse", {S::kBool, &l.fuse, 0}}}},
   };
 }
 
@@ -123,7 +144,7 @@ SlamConfig loadSlamConfig(const std::string& path) {
   SlamConfig c;
   auto settings = settingsOf(c);
   const cv::FileNode root = fs.root();
-  if (!root.isMap()) throw ConfigError(path + ": expected sections (orb, stereo, tracking, mapping)");
+  if (!root.isMap()) throw ConfigError(path + ": expected sections (orb, stereo, tracking, mapping, loop_detection, loop_closing)");
   for (const std::string& section : root.keys()) {
     auto sec = settings.find(section);
     if (sec == settings.end()) {

@@ -1,26 +1,100 @@
 #include "binloop/pipeline/slam_pipeline.h"
 
+#include <chrono>
+
 namespace binloop {
 
 SlamPipeline::SlamPipeline(const StereoCamera& cam, const TrackerParams& tp, const LocalMapperParams& mp,
-                           PipelineMode mode, size_t queue_capacity)
-    : mode_(mode), tracker_(cam, tp), mapper_(mp), keyframes_(queue_capacity), updates_(1u << 20) {
+                           PipelineMode mode, size_t queue_capacity, std::optional<LoopClosingSetup> loops)
+    : mode_(mode),
+      tracker_(cam, tp),
+      mapper_(mp),
+      mapping_inbox_(queue_capacity),
+      loop_inbox_(1u << 20),
+      updates_(1u << 20) {
+  if (loops) {
+    detector_ = std::make_unique<LoopDetector>(loops->detector, loops->make_model);
+    if (!loops->shadow.empty()) detector_->setShadowModels(loops->shadow);
+    closer_ = std::make_unique<LoopCloser>(loops->closer);
+    switches_ = loops->switches;
+  }
   if (mode_ == PipelineMode::kThreaded) {
     mapping_thread_ = std::thread([this] {
-      while (auto kf = keyframes_.pop()) map(*kf);
+      while (auto in = mapping_inbox_.pop()) map(*in);
     });
+    if (detector_)
+      loop_thread_ = std::thread([this] {
+        while (auto in = loop_inbox_.pop()) searchLoops(*in);
+      });
   }
 }
 
 SlamPipeline::~SlamPipeline() { finish(); }
 
-void SlamPipeline::map(const msg::KeyFramePtr& kf) {
+void SlamPipeline::switchDetector(const std::string& model) {
+  if (!detector_) throw PlaceError("loop closing is off: no detector to switch");
+  std::lock_guard<std::mutex> lk(switch_mutex_);
+  switch_to_ = model;
+}
+
+void SlamPipeline::map(const MappingInput& in) {
+  if (const auto* c = std::get_if<msg::CorrectionPtr>(&in)) {
+    msg::LocalMapUpdatePtr u = mapper_.apply(**c);
+    updates_.push(u);
+    if (closer_) {
+      if (mode_ == PipelineMode::kLockStep) closer_->apply(*u);
+      else loop_inbox_.push({nullptr, u});
+    }
+    return;
+  }
+  const msg::KeyFramePtr& kf = std::get<msg::KeyFramePtr>(in);
   LocalMapper::Output out = mapper_.process(*kf);
   mapping_times_.push_back({kf->id, kf->frame_index, out.update->total_ms, out.update->ba_ms,
                             out.update->triangulation_ms, out.update->points_triangulated});
   if (on_keyframe) on_keyframe(out.refined);
   updates_.push(out.update);
   --pending_;
+  if (!detector_) return;
+  if (mode_ == PipelineMode::kLockStep) searchLoops({out.refined, out.update});
+  else loop_inbox_.push({out.refined, out.update});
+}
+
+void SlamPipeline::searchLoops(const LoopInput& in) {
+  if (!in.refined) {  // an update alone (the corrected map)
+    closer_->apply(*in.update);
+    return;
+  }
+  closer_->addKeyframe(in.refined);
+  closer_->apply(*in.update);
+  LoopLogEntry entry;
+  std::string to;
+  {
+    std::lock_guard<std::mutex> lk(switch_mutex_);
+    std::swap(to, switch_to_);
+  }
+  for (const auto& [at, model] : switches_)
+    if (at == detector_->keyframeCount()) to = model;
+  if (!to.empty() && to != detector_->activeModel()) detector_->switchModel(to);
+  LoopDetector::Output d = detector_->process(*in.refined);
+  entry.switch_ms = d.switch_ms;
+  entry.active = d.active;
+  entry.shadow = d.shadow;
+  if (d.active) {
+    LoopCloser::Output c = closer_->process(*d.active);
+    entry.closures = c.closures;
+    loop_log_.push_back(entry);
+    if (c.correction) {
+      if (mode_ == PipelineMode::kLockStep) {
+        const auto t0 = std::chrono::steady_clock::now();
+        map(c.correction);
+        loop_log_.back().correction_ms = msSince(t0);
+      } else {
+        mapping_inbox_.push(c.correction);
+      }
+    }
+  } else {
+    loop_log_.push_back(entry);
+  }
 }
 
 void SlamPipeline::drainUpdates() {
@@ -38,7 +112,7 @@ msg::TrackedFrame SlamPipeline::process(const StereoFrame& frame) {
     } else {
       // A keyframe waiting means the running local BA should stop early (ORB-SLAM2's abort flag).
       mapper_.abortFlag() = true;
-      keyframes_.push(out.keyframe);
+      mapping_inbox_.push(out.keyframe);
     }
   }
   return out.frame;
@@ -47,8 +121,15 @@ msg::TrackedFrame SlamPipeline::process(const StereoFrame& frame) {
 void SlamPipeline::finish() {
   if (finished_) return;
   finished_ = true;
-  keyframes_.close();
-  if (mapping_thread_.joinable()) mapping_thread_.join();
+  if (mode_ == PipelineMode::kThreaded) {
+    // Mapping first finishes its keyframes, then the loop stages their queue (a correction they send still
+    // reaches mapping), then mapping whatever came back.
+    while (pending_.load() > 0) std::this_thread::sleep_for(std::chrono::milliseconds(1));
+    loop_inbox_.close();
+    if (loop_thread_.joinable()) loop_thread_.join();
+    mapping_inbox_.close();
+    if (mapping_thread_.joinable()) mapping_thread_.join();
+  }
   drainUpdates();
 }
 

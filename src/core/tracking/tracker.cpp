@@ -444,6 +444,7 @@ msg::KeyFramePtr Tracker::makeKeyframe(Frame& f) {
   kf->state.id = kf->id;
   kf->state.T_w_c = f.T_w_c;
   kf->state.parent = reference_;
+  kf->corrections_seen = corrections_seen_;
   kf->state.point_ids.assign(f.size(), kNoId);
   for (size_t i = 0; i < f.size(); ++i)
     if (f.points[i] != kNoId && !f.outlier[i]) kf->state.point_ids[i] = map_.resolve(f.points[i]);
@@ -486,10 +487,9 @@ msg::KeyFramePtr Tracker::makeKeyframe(Frame& f) {
 
 void Tracker::apply(const msg::LocalMapUpdate& u) {
   map_.apply(u);
+  corrections_seen_ = std::max(corrections_seen_, u.corrections_seen);
   if (keyframe_db_)
     for (SlamKeyframeId k : u.culled_keyframes) keyframe_db_->remove(k);
 }
-
-void Tracker::apply(const msg::Correction& c) { map_.apply(c); }
 
 }  // namespace binloop

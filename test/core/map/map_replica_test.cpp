@@ -342,21 +342,5 @@ TEST(MapReplica, KeyframeUpsertedWithAFusedIdGetsTheKeptId) {
   EXPECT_TRUE(m.observers(P1).empty());
 }
 
-TEST(MapReplica, ApplyCorrectionFusesAndOverwrites) {
-  MapReplica m = twoKeyframes();
-  msg::Correction c;
-  c.fused = {{P4, P1}};
-  c.points = {point(P1, 11), point(P4, 12)};  // P4 is stale: it was just fused away
-  c.keyframes = {keyframe(K2, {P2, P3, kNoId, P4}, 3)};
-  m.apply(c);
-  EXPECT_EQ(m.resolve(P4), P1);
-  EXPECT_EQ(m.point(P1)->p_w.x(), 11);
-  EXPECT_EQ(m.point(P4)->p_w.x(), 11);
-  EXPECT_EQ(m.pointCount(), 3u);
-  EXPECT_EQ(m.keyframe(K2)->point_ids, (Ids{P2, P3, kNoId, P1}));
-  EXPECT_EQ(m.keyframe(K2)->T_w_c.translation().x(), 3);
-  EXPECT_EQ(sorted(m.observers(P1)), (Ids{K1, K2}));
-}
-
 }  // namespace
 }  // namespace binloop

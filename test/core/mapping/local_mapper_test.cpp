@@ -2,6 +2,8 @@
 
 #include <gtest/gtest.h>
 
+#include <algorithm>
+
 #include "../optim/optim_test_scene.h"
 
 namespace binloop {
@@ -157,6 +159,63 @@ TEST_F(LocalMapperTest, AKeyframeNamingSizesThatDifferIsRefused) {
   msg::KeyFrame k2 = keyframe(0, range(0, 50), true);
   k2.state.id = kNoId;
   EXPECT_THROW(m.process(k2), std::invalid_argument);
+}
+
+// A loop correction names k1 (unchanged) and k2 (moved 1 m sideways and turned 2 degrees); k3, which loop
+// closing had not seen yet, follows its spanning-tree parent k2; each point moves with the keyframe that
+// created it. A keyframe tracking made before it heard of the correction arrives later and moves with its
+// parent too, with the points it brings.
+TEST_F(LocalMapperTest, ACorrectionMovesKeyframesWithTheirParentAndPointsWithTheirReference) {
+  for (int i = 0; i < 300; ++i) addPoint({rng.uniform(-6, 6), rng.uniform(-2, 1), rng.uniform(8, 18)});
+  LocalMapperParams p;
+  p.triangulate = p.fuse = p.local_ba = p.cull_keyframes = false;
+  p.cull_min_observers = 1;
+  LocalMapper m(p);
+  const msg::KeyFrame k1 = keyframe(0, range(0, 100), true);
+  const msg::KeyFrame k2 = keyframe(0.5, range(40, 160), true);
+  const msg::KeyFrame k3 = keyframe(1.0, range(100, 220), true);
+  m.process(k1);
+  m.process(k2);
+  m.process(k3);
+  Pose3 delta = Pose3::Identity();
+  delta.linear() = Eigen::AngleAxisd(2 * test::kPi / 180, Eigen::Vector3d::UnitY()).toRotationMatrix();
+  delta.translation() = Eigen::Vector3d(1, 0, 0);
+  msg::Correction c;
+  c.sequence = 1;
+  c.query = k2.id;
+  c.match = k1.id;
+  c.fuse_by_projection = false;
+  c.keyframes.push_back({k1.id, k1.state.T_w_c, k1.state.T_w_c});
+  c.keyframes.push_back({k2.id, k2.state.T_w_c, delta * k2.state.T_w_c});
+  const msg::LocalMapUpdatePtr u = m.apply(c);
+  EXPECT_TRUE(u->correction);
+  EXPECT_EQ(u->corrections_seen, 1u);
+  EXPECT_EQ(u->keyframes.size(), 3u);
+  EXPECT_EQ(u->points.size(), 220u);
+  Pose3 T;
+  ASSERT_TRUE(m.keyframePose(k3.id, &T));
+  EXPECT_LT((T.translation() - (delta * k3.state.T_w_c).translation()).norm(), 1e-9);
+  ASSERT_TRUE(m.keyframePose(k1.id, &T));
+  EXPECT_LT((T.translation() - k1.state.T_w_c.translation()).norm(), 1e-12);
+  for (const msg::MapPoint& mp : u->points) {
+    const int i = static_cast<int>(std::find_if(scene.begin(), scene.end(), [&](const ScenePoint& s) { return s.id == mp.id; }) - scene.begin());
+    ASSERT_LT(i, 220);
+    const Eigen::Vector3d expected = i < 100 ? scene[i].p_w : Eigen::Vector3d(delta * scene[i].p_w);
+    EXPECT_LT((mp.p_w - expected).norm(), 1e-9) << "point " << i;
+  }
+  EXPECT_THROW(m.apply(c), std::invalid_argument) << "the same correction twice";
+
+  // Tracking made k4 on k3 before it applied the correction.
+  msg::KeyFrame k4 = keyframe(1.5, range(160, 300), true);
+  k4.state.parent = k3.id;
+  k4.corrections_seen = 0;
+  const auto o4 = m.process(k4);
+  EXPECT_LT((o4.refined->state.T_w_c.translation() - (delta * k4.state.T_w_c).translation()).norm(), 1e-9);
+  for (const msg::MapPoint& mp : o4.update->points) {
+    if (issuerOf(mp.id) != IdIssuer::kTracking || mp.reference != k4.id) continue;
+    const auto it = std::find_if(scene.begin(), scene.end(), [&](const ScenePoint& s) { return s.id == mp.id; });
+    EXPECT_LT((mp.p_w - delta * it->p_w).norm(), 1e-9);
+  }
 }
 
 }  // namespace

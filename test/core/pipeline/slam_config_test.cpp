@@ -111,7 +111,7 @@ TEST(SlamConfig, UnknownSectionNamesFileAndSection) {
   TempDir dir;
   const std::string path = configFile(dir, "orb:\n  features: 1000\nmaping:\n  fuse: 0\n");
   EXPECT_THROW_WITH(loadSlamConfig(path), ConfigError, path + ": unknown section 'maping'");
-  EXPECT_THROW_WITH(loadSlamConfig(path), ConfigError, "known: mapping, orb, stereo, tracking");
+  EXPECT_THROW_WITH(loadSlamConfig(path), ConfigError, "known: loop_closing, loop_detection, mapping, orb, stereo, tracking");
 }
 
 TEST(SlamConfig, UnknownKeyNamesFileAndKey) {

@@ -1,0 +1,100 @@
+#pragma once
+// The loop-closing stage (SPEC, pipeline step 4): refined keyframes and local mapping's updates in (its own
+// copy of every keyframe: keypoints, descriptors, pose, covisibility, parent), the loop detector's accepted
+// candidates in; per verified loop a LoopClosure out, and for an accepted one a Correction for local mapping.
+//
+// A loop is accepted in four steps:
+//   1. verification (loop/loop_verifier.h): the two keyframes see the same structure; T_query_match;
+//   2. the drift bound: the loop moves the query keyframe by `correction_m`; odometry can have drifted by
+//      at most drift_base_m + drift_per_m * (the shortest path from the match to the query through the
+//      keyframe chain and the loops closed so far). A loop beyond it is held until a second loop, at least
+//      confirm_min_travel_m further on, asks for the same correction (within confirm_tolerance_m plus
+//      confirm_tolerance_ratio of it); a held loop that nothing confirms within hold_keyframes is rejected.
+//      Repeated facades pass step 1 between places hundreds of metres apart; they do not pass this.
+//   3. the essential graph (loop/essential_graph.h) optimised with the loop edge (optim/pose_graph.h);
+//   4. the residual guard: residual_ratio = sqrt(chi2 of the loop edge after / before the optimisation),
+//      the part of the loop's disagreement the graph could not absorb; above max_residual_ratio the loop
+//      is rejected (large_residual) and nothing moves.
+#include <deque>
+#include <optional>
+#include <unordered_map>
+#include <vector>
+
+#include "binloop/loop/essential_graph.h"
+#include "binloop/loop/loop_verifier.h"
+#include "binloop/map/correction_history.h"
+#include "binloop/messages/correction.h"
+#include "binloop/messages/keyframe.h"
+#include "binloop/messages/local_map_update.h"
+#include "binloop/messages/loop_candidates.h"
+#include "binloop/messages/loop_closure.h"
+#include "binloop/optim/pose_graph.h"
+#include "binloop/place/place_recognizer.h"
+
+namespace binloop {
+
+struct LoopCloserParams {
+  LoopVerifierParams verify;
+  EssentialGraphParams graph;
+  PoseGraphParams optimizer;
+  double drift_base_m = 1.0;
+  double drift_per_m = 0.02;       // 10x the t_rel of the tracking on the rendered routes
+  double confirm_min_travel_m = 10;
+  double confirm_tolerance_m = 1.0;
+  double confirm_tolerance_ratio = 0.1;
+  int hold_keyframes = 40;
+  double max_residual_ratio = 0.5;
+  int min_keyframes_between_loops = 5;  // after a correction, the next few proposals are not verified
+  bool fuse = true;                      // ask local mapping to merge the points around the loop
+};
+
+class LoopCloser {
+ public:
+  struct Output {
+    std::vector<msg::LoopClosurePtr> closures;  // loops verified now (and held ones that expired)
+    msg::CorrectionPtr correction;               // set when a loop was accepted
+  };
+
+  explicit LoopCloser(const LoopCloserParams& p = {});
+
+  /// A refined keyframe from local mapping (a later revision replaces the stored one). Throws
+  /// std::invalid_argument for a malformed message (sizes differ).
+  void addKeyframe(const msg::KeyFramePtr& kf);
+  /// Local mapping's later refinements of poses and covisibility, and its culled keyframes.
+  void apply(const msg::LocalMapUpdate& u);
+  /// The active detector's result: verifies its accepted candidate, if any (shadow results are ignored).
+  Output process(const msg::LoopCandidates& c);
+  /// A loop proposed from outside (another front end, a person): verified and guarded the same way.
+  Output addExternalLoop(SlamKeyframeId query, SlamKeyframeId match, const std::string& source = "external");
+
+  size_t keyframeCount() const { return states_.size(); }
+  const std::vector<LoopEdge>& loops() const { return loops_; }
+  uint64_t correctionsMade() const { return history_.applied(); }
+
+ private:
+  struct Held {
+    LoopEdge edge;
+    msg::LoopClosure closure;
+    Pose3 delta;           // the world-frame correction it asks for
+    size_t held_at = 0;    // keyframes stored when it was held
+    double travel_at = 0;  // path length at the query
+  };
+  Output verify(SlamKeyframeId query, SlamKeyframeId match, const std::string& model);
+  double travelBetween(SlamKeyframeId a, SlamKeyframeId b) const;
+  bool correct(const std::vector<LoopEdge>& new_loops, const std::vector<std::pair<MapPointId, MapPointId>>& fused,
+               msg::LoopClosure* c, Output* out);
+  void expireHeld(Output* out);
+
+  LoopCloserParams p_;
+  std::unordered_map<SlamKeyframeId, msg::KeyFramePtr> frames_;
+  std::unordered_map<SlamKeyframeId, msg::KeyframeState> states_;
+  std::vector<SlamKeyframeId> order_;  // arrival order (culled ones removed)
+  std::vector<LoopEdge> loops_;
+  std::optional<Held> held_;
+  CorrectionHistory history_;
+  SlamKeyframeId first_ = kNoId;
+  size_t last_correction_at_ = 0;  // keyframes stored when the last correction was made
+  bool corrected_once_ = false;
+};
+
+}  // namespace binloop

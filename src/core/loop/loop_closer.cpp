@@ -1,0 +1,275 @@
+#include "binloop/loop/loop_closer.h"
+
+#include <algorithm>
+#include <chrono>
+#include <cmath>
+#include <functional>
+#include <limits>
+#include <queue>
+#include <sstream>
+#include <stdexcept>
+
+namespace binloop {
+
+namespace {
+
+std::string fixed1(double v) {
+  std::ostringstream s;
+  s.setf(std::ios::fixed);
+  s.precision(2);
+  s << v;
+  return s.str();
+}
+
+}  // namespace
+
+LoopCloser::LoopCloser(const LoopCloserParams& p) : p_(p) {}
+
+void LoopCloser::addKeyframe(const msg::KeyFramePtr& kf) {
+  if (!kf || kf->id == kNoId) throw std::invalid_argument("loop closing: keyframe without id");
+  if (kf->descriptors.size() != kf->keypoints.size() || kf->state.point_ids.size() != kf->keypoints.size())
+    throw std::invalid_argument("loop closing: keyframe " + std::to_string(kf->id) + " has " +
+                                std::to_string(kf->keypoints.size()) + " keypoints, " +
+                                std::to_string(kf->descriptors.size()) + " descriptors, " +
+                                std::to_string(kf->state.point_ids.size()) + " point ids");
+  const bool known = states_.count(kf->id) > 0;
+  frames_[kf->id] = kf;
+  msg::KeyframeState s = kf->state;
+  if (kf->corrections_seen < history_.applied())
+    s.T_w_c = orthonormalized(history_.adopt(kf->corrections_seen, kf->id, s.parent) * s.T_w_c);
+  states_[kf->id] = s;
+  if (!known) order_.push_back(kf->id);
+  if (first_ == kNoId) first_ = kf->id;
+}
+
+void LoopCloser::apply(const msg::LocalMapUpdate& u) {
+  for (const msg::KeyframeState& k : u.keyframes) {
+    auto it = states_.find(k.id);
+    if (it == states_.end()) continue;  // not refined yet: its keyframe message will bring it
+    msg::KeyframeState s = k;
+    if (u.corrections_seen < history_.applied()) s.T_w_c = orthonormalized(history_.since(u.corrections_seen, k.id) * s.T_w_c);
+    it->second = s;
+  }
+  for (SlamKeyframeId k : u.culled_keyframes) {
+    if (k == first_) continue;
+    states_.erase(k);
+    frames_.erase(k);
+    order_.erase(std::remove(order_.begin(), order_.end(), k), order_.end());
+  }
+}
+
+double LoopCloser::travelBetween(SlamKeyframeId a, SlamKeyframeId b) const {
+  // Dijkstra over the keyframe chain (consecutive keyframes, cost: distance) and the closed loops (cost 0).
+  std::unordered_map<SlamKeyframeId, size_t> index;
+  for (size_t i = 0; i < order_.size(); ++i) index[order_[i]] = i;
+  auto ia = index.find(a), ib = index.find(b);
+  if (ia == index.end() || ib == index.end()) return std::numeric_limits<double>::infinity();
+  std::vector<std::vector<std::pair<size_t, double>>> adj(order_.size());
+  auto pos = [&](size_t i) { return states_.at(order_[i]).T_w_c.translation(); };
+  for (size_t i = 1; i < order_.size(); ++i) {
+    const double d = (pos(i) - pos(i - 1)).norm();
+    adj[i].emplace_back(i - 1, d);
+    adj[i - 1].emplace_back(i, d);
+  }
+  for (const LoopEdge& l : loops_) {
+    auto x = index.find(l.query), y = index.find(l.candidate);
+    if (x == index.end() || y == index.end()) continue;
+    adj[x->second].emplace_back(y->second, 0.0);
+    adj[y->second].emplace_back(x->second, 0.0);
+  }
+  std::vector<double> dist(order_.size(), std::numeric_limits<double>::infinity());
+  using Item = std::pair<double, size_t>;
+  std::priority_queue<Item, std::vector<Item>, std::greater<Item>> open;
+  dist[ia->second] = 0;
+  open.push({0, ia->second});
+  while (!open.empty()) {
+    auto [d, i] = open.top();
+    open.pop();
+    if (d > dist[i]) continue;
+    if (i == ib->second) return d;
+    for (auto [j, w] : adj[i])
+      if (d + w < dist[j]) dist[j] = d + w, open.push({dist[j], j});
+  }
+  return dist[ib->second];
+}
+
+LoopCloser::Output LoopCloser::process(const msg::LoopCandidates& c) {
+  Output out;
+  expireHeld(&out);
+  if (c.shadow || c.accepted == kNoId) return out;
+  if (corrected_once_ && order_.size() < last_correction_at_ + static_cast<size_t>(p_.min_keyframes_between_loops))
+    return out;
+  Output v = verify(c.query, c.accepted, c.model);
+  for (auto& cl : v.closures) out.closures.push_back(cl);
+  out.correction = v.correction;
+  return out;
+}
+
+LoopCloser::Output LoopCloser::addExternalLoop(SlamKeyframeId query, SlamKeyframeId match, const std::string& source) {
+  Output out;
+  expireHeld(&out);
+  Output v = verify(query, match, source);
+  for (auto& cl : v.closures) out.closures.push_back(cl);
+  out.correction = v.correction;
+  return out;
+}
+
+void LoopCloser::expireHeld(Output* out) {
+  if (!held_ || order_.size() < held_->held_at + static_cast<size_t>(p_.hold_keyframes)) return;
+  auto c = std::make_shared<msg::LoopClosure>(held_->closure);
+  c->status = "beyond_drift_bound";
+  c->detail += "; no second loop confirmed it within " + std::to_string(p_.hold_keyframes) + " keyframes";
+  out->closures.push_back(c);
+  held_.reset();
+}
+
+LoopCloser::Output LoopCloser::verify(SlamKeyframeId query, SlamKeyframeId match, const std::string& model) {
+  Output out;
+  auto c = std::make_shared<msg::LoopClosure>();
+  c->query = query;
+  c->match = match;
+  c->model = model;
+  out.closures.push_back(c);
+  auto fq = frames_.find(query), fm = frames_.find(match);
+  if (fq == frames_.end() || fm == frames_.end() || query == match) {
+    c->status = "unknown_keyframe";
+    c->detail = query == match ? "a keyframe cannot close a loop with itself"
+                               : std::string("loop closing does not hold keyframe ") +
+                                     std::to_string(fq == frames_.end() ? query : match) + " (never sent, or culled)";
+    return out;
+  }
+  c->query_frame = fq->second->frame_index;
+  c->match_frame = fm->second->frame_index;
+  const LoopVerification v = verifyLoop(*fq->second, *fm->second, p_.verify);
+  c->verify_ms = v.ms;
+  c->matches = v.matches;
+  c->inliers = v.inliers;
+  c->T_query_match = v.T_query_candidate;
+  if (!v.accepted) {
+    c->status = rejectionName(v.rejection);
+    c->detail = v.detail;
+    return out;
+  }
+
+  // 2. The drift bound.
+  const Pose3& T_w_q = states_.at(query).T_w_c;
+  const Pose3 T_w_q_loop = states_.at(match).T_w_c * v.T_query_candidate.inverse();
+  const Pose3 delta = T_w_q_loop * T_w_q.inverse();  // the world-frame change the loop asks for
+  c->correction_m = (T_w_q_loop.translation() - T_w_q.translation()).norm();
+  const double travel = travelBetween(match, query);
+  c->drift_bound_m = p_.drift_base_m + p_.drift_per_m * travel;
+  std::string numbers = v.detail + "; moves the query " + fixed1(c->correction_m) + " m, drift bound " +
+                        fixed1(c->drift_bound_m) + " m over " + fixed1(travel) + " m";
+  std::vector<LoopEdge> edges{{query, match, v.T_query_candidate}};
+  LoopEdge confirmed_edge;
+  bool confirming = false;
+  if (c->correction_m > c->drift_bound_m) {
+    // A second loop that asks for the same change confirms a held one.
+    if (held_) {
+      const Eigen::Vector3d here = T_w_q.translation();
+      const double disagree = (delta * here - held_->delta * here).norm();
+      const double apart = travelBetween(held_->edge.query, query);
+      const double tol = p_.confirm_tolerance_m + p_.confirm_tolerance_ratio * c->correction_m;
+      if (disagree <= tol && apart >= p_.confirm_min_travel_m) {
+        confirming = true;
+        confirmed_edge = held_->edge;
+        numbers += "; confirms the loop held at keyframe " + std::to_string(held_->edge.query) + " (" + fixed1(disagree) +
+                   " m apart in what they ask, " + fixed1(apart) + " m along the path)";
+      }
+    }
+    if (!confirming) {
+      c->status = "held";
+      c->detail = numbers + "; held until a second loop confirms it";
+      if (held_) {  // the older one never was confirmed
+        auto old = std::make_shared<msg::LoopClosure>(held_->closure);
+        old->status = "beyond_drift_bound";
+        old->detail += "; replaced by a newer held loop that does not agree with it";
+        out.closures.push_back(old);
+      }
+      held_ = Held{edges.front(), *c, delta, order_.size(), 0};
+      return out;
+    }
+  }
+  if (confirming) {
+    edges.push_back(confirmed_edge);
+    held_.reset();
+  }
+  c->detail = numbers;
+  // The points the verified pairs name on both sides are one point each (the match side's is older).
+  std::vector<std::pair<MapPointId, MapPointId>> fused;
+  const msg::KeyframeState &sq = states_.at(query), &sm = states_.at(match);
+  for (const auto& [qi, mi] : v.pairs) {
+    const MapPointId a = sq.point_ids[qi], b = sm.point_ids[mi];
+    if (a != kNoId && b != kNoId && a != b) fused.emplace_back(a, b);
+  }
+  if (!correct(edges, fused, c.get(), &out)) return out;
+  if (confirming) {
+    auto first = std::make_shared<msg::LoopClosure>(*c);
+    first->query = confirmed_edge.query;
+    first->match = confirmed_edge.candidate;
+    first->status = "accepted";
+    first->detail = "confirmed by the loop at keyframe " + std::to_string(query);
+    out.closures.push_back(first);
+  }
+  return out;
+}
+
+bool LoopCloser::correct(const std::vector<LoopEdge>& new_loops, const std::vector<std::pair<MapPointId, MapPointId>>& fused,
+                         msg::LoopClosure* c, Output* out) {
+  const auto t0 = std::chrono::steady_clock::now();
+  std::vector<msg::KeyframeState> kfs;
+  for (SlamKeyframeId id : order_) kfs.push_back(states_.at(id));
+  const std::vector<SlamKeyframeId> fixed{first_, new_loops.front().candidate};
+  EssentialGraph g = buildEssentialGraph(kfs, loops_, new_loops.front(), fixed, p_.graph);
+  // A confirmed held loop goes in as a second loop edge with its own measurement.
+  std::unordered_map<SlamKeyframeId, size_t> index;
+  for (size_t i = 0; i < g.nodes.size(); ++i) index[g.nodes[i].id] = i;
+  for (size_t k = 1; k < new_loops.size(); ++k) {
+    auto a = index.find(new_loops[k].query), b = index.find(new_loops[k].candidate);
+    if (a == index.end() || b == index.end()) continue;
+    PoseGraphEdge e;
+    e.i = a->second;
+    e.j = b->second;
+    e.T_i_j = new_loops[k].T_query_candidate;
+    e.sigma_rot_rad = p_.graph.loop_sigma_rot_rad;
+    e.sigma_trans_m = p_.graph.loop_sigma_trans_m;
+    e.robust = true;
+    g.edges.push_back(e);
+  }
+  const PoseGraphResult r = optimizePoseGraph(g.nodes, g.edges, p_.optimizer);
+  c->optimize_ms = msSince(t0);
+  const double before = r.initial_edge_chi2[g.new_loop_edge], after = r.edge_chi2[g.new_loop_edge];
+  // A loop the graph already agrees with (chi2 below 6-dof 95 %) has nothing to absorb.
+  c->residual_ratio = before > 12.59 ? std::sqrt(after / before) : 0.0;
+  c->detail += "; loop edge chi2 " + fixed1(before) + " -> " + fixed1(after) + " (ratio " + fixed1(c->residual_ratio) +
+               "), " + std::to_string(g.nodes.size()) + " keyframes, " + std::to_string(g.edges.size()) + " edges, " +
+               std::to_string(r.iterations) + " iterations";
+  if (c->residual_ratio > p_.max_residual_ratio) {
+    c->status = "large_residual";
+    return false;
+  }
+
+  auto corr = std::make_shared<msg::Correction>();
+  corr->sequence = history_.applied() + 1;
+  corr->query = new_loops.front().query;
+  corr->match = new_loops.front().candidate;
+  corr->fuse_by_projection = p_.fuse;
+  history_.begin(corr->sequence);
+  for (size_t i = 0; i < g.nodes.size(); ++i) {
+    msg::KeyframeState& s = states_.at(g.nodes[i].id);
+    const Pose3 after_w_c = r.T_c_w[i].inverse();
+    corr->keyframes.push_back({s.id, s.T_w_c, after_w_c});
+    history_.note(s.id, after_w_c * s.T_w_c.inverse());
+    s.T_w_c = after_w_c;
+  }
+  if (p_.fuse) corr->fused = fused;
+  for (const LoopEdge& l : new_loops) loops_.push_back(l);
+  c->status = "accepted";
+  c->keyframes_corrected = static_cast<int>(g.nodes.size());
+  last_correction_at_ = order_.size();
+  corrected_once_ = true;
+  out->correction = corr;
+  return true;
+}
+
+}  // namespace binloop

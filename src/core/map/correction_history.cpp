@@ -1,0 +1,39 @@
+#include "binloop/map/correction_history.h"
+
+#include <stdexcept>
+#include <string>
+
+namespace binloop {
+
+void CorrectionHistory::begin(uint64_t sequence) {
+  if (sequence != applied() + 1)
+    throw std::invalid_argument("correction " + std::to_string(sequence) + " after " + std::to_string(applied()));
+  deltas_.emplace_back();
+}
+
+void CorrectionHistory::note(SlamKeyframeId id, const Pose3& delta) {
+  if (deltas_.empty()) throw std::logic_error("CorrectionHistory::note before begin");
+  deltas_.back()[id] = delta;
+}
+
+Pose3 CorrectionHistory::since(uint64_t seen, SlamKeyframeId anchor) const {
+  Pose3 d = Pose3::Identity();
+  for (uint64_t k = seen; k < applied(); ++k) {
+    auto it = deltas_[k].find(anchor);
+    if (it != deltas_[k].end()) d = it->second * d;
+  }
+  return d;
+}
+
+Pose3 CorrectionHistory::adopt(uint64_t seen, SlamKeyframeId id, SlamKeyframeId anchor) {
+  Pose3 d = Pose3::Identity();
+  for (uint64_t k = seen; k < applied(); ++k) {
+    auto it = deltas_[k].find(anchor);
+    if (it == deltas_[k].end()) continue;
+    d = it->second * d;
+    deltas_[k][id] = it->second;
+  }
+  return d;
+}
+
+}  // namespace binloop

@@ -1,0 +1,103 @@
+#include "binloop/pipeline/loop_log.h"
+
+#include <fstream>
+#include <sstream>
+
+#include "binloop/io/data_error.h"
+
+namespace binloop {
+
+namespace {
+
+constexpr const char* kHeader =
+    "keyframe,frame,model,shadow,status,candidates,consistency,accepted_candidate,closure,match_frame,matches,"
+    "inliers,correction_m,drift_bound_m,residual_ratio,detect_ms,verify_ms,optimize_ms,correction_ms,switch_ms,"
+    "detail";
+
+std::string quoted(const std::string& s) {
+  std::string o = "\"";
+  for (char c : s) o += c == '"' ? std::string("\"\"") : std::string(1, c);
+  return o + "\"";
+}
+
+// Fields of one CSV line; quotes as written by quoted().
+std::vector<std::string> fields(const std::string& line) {
+  std::vector<std::string> f(1);
+  bool in = false;
+  for (size_t i = 0; i < line.size(); ++i) {
+    const char c = line[i];
+    if (in && c == '"' && i + 1 < line.size() && line[i + 1] == '"') f.back() += '"', ++i;
+    else if (c == '"') in = !in;
+    else if (c == ',' && !in) f.emplace_back();
+    else f.back() += c;
+  }
+  return f;
+}
+
+void row(std::ostream& o, const msg::LoopCandidates* q, const msg::LoopClosure* c, double correction_ms, double switch_ms) {
+  if (q) {
+    std::string cands;
+    for (size_t i = 0; i < q->candidates.size() && i < 5; ++i)
+      cands += (i ? " " : "") + std::to_string(counterOf(q->candidates[i].id)) + ":" + std::to_string(q->candidates[i].score);
+    o << counterOf(q->query) << "," << q->query_frame << "," << q->model << "," << q->shadow << "," << q->status << ","
+      << quoted(cands) << "," << q->consistency << ","
+      << (q->accepted == kNoId ? std::string() : std::to_string(counterOf(q->accepted))) << ",";
+  } else {
+    o << counterOf(c->query) << "," << c->query_frame << "," << c->model << ",0,,\"\",,,";
+  }
+  if (c) {
+    o << c->status << "," << c->match_frame << "," << c->matches << "," << c->inliers << "," << c->correction_m << ","
+      << c->drift_bound_m << "," << c->residual_ratio << ",";
+  } else {
+    o << ",,,,,,,";
+  }
+  o << (q ? q->total_ms : 0) << "," << (c ? c->verify_ms : 0) << "," << (c ? c->optimize_ms : 0) << "," << correction_ms
+    << "," << switch_ms << "," << quoted(c ? c->detail : q ? q->detail : "") << "\n";
+}
+
+}  // namespace
+
+void writeLoopLog(const std::string& path, const std::vector<SlamPipeline::LoopLogEntry>& log) {
+  std::ofstream o(path);
+  if (!o) throw DataError("cannot write " + path);
+  o << kHeader << "\n";
+  for (const auto& e : log) {
+    const msg::LoopClosure* own = nullptr;
+    for (const auto& c : e.closures)
+      if (e.active && c->query == e.active->query && !own) own = c.get();
+    if (e.active) row(o, e.active.get(), own, e.correction_ms, e.switch_ms);
+    for (const auto& c : e.closures)
+      if (c.get() != own) row(o, nullptr, c.get(), 0, 0);
+    for (const auto& s : e.shadow) row(o, s.get(), nullptr, 0, 0);
+  }
+}
+
+std::vector<LoggedLoop> readLoopLog(const std::string& path) {
+  std::ifstream in(path);
+  if (!in) throw DataError(path + ": cannot open");
+  std::string line;
+  if (!std::getline(in, line) || line != kHeader) throw DataError(path + ": not a loops.csv (header differs)");
+  std::vector<LoggedLoop> out;
+  size_t n = 1;
+  while (std::getline(in, line)) {
+    ++n;
+    const std::vector<std::string> f = fields(line);
+    if (f.size() != 21) throw dataError(path, static_cast<int>(n), std::to_string(f.size()) + " fields, expected 21");
+    if (f[8].empty()) continue;  // no closure on this row
+    try {
+      LoggedLoop l;
+      l.model = f[2];
+      l.status = f[8];
+      l.query_frame = std::stoull(f[1]);
+      l.match_frame = std::stoull(f[9]);
+      l.inliers = std::stoi(f[11]);
+      l.correction_m = std::stod(f[12]);
+      out.push_back(l);
+    } catch (const std::exception&) {
+      throw dataError(path, static_cast<int>(n), "a number field is not a number");
+    }
+  }
+  return out;
+}
+
+}  // namespace binloop

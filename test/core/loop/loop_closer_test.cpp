@@ -1,0 +1,241 @@
+#include "binloop/loop/loop_closer.h"
+
+#include <gtest/gtest.h>
+
+#include <cmath>
+
+#include "../optim/optim_test_scene.h"
+
+namespace binloop {
+namespace {
+
+// Keyframes 0..59 drive once round a circle of 40 m radius (4.2 m apart); then the route goes on along a
+// straight road. Each of the first keyframes looks at a place of its own: 400 points with descriptors in
+// front of it. A keyframe that comes back to place j sees place j's points again (3 bits of each
+// descriptor flipped, 300 keypoints of clutter). Estimated poses drift by `drift` metres along x per
+// keyframe: est_i = D_i * truth_i.
+class LoopCloserTest : public ::testing::Test {
+ protected:
+  static constexpr double kRadius = 40;
+  static constexpr int kLap = 60;
+
+  Pose3 truthOnCircle(double k) const {
+    const double a = 2 * test::kPi * k / kLap;
+    Pose3 T = Pose3::Identity();
+    T.linear() = Eigen::AngleAxisd(-a, Eigen::Vector3d::UnitY()).toRotationMatrix();
+    T.translation() = Eigen::Vector3d(kRadius - kRadius * std::cos(a), 0, kRadius * std::sin(a));
+    return T;
+  }
+  // After the lap: straight on from the start, along the circle's first tangent (+z), 4.2 m per keyframe.
+  Pose3 truthAfter(int i) const {
+    Pose3 T = Pose3::Identity();
+    T.translation() = Eigen::Vector3d(-30, 0, 4.2 * (i - kLap));
+    return T;
+  }
+  Pose3 drifted(const Pose3& truth, int i) const {
+    Pose3 D = Pose3::Identity();
+    D.translation() = Eigen::Vector3d(drift * i, 0, 0);
+    return D * truth;
+  }
+
+  void SetUp() override {
+    for (int j = 0; j < 6; ++j) {
+      std::vector<Eigen::Vector3d> pts;
+      Descriptors ds;
+      for (int i = 0; i < 400; ++i) {
+        pts.emplace_back(rng.uniform(-12, 12), rng.uniform(-3, 1.5), rng.uniform(4, 35));
+        Desc256 d;
+        for (auto& w : d.w) w = rng.next();
+        ds.push_back(d);
+      }
+      place_points.push_back(pts);  // in the frame of the camera that first sees them
+      place_descs.push_back(ds);
+    }
+  }
+
+  static SlamKeyframeId id(int i) { return (uint64_t{1} << 56) | static_cast<uint64_t>(i + 1); }
+
+  // Keyframe i at `truth`, seeing place `place` (-1: none) laid out in front of `place_pose`; stored with the
+  // drifted estimate of index `i`.
+  msg::KeyFramePtr keyframe(int i, const Pose3& truth, int place, const Pose3& place_pose) {
+    auto kf = std::make_shared<msg::KeyFrame>();
+    kf->id = kf->state.id = id(i);
+    kf->frame_index = static_cast<uint64_t>(3 * i);
+    kf->camera = cam;
+    kf->state.T_w_c = drifted(truth, i);
+    if (i > 0) {
+      kf->state.parent = id(i - 1);
+      kf->state.covisible.push_back({id(i - 1), 150});
+    }
+    auto add = [&](const Eigen::Vector3d& p_c, const Desc256& d) {
+      if (p_c.z() < 1) return;
+      msg::KeyPoint k;
+      k.x = static_cast<float>(cam.fx * p_c.x() / p_c.z() + cam.cx);
+      k.y = static_cast<float>(cam.fy * p_c.y() / p_c.z() + cam.cy);
+      if (k.x < 0 || k.x >= cam.width || k.y < 0 || k.y >= cam.height) return;
+      k.depth = static_cast<float>(p_c.z());
+      k.right_x = static_cast<float>(k.x - cam.bf() / p_c.z());
+      kf->keypoints.push_back(k);
+      kf->descriptors.push_back(d);
+      kf->state.point_ids.push_back(kNoId);
+    };
+    if (place >= 0)
+      for (size_t n = 0; n < place_points[place].size(); ++n) {
+        Desc256 d = place_descs[place][n];
+        for (int f = 0; f < 3; ++f) {
+          const int bit = rng.below(256);
+          d.w[bit / 64] ^= uint64_t{1} << (bit % 64);
+        }
+        add(truth.inverse() * (place_pose * place_points[place][n]), d);
+      }
+    for (int n = 0; n < 300; ++n) {
+      Desc256 d;
+      for (auto& w : d.w) w = rng.next();
+      add(Eigen::Vector3d(rng.uniform(-10, 10), rng.uniform(-3, 2), rng.uniform(4, 40)), d);
+    }
+    return kf;
+  }
+
+  // The lap: keyframes 0..59, keyframes 0..5 each at its own place.
+  void driveLap(LoopCloser& lc) {
+    for (int i = 0; i < kLap; ++i) lc.addKeyframe(keyframe(i, truthOnCircle(i), i < 6 ? i : -1, truthOnCircle(i)));
+  }
+  static msg::LoopCandidates proposal(int query, int match) {
+    msg::LoopCandidates c;
+    c.query = id(query);
+    c.accepted = match < 0 ? kNoId : id(match);
+    c.model = "test";
+    return c;
+  }
+  static const msg::KeyframeCorrection* correctionOf(const msg::Correction& c, int i) {
+    for (const auto& k : c.keyframes)
+      if (k.id == id(i)) return &k;
+    return nullptr;
+  }
+
+  StereoCamera cam = test::kitti();
+  HashRng rng{5};
+  double drift = 0.05;
+  std::vector<std::vector<Eigen::Vector3d>> place_points;
+  std::vector<Descriptors> place_descs;
+};
+
+// Back at the start, 1 m to the side, after 252 m with 3 m of drift: accepted, and the optimised graph
+// puts the query where the match says it is and leaves the start where it was.
+TEST_F(LoopCloserTest, ARevisitWithinTheDriftBoundIsAcceptedAndCorrectsTheQuery) {
+  LoopCloser lc;
+  driveLap(lc);
+  Pose3 truth = truthOnCircle(0);
+  truth.translation().x() += 1.0;
+  lc.addKeyframe(keyframe(kLap, truth, 0, truthOnCircle(0)));
+  const LoopCloser::Output out = lc.process(proposal(kLap, 0));
+  ASSERT_EQ(out.closures.size(), 1u);
+  const msg::LoopClosure& c = *out.closures[0];
+  ASSERT_EQ(c.status, "accepted") << c.detail;
+  EXPECT_NEAR(c.correction_m, drift * kLap, 0.1) << c.detail;
+  EXPECT_GT(c.drift_bound_m, c.correction_m);
+  EXPECT_GE(c.inliers, 40);
+  ASSERT_TRUE(out.correction);
+  const msg::KeyframeCorrection* q = correctionOf(*out.correction, kLap);
+  ASSERT_NE(q, nullptr);
+  EXPECT_LT((q->T_w_c_after.translation() - truth.translation()).norm(), 0.1);
+  EXPECT_GT((q->T_w_c_before.translation() - truth.translation()).norm(), 2.5);
+  const msg::KeyframeCorrection* first = correctionOf(*out.correction, 0);
+  ASSERT_NE(first, nullptr);
+  EXPECT_LT((first->T_w_c_after.translation() - first->T_w_c_before.translation()).norm(), 1e-9);
+  // Halfway round, the graph has spread part of the correction.
+  const msg::KeyframeCorrection* half = correctionOf(*out.correction, kLap / 2);
+  const double moved = (half->T_w_c_after.translation() - half->T_w_c_before.translation()).norm();
+  EXPECT_GT(moved, 0.5);
+  EXPECT_LT(moved, drift * kLap);
+  EXPECT_EQ(lc.loops().size(), 1u);
+}
+
+TEST_F(LoopCloserTest, ACandidateFromAnotherPlaceIsRejectedForTooFewMatches) {
+  LoopCloser lc;
+  driveLap(lc);
+  lc.addKeyframe(keyframe(kLap, truthOnCircle(0), 0, truthOnCircle(0)));
+  const LoopCloser::Output out = lc.process(proposal(kLap, 4));  // keyframe 4 saw place 4, not place 0
+  ASSERT_EQ(out.closures.size(), 1u);
+  EXPECT_EQ(out.closures[0]->status, "too_few_matches") << out.closures[0]->detail;
+  EXPECT_FALSE(out.correction);
+  EXPECT_TRUE(lc.loops().empty());
+}
+
+// A repeated block: 42 m down the road past the start, a building identical to place 0 stands in the same
+// place relative to the camera. Verification accepts it (it is the same structure) but the loop would move
+// the query 42 m after 3 m of drift: held, and rejected when nothing confirms it.
+TEST_F(LoopCloserTest, ARepeatedBlockBeyondTheDriftBoundIsHeldThenRejected) {
+  LoopCloserParams p;
+  p.hold_keyframes = 5;
+  LoopCloser lc(p);
+  driveLap(lc);
+  const int q = kLap + 10;
+  for (int i = kLap; i <= q; ++i) lc.addKeyframe(keyframe(i, truthAfter(i), i == q ? 0 : -1, truthAfter(q)));
+  LoopCloser::Output out = lc.process(proposal(q, 0));
+  ASSERT_EQ(out.closures.size(), 1u);
+  EXPECT_EQ(out.closures[0]->status, "held") << out.closures[0]->detail;
+  EXPECT_GT(out.closures[0]->correction_m, 30);
+  EXPECT_FALSE(out.correction);
+  std::string final_status;
+  for (int i = q + 1; i < q + 8 && final_status.empty(); ++i) {
+    lc.addKeyframe(keyframe(i, truthAfter(i), -1, Pose3::Identity()));
+    out = lc.process(proposal(i, -1));
+    for (const auto& c : out.closures) final_status = c->status;
+    EXPECT_FALSE(out.correction);
+  }
+  EXPECT_EQ(final_status, "beyond_drift_bound");
+  EXPECT_TRUE(lc.loops().empty());
+}
+
+// Large drift (18 m over the lap, beyond the 6 m bound), but two loops 12 m apart ask for the same
+// correction: the first is held, the second confirms it, and both are accepted.
+TEST_F(LoopCloserTest, ASecondConsistentLoopConfirmsAHeldOne) {
+  drift = 0.3;
+  LoopCloser lc;
+  driveLap(lc);
+  lc.addKeyframe(keyframe(kLap, truthOnCircle(kLap), 0, truthOnCircle(0)));
+  LoopCloser::Output out = lc.process(proposal(kLap, 0));
+  ASSERT_EQ(out.closures.size(), 1u);
+  EXPECT_EQ(out.closures[0]->status, "held") << out.closures[0]->detail;
+  for (int i = kLap + 1; i <= kLap + 3; ++i)
+    lc.addKeyframe(keyframe(i, truthOnCircle(i), i == kLap + 3 ? 3 : -1, truthOnCircle(3)));
+  out = lc.process(proposal(kLap + 3, 3));
+  ASSERT_EQ(out.closures.size(), 2u);
+  EXPECT_EQ(out.closures[0]->status, "accepted") << out.closures[0]->detail;
+  EXPECT_EQ(out.closures[1]->status, "accepted") << out.closures[1]->detail;
+  EXPECT_EQ(out.closures[1]->query, id(kLap));
+  ASSERT_TRUE(out.correction);
+  EXPECT_EQ(lc.loops().size(), 2u);
+  // The odometry edges themselves carry the drift (0.3 m per 4.2 m), so the graph settles between them and
+  // the two loops: from 19 m off to under 1 m.
+  const msg::KeyframeCorrection* q = correctionOf(*out.correction, kLap + 3);
+  EXPECT_GT((q->T_w_c_before.translation() - truthOnCircle(kLap + 3).translation()).norm(), 15);
+  EXPECT_LT((q->T_w_c_after.translation() - truthOnCircle(kLap + 3).translation()).norm(), 1.0);
+}
+
+TEST_F(LoopCloserTest, AnExternalLoopIsVerifiedBeforeItIsApplied) {
+  LoopCloser lc;
+  driveLap(lc);
+  lc.addKeyframe(keyframe(kLap, truthOnCircle(kLap), 1, truthOnCircle(1)));
+  LoopCloser::Output wrong = lc.addExternalLoop(id(kLap), id(2), "operator");
+  ASSERT_EQ(wrong.closures.size(), 1u);
+  EXPECT_EQ(wrong.closures[0]->model, "operator");
+  EXPECT_EQ(wrong.closures[0]->status, "too_few_matches");
+  EXPECT_FALSE(wrong.correction);
+  LoopCloser::Output unknown = lc.addExternalLoop(id(kLap), id(500));
+  EXPECT_EQ(unknown.closures[0]->status, "unknown_keyframe");
+  LoopCloser::Output right = lc.addExternalLoop(id(kLap), id(1), "operator");
+  EXPECT_EQ(right.closures[0]->status, "accepted") << right.closures[0]->detail;
+  EXPECT_TRUE(right.correction);
+}
+
+TEST_F(LoopCloserTest, AMalformedKeyframeIsRefused) {
+  LoopCloser lc;
+  auto kf = std::make_shared<msg::KeyFrame>(*keyframe(0, truthOnCircle(0), 0, truthOnCircle(0)));
+  kf->descriptors.pop_back();
+  EXPECT_THROW(lc.addKeyframe(kf), std::invalid_argument);
+}
+
+}  // namespace
+}  // namespace binloop
