@@ -163,13 +163,18 @@ LoopCloser::Output LoopCloser::verify(SlamKeyframeId query, SlamKeyframeId match
   std::vector<LoopEdge> edges{{query, match, v.T_query_candidate}};
   LoopEdge confirmed_edge;
   bool confirming = false;
+  if (c->correction_m > p_.hold_factor * c->drift_bound_m) {
+    c->status = "beyond_drift_bound";
+    c->detail = numbers + "; more than " + fixed1(p_.hold_factor) + "x the bound: not a loop drift can explain";
+    return out;
+  }
   if (c->correction_m > c->drift_bound_m) {
     // A second loop that asks for the same change confirms a held one.
     if (held_) {
       const Eigen::Vector3d here = T_w_q.translation();
       const double disagree = (delta * here - held_->delta * here).norm();
       const double apart = travelBetween(held_->edge.query, query);
-      const double tol = p_.confirm_tolerance_m + p_.confirm_tolerance_ratio * c->correction_m;
+      const double tol = p_.confirm_tolerance_m + p_.confirm_tolerance_per_m * apart;
       if (disagree <= tol && apart >= p_.confirm_min_travel_m) {
         confirming = true;
         confirmed_edge = held_->edge;

@@ -86,6 +86,7 @@ std::map<std::string, std::map<std::string, Setting>> settingsOf(SlamConfig& c) 
         {"drift_per_m", {S::kDouble, &l.drift_per_m, 0}},
         {"confirm_min_travel_m", {S::kDouble, &l.confirm_min_travel_m, 0}},
         {"hold_keyframes", {S::kInt, &l.hold_keyframes, 1}},
+        {"hold_factor", {S::kDouble, &l.hold_factor, 1}},
         {"max_residual_ratio", {S::kDouble, &l.max_residual_ratio, 0}},
         {"min_keyframes_between_loops", {S::kInt, &l.min_keyframes_between_loops, 0}},
         {"fuse", {S::kBool, &l.fuse, 0}}}},

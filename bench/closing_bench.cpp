@@ -1,0 +1,175 @@
+// Loop-closing timing benchmark: the figures the loop-closing issue sets goals for. Prints one markdown table
+// of median / min / max over runs (never pass/fail) and writes the medians to $BINLOOP_BENCH_JSON
+// (scripts/bench.sh sets .build/bench/closing.json).
+//
+// Rows and their data (synthetic, so that the numbers do not depend on a run of the SLAM):
+// - verification of one candidate (loop/loop_verifier.h): two keyframes of 2000 stereo keypoints each,
+//   1000 of them the same 3-D points seen from 1.5 m to the side and 8 degrees turned, the rest clutter;
+// - essential-graph optimisation (build + optim/pose_graph.h) of a loop of N keyframes driven round a
+//   circle, each keyframe covisible (weight >= 100) with its 8 successors, as on rendered route 00 (1395
+//   keyframes, 11138 edges), 0.5 % drift, one loop edge from the last keyframe to the first.
+// One thread (Ceres num_threads = 1).
+//
+//   bench_closing_bench [--runs N]
+#include <algorithm>
+#include <chrono>
+#include <cmath>
+#include <cstdio>
+#include <cstdlib>
+#include <fstream>
+#include <string>
+#include <vector>
+
+#include "binloop/loop/essential_graph.h"
+#include "binloop/loop/loop_verifier.h"
+#include "binloop/optim/pose_graph.h"
+#include "binloop/util/hash_random.h"
+
+using namespace binloop;
+using Clock = std::chrono::steady_clock;
+
+namespace {
+
+double ms(Clock::time_point t0) { return std::chrono::duration<double, std::milli>(Clock::now() - t0).count(); }
+
+double median(std::vector<double> v) {
+  std::sort(v.begin(), v.end());
+  return v.empty() ? 0 : v[v.size() / 2];
+}
+
+struct Row {
+  std::string name, goal, orbslam2;
+  std::vector<double> runs;
+};
+
+msg::KeyFrame keyframe(uint64_t id, const Pose3& T_w_c, const std::vector<Eigen::Vector3d>& pts, const Descriptors& ds,
+                       HashRng& rng) {
+  const StereoCamera cam = kittiCameraByName("kitti00");
+  msg::KeyFrame kf;
+  kf.id = kf.state.id = id;
+  kf.camera = cam;
+  kf.state.T_w_c = T_w_c;
+  auto add = [&](const Eigen::Vector3d& p, const Desc256& d) {
+    if (p.z() < 1) return;
+    msg::KeyPoint k;
+    k.x = static_cast<float>(cam.fx * p.x() / p.z() + cam.cx);
+    k.y = static_cast<float>(cam.fy * p.y() / p.z() + cam.cy);
+    if (k.x < 0 || k.x >= cam.width || k.y < 0 || k.y >= cam.height) return;
+    k.depth = static_cast<float>(p.z());
+    k.right_x = static_cast<float>(k.x - cam.bf() / p.z());
+    kf.keypoints.push_back(k);
+    kf.descriptors.push_back(d);
+    kf.state.point_ids.push_back(kNoId);
+  };
+  for (size_t i = 0; i < pts.size(); ++i) {
+    Desc256 d = ds[i];
+    for (int f = 0; f < 3; ++f) {
+      const int bit = rng.below(256);
+      d.w[bit / 64] ^= uint64_t{1} << (bit % 64);
+    }
+    add(T_w_c.inverse() * pts[i], d);
+  }
+  while (kf.keypoints.size() < 2000) {
+    Desc256 d;
+    for (auto& w : d.w) w = rng.next();
+    add(Eigen::Vector3d(rng.uniform(-10, 10), rng.uniform(-3, 2), rng.uniform(4, 40)), d);
+  }
+  return kf;
+}
+
+Row verification(int runs) {
+  Row r{"verification of one candidate (2000 x 2000 keypoints, 1000 shared)", "<= 5 ms", "", {}};
+  HashRng rng(3);
+  std::vector<Eigen::Vector3d> pts;
+  Descriptors ds;
+  for (int i = 0; i < 1300; ++i) {
+    pts.emplace_back(rng.uniform(-12, 12), rng.uniform(-3, 1.5), rng.uniform(4, 35));
+    Desc256 d;
+    for (auto& w : d.w) w = rng.next();
+    ds.push_back(d);
+  }
+  Pose3 T_w_q = Pose3::Identity();
+  T_w_q.linear() = Eigen::AngleAxisd(8 * M_PI / 180, Eigen::Vector3d::UnitY()).toRotationMatrix();
+  T_w_q.translation() = Eigen::Vector3d(1.5, 0.1, 0.8);
+  const msg::KeyFrame c = keyframe(1, Pose3::Identity(), pts, ds, rng), q = keyframe(2, T_w_q, pts, ds, rng);
+  for (int i = 0; i < runs; ++i) {
+    const auto t0 = Clock::now();
+    const LoopVerification v = verifyLoop(q, c, {});
+    r.runs.push_back(ms(t0));
+    if (!v.accepted) std::fprintf(stderr, "closing_bench: verification rejected the synthetic loop: %s\n", v.detail.c_str());
+  }
+  return r;
+}
+
+Row essentialGraph(int n, int runs) {
+  Row r{"essential graph optimisation, " + std::to_string(n) + "-keyframe loop (8 covisible each)",
+        n <= 300 ? "<= 100 ms" : "", n <= 300 ? "178 ms (loop of ~250 keyframes)" : "", {}};
+  const double radius = 4.0 * n / (2 * M_PI);  // 4 m between keyframes
+  std::vector<msg::KeyframeState> kfs;
+  for (int i = 0; i < n; ++i) {
+    const double a = 2 * M_PI * i / n;
+    Pose3 truth = Pose3::Identity();
+    truth.linear() = Eigen::AngleAxisd(-a, Eigen::Vector3d::UnitY()).toRotationMatrix();
+    truth.translation() = Eigen::Vector3d(radius - radius * std::cos(a), 0, radius * std::sin(a));
+    Pose3 drift = Pose3::Identity();
+    drift.translation() = Eigen::Vector3d(0.005 * 4.0 * i, 0, 0);
+    msg::KeyframeState s;
+    s.id = static_cast<uint64_t>(i + 1);
+    s.T_w_c = drift * truth;
+    if (i > 0) s.parent = static_cast<uint64_t>(i);
+    for (int k = 1; k <= 8 && i + k < n; ++k) s.covisible.push_back({static_cast<uint64_t>(i + 1 + k), 400u - 30u * k});
+    kfs.push_back(s);
+  }
+  LoopEdge loop{static_cast<uint64_t>(n), 1, Pose3::Identity()};
+  const Pose3 truth_last = Eigen::Translation3d(radius - radius * std::cos(2 * M_PI * (n - 1) / n), 0,
+                                                radius * std::sin(2 * M_PI * (n - 1) / n)) *
+                           Eigen::AngleAxisd(-2 * M_PI * (n - 1) / n, Eigen::Vector3d::UnitY());
+  loop.T_query_candidate = truth_last.inverse();  // first keyframe's truth is the identity
+  for (int i = 0; i < runs; ++i) {
+    const auto t0 = Clock::now();
+    const EssentialGraph g = buildEssentialGraph(kfs, {}, loop, {1});
+    const PoseGraphResult res = optimizePoseGraph(g.nodes, g.edges);
+    r.runs.push_back(ms(t0));
+    if (i == 0)
+      std::fprintf(stderr, "closing_bench: %d keyframes, %zu edges, %d iterations, loop chi2 %.1f -> %.2f\n", n,
+                   g.edges.size(), res.iterations, res.initial_edge_chi2[g.new_loop_edge], res.edge_chi2[g.new_loop_edge]);
+  }
+  return r;
+}
+
+std::string cpuModel() {
+  std::ifstream in("/proc/cpuinfo");
+  for (std::string line; std::getline(in, line);)
+    if (line.rfind("model name", 0) == 0) return line.substr(line.find(':') + 2);
+  return "unknown";
+}
+
+}  // namespace
+
+int main(int argc, char** argv) {
+  int runs = 7;
+  for (int i = 1; i + 1 < argc; ++i)
+    if (std::string(argv[i]) == "--runs") runs = std::max(1, std::atoi(argv[i + 1]));
+  std::vector<Row> rows;
+  rows.push_back(verification(runs * 3));
+  rows.push_back(essentialGraph(250, runs));
+  rows.push_back(essentialGraph(1400, std::max(1, runs / 2)));
+  rows.push_back({"global bundle adjustment, rendered route 06", "reported", "", {}});
+  std::printf("\nCPU: %s\n\n| measure | median ms | min | max | goal | ORB-SLAM2 (i7) | runs |\n|---|---|---|---|---|---|---|\n",
+              cpuModel().c_str());
+  for (const Row& r : rows) {
+    if (r.runs.empty()) {
+      std::printf("| %s | not built | | | %s | %s | |\n", r.name.c_str(), r.goal.c_str(), r.orbslam2.c_str());
+      continue;
+    }
+    std::printf("| %s | %.2f | %.2f | %.2f | %s | %s | %zu |\n", r.name.c_str(), median(r.runs),
+                *std::min_element(r.runs.begin(), r.runs.end()), *std::max_element(r.runs.begin(), r.runs.end()),
+                r.goal.c_str(), r.orbslam2.c_str(), r.runs.size());
+  }
+  const char* json = std::getenv("BINLOOP_BENCH_JSON");
+  std::ofstream out(json ? json : ".build/bench/closing.json");
+  out << "{\n  \"cpu\": \"" << cpuModel() << "\",\n  \"verification_ms\": " << median(rows[0].runs)
+      << ",\n  \"essential_graph_250_ms\": " << median(rows[1].runs) << ",\n  \"essential_graph_1400_ms\": "
+      << median(rows[2].runs) << "\n}\n";
+  return 0;
+}
