@@ -259,16 +259,25 @@ int main(int argc, char** argv) {
     if (slam.closesLoops()) {
       writeLoopLog((out / "loops.csv").string(), slam.loopLog());
       std::map<std::string, int> by_status;
-      std::map<std::string, std::vector<double>> detect_ms;
+      std::map<std::string, std::vector<double>> detect_ms, query_ms, signature_ms;
       std::vector<double> verify_ms, optimize_ms, correction_ms, switch_ms;
       int queries = 0, proposals = 0;
       for (const auto& e : slam.loopLog()) {
         if (e.active) {
           ++queries;
           proposals += e.active->accepted != kNoId;
-          detect_ms[e.active->model].push_back(e.active->total_ms);
         }
-        for (const auto& s : e.shadow) detect_ms[s->model + "_shadow"].push_back(s->total_ms);
+        std::vector<msg::LoopCandidatesPtr> all = e.shadow;
+        if (e.active) all.push_back(e.active);
+        for (const auto& c : all) {
+          const std::string m = c->model + (c->shadow ? "_shadow" : "");
+          detect_ms[m].push_back(c->total_ms);
+          double sig = 0;
+          for (const auto& t : c->timings)
+            if (t.step == "signature") sig += t.ms;
+          signature_ms[m].push_back(sig);
+          query_ms[m].push_back(c->total_ms - sig);
+        }
         for (const auto& c : e.closures) {
           ++by_status[c->status];
           if (c->verify_ms > 0) verify_ms.push_back(c->verify_ms);
@@ -285,7 +294,11 @@ int main(int argc, char** argv) {
         first_status = false;
       }
       js << "},\n";
-      for (const auto& [m, v] : detect_ms) stat(("detect_" + m).c_str(), v, false);
+      for (const auto& [m, v] : detect_ms) {
+        stat(("detect_" + m).c_str(), v, false);  // signature + query
+        stat(("detect_" + m + "_signature").c_str(), signature_ms[m], false);
+        stat(("detect_" + m + "_query").c_str(), query_ms[m], false);
+      }
       stat("verify", verify_ms, false);
       stat("pose_graph", optimize_ms, false);
       stat("correction_apply", correction_ms, false);

@@ -31,8 +31,8 @@ struct LoopCandidates {
   std::vector<LoopCandidate> candidates;  // passed the model's bar, best first
   int consistency = 0;        // consecutive consistent queries of the strongest chain so far
   SlamKeyframeId accepted = kNoId;  // the candidate the consistency check accepted, if any
-  std::vector<LoopStepTime> timings;
-  double total_ms = 0;
+  std::vector<LoopStepTime> timings;  // "signature" first (adding the keyframe), then the query's steps
+  double total_ms = 0;                // signature + query
 };
 using LoopCandidatesPtr = std::shared_ptr<const LoopCandidates>;
 

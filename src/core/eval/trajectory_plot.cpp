@@ -24,20 +24,58 @@ std::string metres(double v) {
   return std::abs(v - std::round(v)) < 1e-9 ? cv::format("%.0f", v) : cv::format("%g", v);
 }
 
-}  // namespace
+// Matplotlib's tab10 (BGR) without its green, which marks the start: blue is the ground truth, the rest
+// the estimates.
+const cv::Scalar kGroundTruth(180, 119, 31);
+const cv::Scalar kPalette[] = {{14, 127, 255}, {40, 39, 214},  {189, 103, 148}, {75, 86, 140},
+                               {194, 119, 227}, {34, 189, 188}, {207, 190, 23},  {127, 127, 127}};
 
-void writeTrajectoryPlot(const std::string& path, const std::string& title, const std::vector<Pose3>& gt,
-                         const std::vector<Pose3>& est_aligned, const TrajectoryMetrics& metrics) {
-  const int w = 900, h = 1000, l = 75, r = 25, t = 125, b = 75;  // plot area inside these margins
-  const cv::Scalar black(0, 0, 0), grey(120, 120, 120), grid(232, 232, 232);
-  const cv::Scalar c_gt(180, 119, 31), c_est(14, 127, 255), c_start(44, 160, 44);  // blue, orange, green
+// One path of a top view: drawn as a line, with a ring at its end.
+struct PlotPath {
+  std::string label;
+  const std::vector<Pose3>* poses;
+  cv::Scalar colour;
+  int thickness;
+};
+
+// The top view both plots share: `paths` (the first is the ground truth: drawn under the rest, its first
+// pose marked as the start) with equal axis scales, a grid, a scale bar, and a header of the title, the
+// `notes` lines and a legend that wraps onto more rows when the labels do not fit one.
+void writeTopView(const std::string& path, const std::string& title, const std::vector<std::string>& notes,
+                  const std::vector<PlotPath>& paths) {
+  const int w = 900, l = 75, r = 25, b = 75, ph_px = 800;  // margins round an 800-px-high plot area
+  const cv::Scalar black(0, 0, 0), grey(120, 120, 120), grid(232, 232, 232), c_start(44, 160, 44);  // green
   const auto font = cv::FONT_HERSHEY_SIMPLEX;
+  auto textWidth = [&](const std::string& s, double size) { return cv::getTextSize(s, font, size, 1, nullptr).width; };
+
+  // Header layout first: its height sets where the plot area starts. A key is a line (a path), a filled
+  // disc (start) or a ring (end).
+  enum class Key { line, start, end };
+  struct Entry {
+    std::string label;
+    Key kind;
+    cv::Scalar colour;
+    int thickness;
+    cv::Point at;  // left end of the symbol, on the text's baseline
+  };
+  std::vector<Entry> legend;
+  for (const auto& p : paths) legend.push_back({p.label, Key::line, p.colour, p.thickness, {}});
+  legend.push_back({"start", Key::start, c_start, 0, {}});
+  legend.push_back({"end", Key::end, grey, 2, {}});
+  int lx = l - 60, ly = 28 + 30 * static_cast<int>(notes.size()) + 34;
+  for (auto& e : legend) {
+    const int symbol = e.kind == Key::line ? 38 : 22, width = symbol + textWidth(e.label, 0.5);
+    if (lx > l - 60 && lx + width > w - r) lx = l - 60, ly += 26;
+    e.at = cv::Point(lx, ly);
+    lx += width + 30;
+  }
+  const int t = ly + 33, h = t + ph_px + b;
   cv::Mat img(h, w, CV_8UC3, cv::Scalar(255, 255, 255));
 
-  // Equal scales: the box around both paths (x right, z up), padded, fitted into the plot area.
+  // Equal scales: the box around all paths (x right, z up), padded, fitted into the plot area.
   double x0 = 1e300, x1 = -1e300, z0 = 1e300, z1 = -1e300;
-  for (const auto* poses : {&gt, &est_aligned})
-    for (const auto& T : *poses) {
+  for (const auto& p : paths)
+    for (const auto& T : *p.poses) {
       x0 = std::min(x0, T.translation().x()), x1 = std::max(x1, T.translation().x());
       z0 = std::min(z0, T.translation().z()), z1 = std::max(z1, T.translation().z());
     }
@@ -58,64 +96,51 @@ void writeTrajectoryPlot(const std::string& path, const std::string& title, cons
   for (double x = std::ceil(gx0 / step) * step; x <= gx1; x += step) {
     cv::line(img, px(x, gz0), px(x, gz1), grid);
     const std::string s_x = metres(x);
-    const int tw = cv::getTextSize(s_x, font, 0.4, 1, nullptr).width;
-    cv::putText(img, s_x, cv::Point(px(x, gz0).x - tw / 2, h - b + 16), font, 0.4, grey, 1, cv::LINE_AA);
+    cv::putText(img, s_x, cv::Point(px(x, gz0).x - textWidth(s_x, 0.4) / 2, h - b + 16), font, 0.4, grey, 1,
+                cv::LINE_AA);
   }
   for (double z = std::ceil(gz0 / step) * step; z <= gz1; z += step) {
     cv::line(img, px(gx0, z), px(gx1, z), grid);
     const std::string s_z = metres(z);
-    const int tw = cv::getTextSize(s_z, font, 0.4, 1, nullptr).width;
-    cv::putText(img, s_z, cv::Point(l - 6 - tw, px(gx0, z).y + 4), font, 0.4, grey, 1, cv::LINE_AA);
+    cv::putText(img, s_z, cv::Point(l - 6 - textWidth(s_z, 0.4), px(gx0, z).y + 4), font, 0.4, grey, 1, cv::LINE_AA);
   }
   cv::rectangle(img, cv::Point(l, t), cv::Point(w - r, h - b), grey);
   cv::putText(img, "x [m] (right)", cv::Point(l + static_cast<int>(pw) / 2 - 45, h - b + 36), font, 0.45, black, 1,
               cv::LINE_AA);
   cv::putText(img, "z [m] (forward)", cv::Point(l - 60, t - 8), font, 0.45, black, 1, cv::LINE_AA);
 
-  // Paths: ground truth under the estimate, then end and start markers.
-  auto polyline = [&](const std::vector<Pose3>& poses, const cv::Scalar& c, int thick) {
-    std::vector<cv::Point> pts;
-    for (const auto& T : poses) {
-      const cv::Point p = px(T.translation().x(), T.translation().z());
-      if (pts.empty() || p != pts.back()) pts.push_back(p);
-    }
-    if (pts.size() == 1) cv::circle(img, pts[0], thick, c, cv::FILLED, cv::LINE_AA);
-    if (pts.size() > 1) cv::polylines(img, pts, false, c, thick, cv::LINE_AA);
-  };
-  polyline(gt, c_gt, 3);
-  polyline(est_aligned, c_est, 2);
+  // Paths in order (the ground truth under the estimates), then end and start markers.
   auto at = [&](const Pose3& T) { return px(T.translation().x(), T.translation().z()); };
-  if (!gt.empty()) cv::circle(img, at(gt.back()), 6, c_gt, 2, cv::LINE_AA);
-  if (!est_aligned.empty()) cv::circle(img, at(est_aligned.back()), 6, c_est, 2, cv::LINE_AA);
-  if (!gt.empty()) {
-    cv::circle(img, at(gt.front()), 8, c_start, cv::FILLED, cv::LINE_AA);
-    cv::circle(img, at(gt.front()), 8, black, 1, cv::LINE_AA);
+  for (const auto& p : paths) {
+    std::vector<cv::Point> pts;
+    for (const auto& T : *p.poses)
+      if (pts.empty() || at(T) != pts.back()) pts.push_back(at(T));
+    if (pts.size() == 1) cv::circle(img, pts[0], p.thickness, p.colour, cv::FILLED, cv::LINE_AA);
+    if (pts.size() > 1) cv::polylines(img, pts, false, p.colour, p.thickness, cv::LINE_AA);
+  }
+  for (const auto& p : paths)
+    if (!p.poses->empty()) cv::circle(img, at(p.poses->back()), 6, p.colour, 2, cv::LINE_AA);
+  if (!paths.empty() && !paths[0].poses->empty()) {
+    cv::circle(img, at(paths[0].poses->front()), 8, c_start, cv::FILLED, cv::LINE_AA);
+    cv::circle(img, at(paths[0].poses->front()), 8, black, 1, cv::LINE_AA);
   }
 
-  // Header: title, metrics, legend.
+  // Header: title, notes, legend.
   cv::putText(img, title, cv::Point(l - 60, 28), font, 0.6, black, 1, cv::LINE_AA);
-  const RelativeErrors& rel = metrics.relative;
-  std::string text = cv::format("ATE RMSE %.3f m", metrics.ate_rmse_m);
-  if (rel.valid)
-    text += cv::format("    t_rel %.3f %%    r_rel %.4f deg/100 m", rel.t_rel_pct, rel.r_rel_deg_per_100m);
-  else
-    text += cv::format("    t_rel, r_rel: n/a (path of %.0f m is too short)", rel.path_length_m);
-  cv::putText(img, text, cv::Point(l - 60, 58), font, 0.6, black, 1, cv::LINE_AA);
-  int lx = l - 60;
-  const int ly = 92;
-  auto key = [&](const std::string& label, const cv::Scalar& c, int thick) {
-    cv::line(img, cv::Point(lx, ly - 5), cv::Point(lx + 30, ly - 5), c, thick, cv::LINE_AA);
-    cv::putText(img, label, cv::Point(lx + 38, ly), font, 0.5, black, 1, cv::LINE_AA);
-    lx += 38 + cv::getTextSize(label, font, 0.5, 1, nullptr).width + 30;
-  };
-  key("ground truth", c_gt, 3);
-  key("estimate (aligned, SE(3))", c_est, 2);
-  cv::circle(img, cv::Point(lx + 8, ly - 5), 8, c_start, cv::FILLED, cv::LINE_AA);
-  cv::circle(img, cv::Point(lx + 8, ly - 5), 8, black, 1, cv::LINE_AA);
-  cv::putText(img, "start", cv::Point(lx + 22, ly), font, 0.5, black, 1, cv::LINE_AA);
-  lx += 22 + cv::getTextSize("start", font, 0.5, 1, nullptr).width + 30;
-  cv::circle(img, cv::Point(lx + 8, ly - 5), 6, grey, 2, cv::LINE_AA);
-  cv::putText(img, "end", cv::Point(lx + 22, ly), font, 0.5, black, 1, cv::LINE_AA);
+  for (size_t i = 0; i < notes.size(); ++i)
+    cv::putText(img, notes[i], cv::Point(l - 60, 58 + 30 * static_cast<int>(i)), font, 0.6, black, 1, cv::LINE_AA);
+  for (const auto& e : legend) {
+    const cv::Point c = e.at + cv::Point(8, -5);
+    if (e.kind == Key::line) {
+      cv::line(img, e.at + cv::Point(0, -5), e.at + cv::Point(30, -5), e.colour, e.thickness, cv::LINE_AA);
+    } else if (e.kind == Key::start) {
+      cv::circle(img, c, 8, e.colour, cv::FILLED, cv::LINE_AA);
+      cv::circle(img, c, 8, black, 1, cv::LINE_AA);
+    } else {
+      cv::circle(img, c, 6, e.colour, e.thickness, cv::LINE_AA);
+    }
+    cv::putText(img, e.label, e.at + cv::Point(e.kind == Key::line ? 38 : 22, 0), font, 0.5, black, 1, cv::LINE_AA);
+  }
 
   // Scale bar, bottom right below the plot: one grid step.
   const int bar = static_cast<int>(std::lround(step * s));
@@ -126,6 +151,29 @@ void writeTrajectoryPlot(const std::string& path, const std::string& title, cons
   cv::putText(img, metres(step) + " m", b1 + cv::Point(8, 5), font, 0.5, black, 1, cv::LINE_AA);
 
   if (!cv::imwrite(path, img)) throw dataError(path, 0, "cannot write the plot");
+}
+
+}  // namespace
+
+void writeTrajectoryPlot(const std::string& path, const std::string& title, const std::vector<Pose3>& gt,
+                         const std::vector<Pose3>& est_aligned, const TrajectoryMetrics& metrics) {
+  const RelativeErrors& rel = metrics.relative;
+  std::string text = cv::format("ATE RMSE %.3f m", metrics.ate_rmse_m);
+  if (rel.valid)
+    text += cv::format("    t_rel %.3f %%    r_rel %.4f deg/100 m", rel.t_rel_pct, rel.r_rel_deg_per_100m);
+  else
+    text += cv::format("    t_rel, r_rel: n/a (path of %.0f m is too short)", rel.path_length_m);
+  writeTopView(path, title, {text},
+               {{"ground truth", &gt, kGroundTruth, 3}, {"estimate (aligned, SE(3))", &est_aligned, kPalette[0], 2}});
+}
+
+void writeTrajectoriesPlot(const std::string& path, const std::string& title, const std::vector<Pose3>& gt,
+                           const std::vector<std::pair<std::string, std::vector<Pose3>>>& aligned) {
+  std::vector<PlotPath> paths{{"ground truth", &gt, kGroundTruth, 3}};
+  const size_t colours = sizeof kPalette / sizeof kPalette[0];
+  for (size_t i = 0; i < aligned.size(); ++i)
+    paths.push_back({aligned[i].first, &aligned[i].second, kPalette[i % colours], 2});
+  writeTopView(path, title, {"each estimate aligned to the ground truth by its own SE(3)"}, paths);
 }
 
 }  // namespace binloop

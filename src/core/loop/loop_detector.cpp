@@ -122,18 +122,23 @@ LoopDetector::Output LoopDetector::process(const msg::KeyFrame& kf) {
     pending_.reset();
   }
   if (dense_.count(kf.id)) return out;  // a later revision: covisibility only
-  const auto t0 = std::chrono::steady_clock::now();
   const KeyframeId dense = static_cast<KeyframeId>(order_.size());
-  // add() throws only for an empty set or a known id, both ruled out above.
-  active_.recognizer->add(dense, kf.descriptors);
-  for (Model& m : shadow_) m.recognizer->add(dense, kf.descriptors);
+  // add() throws only for an empty set or a known id, both ruled out above. Each model's signature time is
+  // reported as its own first step (the detection goals exclude it).
+  const double active_signature_ms = active_.recognizer->add(dense, kf.descriptors);
+  std::vector<double> shadow_signature_ms;
+  for (Model& m : shadow_) shadow_signature_ms.push_back(m.recognizer->add(dense, kf.descriptors));
   dense_[kf.id] = dense;
   order_.push_back(kf.id);
   descriptors_.push_back(kf.descriptors);
-  auto active = query(active_, kf.id, kf.frame_index, false);
-  active->total_ms = msSince(t0);  // the add included
-  out.active = active;
-  for (Model& m : shadow_) out.shadow.push_back(query(m, kf.id, kf.frame_index, true));
+  auto withSignature = [](std::shared_ptr<msg::LoopCandidates> c, double ms) {
+    c->timings.insert(c->timings.begin(), msg::LoopStepTime{"signature", ms});
+    c->total_ms += ms;
+    return c;
+  };
+  out.active = withSignature(query(active_, kf.id, kf.frame_index, false), active_signature_ms);
+  for (size_t i = 0; i < shadow_.size(); ++i)
+    out.shadow.push_back(withSignature(query(shadow_[i], kf.id, kf.frame_index, true), shadow_signature_ms[i]));
   return out;
 }
 
