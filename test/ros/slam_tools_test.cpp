@@ -1,0 +1,89 @@
+// run and eval-slam as a user runs them: the loop log and summary run writes with a detector on, the table
+// eval-slam writes, and one clear line for bad options. On the real 11-frame sample (no revisit: these check
+// the tools' outputs; loop closing itself is tested in test/core/pipeline/loop_closing_pipeline_test.cpp).
+#include <fstream>
+#include <sstream>
+
+#include "support/test_support.h"
+
+namespace {
+binloop::test::CommandResult tool(const std::string& name, const std::string& args) {
+  return binloop::test::runCommand(std::string(BINLOOP_TOOL_DIR) + "/" + name + " " + args);
+}
+std::string readAll(const std::string& path) {
+  std::ifstream f(path);
+  std::stringstream s;
+  s << f.rdbuf();
+  return s.str();
+}
+int lines(const std::string& s) {
+  int n = 0;
+  for (char c : s) n += c == '\n';
+  return n;
+}
+const std::string kVocab = std::string(BINLOOP_ROOT_DIR) + "/vocab/kitti08";
+}  // namespace
+
+TEST(SlamTools, RunWithADetectorWritesTheLoopLogAndCounts) {
+  const std::string seq = binloop::test::sharedData("kitti/sample_00");
+  BINLOOP_REQUIRE_DATA(seq);
+  BINLOOP_REQUIRE_DATA(kVocab + "/vladpq.bin");
+  binloop::test::TempDir tmp;
+  const auto r = tool("run", seq + " --out " + (tmp / "out") + " --lockstep --detector vladpq --vocab-dir " + kVocab +
+                                 " --shadow vlad --reloc-vocab none");
+  ASSERT_EQ(r.code, 0) << r.out;
+  const std::string log = readAll(tmp / "out/loops.csv");
+  ASSERT_EQ(log.rfind("keyframe,frame,model,shadow,status,candidates,", 0), 0u) << log;
+  const std::string summary = readAll(tmp / "out/summary.json");
+  // One active and one shadow row per keyframe.
+  const auto pos = summary.find("\"keyframes_made\": ");
+  ASSERT_NE(pos, std::string::npos) << summary;
+  const int keyframes = std::stoi(summary.substr(pos + 18));
+  EXPECT_GT(keyframes, 1);
+  EXPECT_EQ(lines(log), 1 + 2 * keyframes) << log;
+  EXPECT_NE(log.find(",vladpq,0,"), std::string::npos);
+  EXPECT_NE(log.find(",vlad,1,"), std::string::npos);
+  for (const char* key : {"\"detector\": \"vladpq\"", "\"loops_accepted\": 0", "\"loop_queries\": ",
+                          "\"detect_vladpq_query_ms_median\": ", "\"detect_vlad_shadow_ms_median\": "})
+    EXPECT_NE(summary.find(key), std::string::npos) << key << " missing from\n" << summary;
+}
+
+TEST(SlamTools, BadLoopOptionsAreOneClearLine) {
+  const std::string seq = binloop::test::sharedData("kitti/sample_00");
+  BINLOOP_REQUIRE_DATA(seq);
+  binloop::test::TempDir tmp;
+  const auto unknown = tool("run", seq + " --out " + (tmp / "a") + " --detector sift");
+  EXPECT_NE(unknown.code, 0);
+  EXPECT_NE(unknown.out.find("--detector 'sift': not one of hbow, fabmap, vlad, hmvlad, vladpq"), std::string::npos)
+      << unknown.out;
+  const auto sw = tool("run", seq + " --out " + (tmp / "b") + " --detector vladpq --vocab-dir " + kVocab +
+                                  " --switch-detector-at 500");
+  EXPECT_NE(sw.code, 0);
+  EXPECT_NE(sw.out.find("--switch-detector-at '500': expected KF:model"), std::string::npos) << sw.out;
+  const auto missing = tool("run", seq + " --out " + (tmp / "c") + " --detector vladpq --vocab-dir " + (tmp / "none"));
+  EXPECT_NE(missing.code, 0);
+  EXPECT_NE(missing.out.find("vladpq.bin"), std::string::npos) << missing.out;
+  const auto eval = tool("eval-slam", "--sequence " + seq + " --out " + (tmp / "d") + " --detectors vladpq,sift");
+  EXPECT_NE(eval.code, 0);
+  EXPECT_NE(eval.out.find("unknown detector 'sift'"), std::string::npos) << eval.out;
+}
+
+TEST(SlamTools, EvalSlamScoresEveryDetectorInOneTable) {
+  const std::string seq = binloop::test::sharedData("kitti/sample_00");
+  BINLOOP_REQUIRE_DATA(seq);
+  BINLOOP_REQUIRE_DATA(kVocab + "/vladpq.bin");
+  binloop::test::TempDir tmp;
+  binloop::test::writeText(tmp / "gt.txt", "# no revisit in 11 frames; one made-up pair so there is a segment\n10 0\n");
+  const auto r = tool("eval-slam", "--sequence " + seq + " --out " + (tmp / "out") + " --detectors vladpq,none --jobs 1" +
+                                       " --lockstep --loop-gt " + (tmp / "gt.txt") + " --run-args \"--reloc-vocab none --vocab-dir " +
+                                       kVocab + "\"");
+  ASSERT_EQ(r.code, 0) << r.out;
+  const std::string table = readAll(tmp / "out/summary.csv");
+  EXPECT_EQ(table.rfind("model,ate_m,t_rel_pct,r_rel_deg_100m,loops_accepted,loops_correct,segments_closed,", 0), 0u)
+      << table;
+  EXPECT_NE(table.find("\nvladpq,"), std::string::npos) << table;
+  EXPECT_NE(table.find("\nnone,"), std::string::npos) << table;
+  EXPECT_NE(table.find(",0,0,0/1,"), std::string::npos) << "no loop in 11 frames: nothing accepted, the segment open\n"
+                                                         << table;
+  EXPECT_TRUE(binloop::test::exists(tmp / "out/trajectories.png"));
+}
