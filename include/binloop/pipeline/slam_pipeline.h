@@ -52,6 +52,11 @@ class SlamPipeline {
   /// that cannot be made; the running one stays.
   void switchDetector(const std::string& model);
 
+  /// A loop between two keyframes from outside (another front end, a person), verified and guarded like a
+  /// detected one by loop closing, on its thread, after what it has queued; the outcome appears in the loop
+  /// log with model `source`. Throws PlaceError when loop closing is off.
+  void addExternalLoop(SlamKeyframeId query, SlamKeyframeId match, const std::string& source = "external");
+
   /// Called on the mapping thread with each refined keyframe; set before the first frame.
   std::function<void(const msg::KeyFramePtr&)> on_keyframe;
 
@@ -81,10 +86,16 @@ class SlamPipeline {
 
  private:
   using MappingInput = std::variant<msg::KeyFramePtr, msg::CorrectionPtr>;
-  struct LoopInput {
-    msg::KeyFramePtr refined;        // null for an update alone
-    msg::LocalMapUpdatePtr update;
+  struct ExternalLoop {
+    SlamKeyframeId query, match;
+    std::string source;
   };
+  struct LoopInput {
+    msg::KeyFramePtr refined;        // null for an update alone or an external loop
+    msg::LocalMapUpdatePtr update;
+    std::optional<ExternalLoop> external;
+  };
+  void sendCorrection(const msg::CorrectionPtr& c);
   void map(const MappingInput& in);
   void searchLoops(const LoopInput& in);
   void drainUpdates();

@@ -30,8 +30,8 @@ Eigen::Vector3d pointOf(const msg::KeyFrame& kf, const msg::KeyPoint& k) {
 bool stereo(const msg::KeyPoint& k) { return k.depth > 0 && k.right_x >= 0; }
 
 // Pose optimisation of T_query_candidate on the pairs; drops the outliers from `pairs`.
-int refine(const msg::KeyFrame& q, const msg::KeyFrame& c, const ScalePyramid& s, Pose3* T,
-           std::vector<std::pair<int, int>>* pairs) {
+int refine(const msg::KeyFrame& q, const msg::KeyFrame& c, const ScalePyramid& s, const PoseOptimizerParams& p,
+           Pose3* T, std::vector<std::pair<int, int>>* pairs) {
   std::vector<PoseObservation> obs;
   for (const auto& [qi, ci] : *pairs) {
     const msg::KeyPoint& kq = q.keypoints[qi];
@@ -43,7 +43,7 @@ int refine(const msg::KeyFrame& q, const msg::KeyFrame& c, const ScalePyramid& s
     obs.push_back(o);
   }
   if (obs.size() < 3) return 0;
-  const PoseOptimizationResult r = optimizePose(q.camera, *T, obs);
+  const PoseOptimizationResult r = optimizePose(q.camera, *T, obs, p);
   *T = r.T_c_w;
   std::vector<std::pair<int, int>> kept;
   for (size_t i = 0; i < pairs->size(); ++i)
@@ -84,6 +84,13 @@ LoopVerification verifyLoop(const msg::KeyFrame& q, const msg::KeyFrame& c, cons
   for (size_t j = 0; j < c.keypoints.size(); ++j)
     if (best_of_c[j] >= 0) pairs.emplace_back(best_of_c[j], static_cast<int>(j));
   v.matches = static_cast<int>(pairs.size());
+  auto lap = [t = std::chrono::steady_clock::now()]() mutable {
+    const auto now = std::chrono::steady_clock::now();
+    const double ms = std::chrono::duration<double, std::milli>(now - t).count();
+    t = now;
+    return ms;
+  };
+  v.match_ms = std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - t0).count();
   if (v.matches < p.min_matches)
     return done(LoopRejection::kTooFewMatches, std::to_string(v.matches) + " matches < " + std::to_string(p.min_matches));
 
@@ -95,6 +102,7 @@ LoopVerification verifyLoop(const msg::KeyFrame& q, const msg::KeyFrame& c, cons
   }
   const RigidRansacResult rr = rigidRansac(a, b, p.ransac, hashCombine(p.seed, hashCombine(q.id, c.id)));
   v.ransac_inliers = rr.inliers;
+  v.ransac_ms = lap();
   if (!rr.ok)
     return done(LoopRejection::kNoConsensus, std::to_string(v.matches) + " matches, best consensus " +
                                                  std::to_string(rr.inliers) + " < " + std::to_string(p.ransac.min_inliers));
@@ -104,7 +112,8 @@ LoopVerification verifyLoop(const msg::KeyFrame& q, const msg::KeyFrame& c, cons
 
   // 3. Refinement by reprojection.
   Pose3 T = rr.T_a_b;
-  refine(q, c, s, &T, &in);
+  refine(q, c, s, p.refine, &T, &in);
+  v.refine_ms = lap();
 
   // 4. Guided search for the candidate's other stereo points.
   std::vector<char> q_used(q.keypoints.size(), 0), c_used(c.keypoints.size(), 0);
@@ -128,7 +137,8 @@ LoopVerification verifyLoop(const msg::KeyFrame& q, const msg::KeyFrame& c, cons
     q_used[best_i] = 1;
     in.emplace_back(best_i, static_cast<int>(j));
   }
-  v.inliers = refine(q, c, s, &T, &in);
+  v.inliers = refine(q, c, s, p.refine, &T, &in);
+  v.guided_ms = lap();
   v.T_query_candidate = T;
   v.pairs = in;
   const std::string numbers = std::to_string(v.matches) + " matches, " + std::to_string(v.ransac_inliers) +

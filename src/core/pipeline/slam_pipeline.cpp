@@ -37,6 +37,25 @@ void SlamPipeline::switchDetector(const std::string& model) {
   switch_to_ = model;
 }
 
+void SlamPipeline::addExternalLoop(SlamKeyframeId query, SlamKeyframeId match, const std::string& source) {
+  if (!closer_) throw PlaceError("loop closing is off: no external loop can be added");
+  LoopInput in;
+  in.external = ExternalLoop{query, match, source};
+  if (mode_ == PipelineMode::kLockStep) searchLoops(in);
+  else loop_inbox_.push(in);
+}
+
+void SlamPipeline::sendCorrection(const msg::CorrectionPtr& c) {
+  if (mode_ == PipelineMode::kLockStep) {
+    const auto t0 = std::chrono::steady_clock::now();
+    map(c);
+    loop_log_.back().correction_ms = msSince(t0);
+    drainUpdates();  // tracking holds the corrected map before the next frame
+  } else {
+    mapping_inbox_.push(c);
+  }
+}
+
 void SlamPipeline::map(const MappingInput& in) {
   if (const auto* c = std::get_if<msg::CorrectionPtr>(&in)) {
     msg::LocalMapUpdatePtr u = mapper_.apply(**c);
@@ -60,6 +79,14 @@ void SlamPipeline::map(const MappingInput& in) {
 }
 
 void SlamPipeline::searchLoops(const LoopInput& in) {
+  if (in.external) {
+    LoopCloser::Output c = closer_->addExternalLoop(in.external->query, in.external->match, in.external->source);
+    LoopLogEntry entry;
+    entry.closures = c.closures;
+    loop_log_.push_back(entry);
+    if (c.correction) sendCorrection(c.correction);
+    return;
+  }
   if (!in.refined) {  // an update alone (the corrected map)
     closer_->apply(*in.update);
     return;
@@ -83,15 +110,7 @@ void SlamPipeline::searchLoops(const LoopInput& in) {
     LoopCloser::Output c = closer_->process(*d.active);
     entry.closures = c.closures;
     loop_log_.push_back(entry);
-    if (c.correction) {
-      if (mode_ == PipelineMode::kLockStep) {
-        const auto t0 = std::chrono::steady_clock::now();
-        map(c.correction);
-        loop_log_.back().correction_ms = msSince(t0);
-      } else {
-        mapping_inbox_.push(c.correction);
-      }
-    }
+    if (c.correction) sendCorrection(c.correction);
   } else {
     loop_log_.push_back(entry);
   }

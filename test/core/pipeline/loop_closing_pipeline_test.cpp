@@ -6,6 +6,7 @@
 
 #include <cmath>
 #include <filesystem>
+#include <functional>
 
 #include "binloop/features/orb_slam_extractor.h"
 #include "binloop/pipeline/slam_pipeline.h"
@@ -65,7 +66,10 @@ struct DriveRun {
   std::vector<SlamPipeline::LoopLogEntry> log;
 };
 
-DriveRun runDrive(const LoopDrive& d, bool close_loops, PipelineMode mode = PipelineMode::kLockStep) {
+using BeforeFinish = std::function<void(SlamPipeline&, const std::vector<msg::TrackedFrame>&)>;
+
+DriveRun runDrive(const LoopDrive& d, bool close_loops, PipelineMode mode = PipelineMode::kLockStep,
+                  const BeforeFinish& before_finish = {}) {
   std::optional<LoopClosingSetup> loops;
   if (close_loops) {
     LoopClosingSetup l;
@@ -80,6 +84,7 @@ DriveRun runDrive(const LoopDrive& d, bool close_loops, PipelineMode mode = Pipe
   SlamPipeline slam(d.cam, {}, {}, mode, 3, loops);
   std::vector<msg::TrackedFrame> tracked;
   for (const auto& f : d.frames) tracked.push_back(slam.process(f));
+  if (before_finish) before_finish(slam, tracked);
   slam.finish();
   DriveRun r;
   for (const auto& tf : tracked) {
@@ -130,11 +135,34 @@ TEST(LoopClosingPipeline, TheRevisitIsClosedCorrectlyTheErrorThereDropsAndReruns
 }
 
 // Threaded, as the nodelets run: the loop stages on their own thread, the correction reaching mapping and
-// tracking while frames keep coming.
-TEST(LoopClosingPipeline, ThreadedModeClosesTheLoopToo) {
+// tracking while frames keep coming. At the end two external loops are added: the start against the second
+// pass over it (verified and accepted) and the second pass against the far side of the block (rejected).
+TEST(LoopClosingPipeline, ThreadedModeClosesTheLoopAndVerifiesExternalLoops) {
   const LoopDrive* d = loopDrive();
   if (!d) GTEST_SKIP() << "needs the texture photos of ../shared/data";
-  const DriveRun r = runDrive(*d, true, PipelineMode::kThreaded);
+  auto keyframeAfter = [](const SlamPipeline& slam, const std::vector<msg::TrackedFrame>& tracked, size_t frame) {
+    for (size_t i = frame; i < tracked.size(); ++i)
+      if (tracked[i].new_keyframe != kNoId && slam.tracker().map().keyframe(tracked[i].new_keyframe))
+        return tracked[i].new_keyframe;
+    return kNoId;
+  };
+  const DriveRun r = runDrive(*d, true, PipelineMode::kThreaded, [&](SlamPipeline& slam, const auto& tracked) {
+    const SlamKeyframeId start = keyframeAfter(slam, tracked, 5), again = keyframeAfter(slam, tracked, d->lap + 5),
+                         far = keyframeAfter(slam, tracked, d->lap / 2);
+    ASSERT_NE(start, kNoId);
+    ASSERT_NE(again, kNoId);
+    ASSERT_NE(far, kNoId);
+    slam.addExternalLoop(again, start, "operator");
+    slam.addExternalLoop(again, far, "operator");
+  });
+  std::vector<std::string> external;
+  for (const auto& e : r.log)
+    for (const auto& c : e.closures)
+      if (c->model == "operator") external.push_back(c->status + ": " + c->detail);
+  ASSERT_EQ(external.size(), 2u);
+  EXPECT_EQ(external[0].rfind("accepted", 0), 0u) << external[0];
+  // The far side shares textures with the start (the world repeats its photos), so a few matches are found.
+  EXPECT_TRUE(external[1].rfind("too_few_matches", 0) == 0 || external[1].rfind("no_consensus", 0) == 0) << external[1];
   const auto loops = accepted(r);
   ASSERT_FALSE(loops.empty()) << "no loop accepted";
   for (const msg::LoopClosure* c : loops)
