@@ -38,6 +38,10 @@ struct LocalMapperParams {
   int local_ba_max_keyframes = 30; // optimised keyframes (the new one and its strongest neighbours)
   LocalBaParams ba;
   bool cull_keyframes = true;
+  // After a loop correction, a bundle adjustment of the whole map (ORB-SLAM2 runs one on its own thread).
+  // Here it runs on mapping's thread, before the corrected map goes to tracking: mapping waits for it, and
+  // tracking declines keyframes meanwhile. Off by default (README, "Running the SLAM": what it costs).
+  bool global_ba_after_loop = false;
   float redundant_ratio = 0.9f;    // a keyframe whose points are this often seen by >= 3 others goes
   float close_depth_baselines = 40;
 };
@@ -101,6 +105,9 @@ class LocalMapper {
   void fuseInto(KF& t, const std::vector<MapPointId>& points, msg::LocalMapUpdate& u);
   std::vector<MapPointId> pointsOf(const std::vector<SlamKeyframeId>& keyframes) const;
   void localBundleAdjustment(KF& kf, msg::LocalMapUpdate& u);
+  /// Bundle adjustment of the `free` keyframes and every point they see; other keyframes that see those
+  /// points hold still.
+  void bundleAdjust(const std::vector<SlamKeyframeId>& free, const LocalBaParams& params, msg::LocalMapUpdate& u);
   void cullKeyframes(KF& kf, msg::LocalMapUpdate& u);
   void updatePointShape(MP& mp);
   void addObservation(MP& mp, KF& kf, int idx);

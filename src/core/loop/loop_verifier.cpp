@@ -68,14 +68,21 @@ LoopVerification verifyLoop(const msg::KeyFrame& q, const msg::KeyFrame& c, cons
 
   // 1. Descriptor matches between stereo keypoints, each candidate keypoint used once.
   std::vector<int> best_of_c(c.keypoints.size(), -1), dist_of_c(c.keypoints.size(), std::numeric_limits<int>::max());
+  // The candidate's stereo descriptors packed together: the inner loop then streams one array.
+  std::vector<int> c_index;
+  Descriptors c_desc;
+  for (size_t j = 0; j < c.keypoints.size(); ++j)
+    if (stereo(c.keypoints[j])) c_index.push_back(static_cast<int>(j)), c_desc.push_back(c.descriptors[j]);
   for (size_t i = 0; i < q.keypoints.size(); ++i) {
     if (!stereo(q.keypoints[i])) continue;
     int best = 256, second = 256, best_j = -1;
-    for (size_t j = 0; j < c.keypoints.size(); ++j) {
-      if (!stereo(c.keypoints[j])) continue;
-      const int d = hamming(q.descriptors[i], c.descriptors[j]);
-      if (d < best) second = best, best = d, best_j = static_cast<int>(j);
-      else if (d < second) second = d;
+    const Desc256& qd = q.descriptors[i];
+    for (size_t k = 0; k < c_desc.size(); ++k) {
+      const int d = hamming(qd, c_desc[k]);
+      if (d < second) {
+        if (d < best) second = best, best = d, best_j = c_index[k];
+        else second = d;
+      }
     }
     if (best_j < 0 || best > p.max_hamming || best > p.ratio * second) continue;
     if (best < dist_of_c[best_j]) dist_of_c[best_j] = best, best_of_c[best_j] = static_cast<int>(i);

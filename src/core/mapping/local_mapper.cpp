@@ -328,6 +328,13 @@ void LocalMapper::fuseWithNeighbors(KF& kf, msg::LocalMapUpdate& u) {
 
 void LocalMapper::localBundleAdjustment(KF& kf, msg::LocalMapUpdate& u) {
   // Local keyframes: the new one and its covisible neighbours; fixed: the others that see their points.
+  std::vector<SlamKeyframeId> free{kf.state.id};
+  for (SlamKeyframeId k : neighbors(kf, p_.local_ba_max_keyframes - 1)) free.push_back(k);
+  bundleAdjust(free, p_.ba, u);
+}
+
+void LocalMapper::bundleAdjust(const std::vector<SlamKeyframeId>& free, const LocalBaParams& params,
+                               msg::LocalMapUpdate& u) {
   BaProblem prob;
   std::unordered_map<SlamKeyframeId, size_t> kf_index;
   std::unordered_map<MapPointId, size_t> pt_index;
@@ -336,8 +343,7 @@ void LocalMapper::localBundleAdjustment(KF& kf, msg::LocalMapUpdate& u) {
     kf_index[id] = prob.keyframes.size();
     prob.keyframes.push_back({id, orthonormalized(kfs_.at(id).state.T_w_c.inverse()), fixed || id == first_kf_});
   };
-  addKf(kf.state.id, false);
-  for (SlamKeyframeId k : neighbors(kf, p_.local_ba_max_keyframes - 1)) addKf(k, false);
+  for (SlamKeyframeId k : free) addKf(k, false);
   const size_t local = prob.keyframes.size();
   for (size_t i = 0; i < local; ++i)
     for (MapPointId id : kfs_.at(prob.keyframes[i].id).state.point_ids)
@@ -357,7 +363,7 @@ void LocalMapper::localBundleAdjustment(KF& kf, msg::LocalMapUpdate& u) {
     }
   if (prob.points.empty()) return;
   const auto t0 = std::chrono::steady_clock::now();
-  const LocalBaResult r = binloop::localBundleAdjustment(camera_, prob, p_.ba, &abort_);
+  const LocalBaResult r = binloop::localBundleAdjustment(camera_, prob, params, &abort_);
   u.ba_ms = msSinceT(t0);
   u.ba_iterations = r.iterations;
   u.ba_outliers = r.num_outliers;
@@ -577,6 +583,23 @@ msg::LocalMapUpdatePtr LocalMapper::apply(const msg::Correction& c) {
       if (id != kNoId) updatePointShape(pts_.at(id));
     for (SlamKeyframeId k : near_q) updateConnections(kfs_.at(k));
     u->points_fused_across_loop = static_cast<int>(u->fused.size());
+  }
+
+  // Global BA (optional): every keyframe and point, the first keyframe held; here, before the update, so
+  // that tracking gets its result with the correction.
+  if (p_.global_ba_after_loop) {
+    std::vector<SlamKeyframeId> all;
+    for (SlamKeyframeId id : ids)
+      if (kfs_.count(id)) all.push_back(id);
+    LocalBaParams g = p_.ba;
+    g.linear_solver = BaLinearSolver::kSparseSchur;  // hundreds of free keyframes
+    abort_ = false;  // a keyframe that arrives meanwhile cuts it short, as a new loop stops ORB-SLAM2's
+    msg::LocalMapUpdate ba;
+    bundleAdjust(all, g, ba);
+    u->ba_ms = ba.ba_ms;
+    u->ba_iterations = ba.ba_iterations;
+    u->ba_outliers = ba.ba_outliers;
+    u->culled_points = ba.culled_points;
   }
 
   // Tracking gets the whole corrected map: every keyframe and every point moved.

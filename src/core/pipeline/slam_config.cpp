@@ -69,6 +69,7 @@ std::map<std::string, std::map<std::string, Setting>> settingsOf(SlamConfig& c) 
         {"ba_robust_iterations", {S::kInt, &m.ba.robust_iterations, 1}},
         {"ba_refine_iterations", {S::kInt, &m.ba.refine_iterations, 0}},
         {"cull_keyframes", {S::kBool, &m.cull_keyframes, 0}},
+        {"global_ba_after_loop", {S::kBool, &m.global_ba_after_loop, 0}},
         {"redundant_ratio", {S::kFloat, &m.redundant_ratio, 0}}}},
       {"loop_detection",
        {{"max_reference", {S::kInt, &d.max_reference, 1}},
