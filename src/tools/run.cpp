@@ -260,7 +260,7 @@ int main(int argc, char** argv) {
       writeLoopLog((out / "loops.csv").string(), slam.loopLog());
       std::map<std::string, int> by_status;
       std::map<std::string, std::vector<double>> detect_ms, query_ms, signature_ms;
-      std::vector<double> verify_ms, optimize_ms, correction_ms, switch_ms;
+      std::vector<double> verify_ms, optimize_ms, correction_ms, switch_ms, global_ba_ms;
       int queries = 0, proposals = 0;
       for (const auto& e : slam.loopLog()) {
         if (e.active) {
@@ -284,6 +284,7 @@ int main(int argc, char** argv) {
           if (c->optimize_ms > 0) optimize_ms.push_back(c->optimize_ms);
         }
         if (e.correction_ms > 0) correction_ms.push_back(e.correction_ms);
+        if (e.global_ba_ms > 0) global_ba_ms.push_back(e.global_ba_ms);
         if (e.switch_ms > 0) switch_ms.push_back(e.switch_ms);
       }
       js << "  \"loop_queries\": " << queries << ",\n  \"loop_proposals\": " << proposals
@@ -303,6 +304,7 @@ int main(int argc, char** argv) {
       stat("pose_graph", optimize_ms, false);
       stat("correction_apply", correction_ms, false);
       if (!switch_ms.empty()) stat("switch_rebuild", switch_ms, false);
+      if (!global_ba_ms.empty()) stat("global_ba", global_ba_ms, false);
       std::cout << "loops_accepted: " << by_status["accepted"] << "\n";
     }
     js << "  \"settings\": {";

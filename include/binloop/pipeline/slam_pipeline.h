@@ -77,7 +77,8 @@ class SlamPipeline {
     msg::LoopCandidatesPtr active;
     std::vector<msg::LoopCandidatesPtr> shadow;
     std::vector<msg::LoopClosurePtr> closures;
-    double correction_ms = 0;  // local mapping applying an accepted loop's correction
+    double correction_ms = 0;  // local mapping applying an accepted loop's correction (lock-step only)
+    double global_ba_ms = 0;   // ... of which the global BA, when on (lock-step only)
     double switch_ms = 0;      // rebuilding a newly switched model's index before this query
   };
   /// Only once finish() has returned.
@@ -114,6 +115,7 @@ class SlamPipeline {
   std::atomic<int> pending_{0};  // keyframes sent to mapping and not yet processed
   std::vector<MappingTime> mapping_times_;
   std::vector<LoopLogEntry> loop_log_;
+  double last_correction_ba_ms_ = 0;
   std::thread mapping_thread_, loop_thread_;
   bool finished_ = false;
 };

@@ -50,6 +50,7 @@ void SlamPipeline::sendCorrection(const msg::CorrectionPtr& c) {
     const auto t0 = std::chrono::steady_clock::now();
     map(c);
     loop_log_.back().correction_ms = msSince(t0);
+    loop_log_.back().global_ba_ms = last_correction_ba_ms_;
     drainUpdates();  // tracking holds the corrected map before the next frame
   } else {
     mapping_inbox_.push(c);
@@ -59,6 +60,7 @@ void SlamPipeline::sendCorrection(const msg::CorrectionPtr& c) {
 void SlamPipeline::map(const MappingInput& in) {
   if (const auto* c = std::get_if<msg::CorrectionPtr>(&in)) {
     msg::LocalMapUpdatePtr u = mapper_.apply(**c);
+    last_correction_ba_ms_ = u->ba_ms;
     updates_.push(u);
     if (closer_) {
       if (mode_ == PipelineMode::kLockStep) closer_->apply(*u);
