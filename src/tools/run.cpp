@@ -261,8 +261,12 @@ int main(int argc, char** argv) {
       std::map<std::string, int> by_status;
       std::map<std::string, std::vector<double>> detect_ms, query_ms, signature_ms;
       std::vector<double> verify_ms, optimize_ms, correction_ms, switch_ms, global_ba_ms;
-      int queries = 0, proposals = 0;
+      int queries = 0, proposals = 0, loop_problems = 0;
       for (const auto& e : slam.loopLog()) {
+        if (!e.problem.empty()) {
+          ++loop_problems;
+          std::cerr << "run: loop detection: " << e.problem << "\n";
+        }
         if (e.active) {
           ++queries;
           proposals += e.active->accepted != kNoId;
@@ -288,6 +292,7 @@ int main(int argc, char** argv) {
         if (e.switch_ms > 0) switch_ms.push_back(e.switch_ms);
       }
       js << "  \"loop_queries\": " << queries << ",\n  \"loop_proposals\": " << proposals
+         << ",\n  \"loop_problems\": " << loop_problems
          << ",\n  \"loops_accepted\": " << by_status["accepted"] << ",\n  \"loops_by_status\": {";
       bool first_status = true;
       for (const auto& [s, n] : by_status) {

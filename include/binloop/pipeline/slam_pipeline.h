@@ -36,7 +36,8 @@ struct LoopClosingSetup {
 
 class SlamPipeline {
  public:
-  /// Throws PlaceError when loop closing's first model cannot be made.
+  /// Throws PlaceError when loop closing's first model, a shadow model or a model named in `switches`
+  /// cannot be made.
   SlamPipeline(const StereoCamera& cam, const TrackerParams& tp, const LocalMapperParams& mp, PipelineMode mode,
                size_t queue_capacity = 3, std::optional<LoopClosingSetup> loops = std::nullopt);
   ~SlamPipeline();
@@ -80,6 +81,7 @@ class SlamPipeline {
     double correction_ms = 0;  // local mapping applying an accepted loop's correction (lock-step only)
     double global_ba_ms = 0;   // ... of which the global BA, when on (lock-step only)
     double switch_ms = 0;      // rebuilding a newly switched model's index before this query
+    std::string problem;       // a switch that failed (the running model stayed), empty otherwise
   };
   /// Only once finish() has returned.
   const std::vector<LoopLogEntry>& loopLog() const { return loop_log_; }
@@ -107,6 +109,7 @@ class SlamPipeline {
   std::unique_ptr<LoopDetector> detector_;
   std::unique_ptr<LoopCloser> closer_;
   std::vector<std::pair<size_t, std::string>> switches_;
+  LoopDetector::ModelFactory make_model_;
   std::mutex switch_mutex_;
   std::string switch_to_;  // set by switchDetector, taken by the loop thread
   BoundedQueue<MappingInput> mapping_inbox_;

@@ -17,6 +17,8 @@ SlamPipeline::SlamPipeline(const StereoCamera& cam, const TrackerParams& tp, con
     if (!loops->shadow.empty()) detector_->setShadowModels(loops->shadow);
     closer_ = std::make_unique<LoopCloser>(loops->closer);
     switches_ = loops->switches;
+    make_model_ = loops->make_model;
+    for (const auto& [at, model] : switches_) make_model_(model);  // a bad file fails now, not mid-run
   }
   if (mode_ == PipelineMode::kThreaded) {
     mapping_thread_ = std::thread([this] {
@@ -33,6 +35,7 @@ SlamPipeline::~SlamPipeline() { finish(); }
 
 void SlamPipeline::switchDetector(const std::string& model) {
   if (!detector_) throw PlaceError("loop closing is off: no detector to switch");
+  make_model_(model);  // throws now for a model that cannot be made; the loop stage makes its own
   std::lock_guard<std::mutex> lk(switch_mutex_);
   switch_to_ = model;
 }
@@ -103,7 +106,13 @@ void SlamPipeline::searchLoops(const LoopInput& in) {
   }
   for (const auto& [at, model] : switches_)
     if (at == detector_->keyframeCount()) to = model;
-  if (!to.empty() && to != detector_->activeModel()) detector_->switchModel(to);
+  if (!to.empty() && to != detector_->activeModel()) {
+    try {
+      detector_->switchModel(to);
+    } catch (const PlaceError& e) {  // checked when asked for; a file that went bad since is reported
+      entry.problem = std::string("switch to ") + to + " failed, " + detector_->activeModel() + " stays: " + e.what();
+    }
+  }
   LoopDetector::Output d = detector_->process(*in.refined);
   entry.switch_ms = d.switch_ms;
   entry.active = d.active;

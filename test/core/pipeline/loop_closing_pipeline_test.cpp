@@ -170,3 +170,27 @@ TEST(LoopClosingPipeline, ThreadedModeClosesTheLoopAndVerifiesExternalLoops) {
   const size_t last = d->frames.size() - 1;
   EXPECT_LT((r.poses[last].translation() - d->route[last].translation()).norm(), 0.3);
 }
+
+// A model that cannot be made is refused when it is asked for, not on the loop stage's thread mid-run.
+TEST(LoopClosingPipeline, ASwitchToAModelThatCannotBeMadeIsRefusedAtOnce) {
+  const std::string dir = std::string(BINLOOP_ROOT_DIR) + "/vocab/kitti08";
+  if (!test::exists(dir + "/vlad.bin")) GTEST_SKIP() << "needs " << dir << "/vlad.bin";
+  test::TempDir empty;
+  LoopClosingSetup l;
+  l.detector.model = "vlad";
+  l.make_model = [&](const std::string& name) {
+    RecognizerOptions ro;
+    ro.model_file = (name == "vladpq" ? empty.path() : dir) + "/" + name + ".bin";
+    return makePlaceRecognizer(name, ro);
+  };
+  const StereoCamera cam = kittiCameraByName("kitti04");
+  LoopClosingSetup bad = l;
+  bad.switches = {{5, "vladpq"}};
+  EXPECT_THROW(SlamPipeline(cam, {}, {}, PipelineMode::kThreaded, 3, bad), PlaceError);
+  SlamPipeline slam(cam, {}, {}, PipelineMode::kThreaded, 3, l);
+  EXPECT_THROW(slam.switchDetector("vladpq"), PlaceError);
+  EXPECT_NO_THROW(slam.switchDetector("hmvlad"));
+  SlamPipeline off(cam, {}, {}, PipelineMode::kLockStep);
+  EXPECT_THROW(off.switchDetector("vlad"), PlaceError);
+  EXPECT_THROW(off.addExternalLoop(1, 2), PlaceError);
+}
