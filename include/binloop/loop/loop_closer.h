@@ -101,7 +101,6 @@ class LoopCloser {
   CorrectionHistory history_;
   SlamKeyframeId first_ = kNoId;
   size_t last_correction_at_ = 0;  // keyframes stored when the last correction was made
-  bool corrected_once_ = false;
 };
 
 }  // namespace binloop

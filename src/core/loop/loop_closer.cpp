@@ -13,7 +13,7 @@ namespace binloop {
 
 namespace {
 
-std::string fixed1(double v) {
+std::string fixed2(double v) {
   std::ostringstream s;
   s.setf(std::ios::fixed);
   s.precision(2);
@@ -97,7 +97,7 @@ LoopCloser::Output LoopCloser::process(const msg::LoopCandidates& c) {
   Output out;
   expireHeld(&out);
   if (c.shadow || c.accepted == kNoId) return out;
-  if (corrected_once_ && order_.size() < last_correction_at_ + static_cast<size_t>(p_.min_keyframes_between_loops))
+  if (history_.applied() > 0 && order_.size() < last_correction_at_ + static_cast<size_t>(p_.min_keyframes_between_loops))
     return out;
   Output v = verify(c.query, c.accepted, c.model);
   for (auto& cl : v.closures) out.closures.push_back(cl);
@@ -158,14 +158,14 @@ LoopCloser::Output LoopCloser::verify(SlamKeyframeId query, SlamKeyframeId match
   c->correction_m = (T_w_q_loop.translation() - T_w_q.translation()).norm();
   const double travel = travelBetween(match, query);
   c->drift_bound_m = p_.drift_base_m + p_.drift_per_m * travel;
-  std::string numbers = v.detail + "; moves the query " + fixed1(c->correction_m) + " m, drift bound " +
-                        fixed1(c->drift_bound_m) + " m over " + fixed1(travel) + " m";
+  std::string numbers = v.detail + "; moves the query " + fixed2(c->correction_m) + " m, drift bound " +
+                        fixed2(c->drift_bound_m) + " m over " + fixed2(travel) + " m";
   std::vector<LoopEdge> edges{{query, match, v.T_query_candidate}};
   LoopEdge confirmed_edge;
   bool confirming = false;
   if (c->correction_m > p_.hold_factor * c->drift_bound_m) {
     c->status = "beyond_drift_bound";
-    c->detail = numbers + "; more than " + fixed1(p_.hold_factor) + "x the bound: not a loop drift can explain";
+    c->detail = numbers + "; more than " + fixed2(p_.hold_factor) + "x the bound: not a loop drift can explain";
     return out;
   }
   if (c->correction_m > c->drift_bound_m) {
@@ -178,8 +178,8 @@ LoopCloser::Output LoopCloser::verify(SlamKeyframeId query, SlamKeyframeId match
       if (disagree <= tol && apart >= p_.confirm_min_travel_m) {
         confirming = true;
         confirmed_edge = held_->edge;
-        numbers += "; confirms the loop held at keyframe " + std::to_string(held_->edge.query) + " (" + fixed1(disagree) +
-                   " m apart in what they ask, " + fixed1(apart) + " m along the path)";
+        numbers += "; confirms the loop held at keyframe " + std::to_string(held_->edge.query) + " (" + fixed2(disagree) +
+                   " m apart in what they ask, " + fixed2(apart) + " m along the path)";
       }
     }
     if (!confirming) {
@@ -246,7 +246,7 @@ bool LoopCloser::correct(const std::vector<LoopEdge>& new_loops, const std::vect
   const double before = r.initial_edge_chi2[g.new_loop_edge], after = r.edge_chi2[g.new_loop_edge];
   // A loop the graph already agrees with (chi2 below 6-dof 95 %) has nothing to absorb.
   c->residual_ratio = before > 12.59 ? std::sqrt(after / before) : 0.0;
-  c->detail += "; loop edge chi2 " + fixed1(before) + " -> " + fixed1(after) + " (ratio " + fixed1(c->residual_ratio) +
+  c->detail += "; loop edge chi2 " + fixed2(before) + " -> " + fixed2(after) + " (ratio " + fixed2(c->residual_ratio) +
                "), " + std::to_string(g.nodes.size()) + " keyframes, " + std::to_string(g.edges.size()) + " edges, " +
                std::to_string(r.iterations) + " iterations";
   if (c->residual_ratio > p_.max_residual_ratio) {
@@ -272,7 +272,6 @@ bool LoopCloser::correct(const std::vector<LoopEdge>& new_loops, const std::vect
   c->status = "accepted";
   c->keyframes_corrected = static_cast<int>(g.nodes.size());
   last_correction_at_ = order_.size();
-  corrected_once_ = true;
   out->correction = corr;
   return true;
 }
