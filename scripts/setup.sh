@@ -10,6 +10,7 @@ PACKAGES=(
   librosbag-dev python3-rosbag libdynamic-reconfigure-config-init-mutex-dev python3-dynamic-reconfigure
   libcv-bridge-dev libimage-transport-dev libmessage-filters-dev
   libsensor-msgs-dev libgeometry-msgs-dev libnav-msgs-dev libvisualization-msgs-dev libstd-msgs-dev
+  libdiagnostic-msgs-dev libdiagnostic-updater-dev
   python3-rostest python3-nose rosout python3-roslaunch rosbash python3-catkin-pkg
   # numerics and vision
   libopencv-dev libeigen3-dev libceres-dev libgtest-dev libgmock-dev libbenchmark-dev

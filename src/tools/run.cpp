@@ -15,6 +15,7 @@
 #include "binloop/place/hbow_recognizer.h"
 #include "binloop/features/orb_slam_extractor.h"
 #include "binloop/pipeline/loop_log.h"
+#include "binloop/pipeline/model_files.h"
 #include "binloop/pipeline/slam_pipeline.h"
 #include "binloop/util/cli_args.h"
 #include "binloop/util/percentile.h"
@@ -90,11 +91,8 @@ int main(int argc, char** argv) {
                   << " not found (vocab/make_vocab.sh hbow makes it): relocalisation tries only the most recent "
                      "keyframes\n";
       } else {
-        ExtractorCheck check;
-        check.expected = extractorSettings(config.tracker.orb, 0);
-        check.force = args.has("force-extractor");
-        checkModelExtractor(reloc_vocab, check);
-        config.tracker.vocabulary = HbowRecognizer::loadVocabulary(reloc_vocab);
+        config.tracker.vocabulary =
+            loadRelocalisationVocabulary(reloc_vocab, config.tracker.orb, args.has("force-extractor"));
       }
     }
     const KittiSequence seq = KittiSequence::open(args.str("sequence_dir"));
@@ -117,16 +115,7 @@ int main(int argc, char** argv) {
       l.detector.model = detector;
       l.closer = config.closer;
       l.closer.verify.seed = config.tracker.seed;
-      const std::string dir = args.str("vocab-dir");
-      const bool force = args.has("force-extractor");
-      const ExtractorSettings expected = extractorSettings(config.tracker.orb, 0);
-      l.make_model = [dir, force, expected](const std::string& name) {
-        RecognizerOptions ro;
-        ro.model_file = (fs::path(dir) / (name + ".bin")).string();
-        ro.extractor.expected = expected;
-        ro.extractor.force = force;
-        return makePlaceRecognizer(name, ro);
-      };
+      l.make_model = modelFileFactory(args.str("vocab-dir"), config.tracker.orb, args.has("force-extractor"));
       if (args.has("shadow")) {
         std::string s = args.str("shadow");
         if (s == "all") {

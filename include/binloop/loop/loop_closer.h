@@ -75,6 +75,13 @@ class LoopCloser {
   Output addExternalLoop(SlamKeyframeId query, SlamKeyframeId match, const std::string& source = "external");
 
   size_t keyframeCount() const { return states_.size(); }
+  struct KeyframePose {
+    SlamKeyframeId id;
+    double stamp_s;
+    Pose3 T_w_c;
+  };
+  /// The keyframes it holds, in the order they arrived, with their poses now (corrected).
+  std::vector<KeyframePose> keyframePoses() const;
   const std::vector<LoopEdge>& loops() const { return loops_; }
   uint64_t correctionsMade() const { return history_.applied(); }
 

@@ -52,6 +52,10 @@ class LoopDetector {
   /// descriptors when that keyframe arrives, so the switch happens at a keyframe boundary. Throws
   /// PlaceError now for a name or model file that cannot be used (the running model stays).
   void switchModel(const std::string& name);
+  /// New detection rules and model factory (e.g. other model thresholds, from dynamic_reconfigure): the
+  /// model p.model is made now and, like a switch, built from the stored keyframes and takes over at the next
+  /// keyframe. Throws PlaceError as switchModel; then nothing changes.
+  void reconfigure(const LoopDetectorParams& p, ModelFactory make);
   /// Models queried beside the active one and only logged (shadow mode). Same errors as switchModel.
   void setShadowModels(const std::vector<std::string>& names);
 

@@ -77,6 +77,8 @@ class LocalMapper {
   /// False for an id never seen.
   bool keyframePose(SlamKeyframeId id, Pose3* T_w_c) const;
 
+  /// Every map point's position now (for display).
+  std::vector<Eigen::Vector3d> pointPositions() const;
   size_t keyframeCount() const { return kfs_.size(); }
   size_t pointCount() const { return pts_.size(); }
 

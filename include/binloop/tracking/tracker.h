@@ -81,6 +81,7 @@ class Tracker {
   msg::TrackingState state() const { return state_; }
   const MapReplica& map() const { return map_; }
   const TrackerParams& params() const { return p_; }
+  const StereoCamera& camera() const { return cam_; }
 
  private:
   bool initialize(Frame& f, msg::KeyFramePtr* kf);

@@ -25,6 +25,17 @@ std::string fixed2(double v) {
 
 LoopCloser::LoopCloser(const LoopCloserParams& p) : p_(p) {}
 
+std::vector<LoopCloser::KeyframePose> LoopCloser::keyframePoses() const {
+  std::vector<KeyframePose> out;
+  out.reserve(order_.size());
+  for (SlamKeyframeId id : order_) {
+    auto s = states_.find(id);
+    auto f = frames_.find(id);
+    if (s != states_.end() && f != frames_.end()) out.push_back({id, f->second->stamp_s, s->second.T_w_c});
+  }
+  return out;
+}
+
 void LoopCloser::addKeyframe(const msg::KeyFramePtr& kf) {
   if (!kf || kf->id == kNoId) throw std::invalid_argument("loop closing: keyframe without id");
   if (kf->descriptors.size() != kf->keypoints.size() || kf->state.point_ids.size() != kf->keypoints.size())

@@ -37,6 +37,20 @@ void LoopDetector::switchModel(const std::string& name) {
   pending_ = std::make_unique<Model>(makeModel(name));
 }
 
+void LoopDetector::reconfigure(const LoopDetectorParams& p, ModelFactory make) {
+  LoopDetectorParams old_p = p_;
+  ModelFactory old_make = make_;
+  p_ = p;
+  make_ = std::move(make);
+  try {
+    pending_ = std::make_unique<Model>(makeModel(p.model));
+  } catch (...) {
+    p_ = old_p;
+    make_ = std::move(old_make);
+    throw;
+  }
+}
+
 void LoopDetector::setShadowModels(const std::vector<std::string>& names) {
   std::vector<Model> models;
   for (const std::string& n : names) {

@@ -495,6 +495,13 @@ std::vector<LocalMapper::KeyframePose> LocalMapper::keyframes() const {
   return out;
 }
 
+std::vector<Eigen::Vector3d> LocalMapper::pointPositions() const {
+  std::vector<Eigen::Vector3d> out;
+  out.reserve(pts_.size());
+  for (const auto& [id, mp] : pts_) out.push_back(mp.state.p_w);
+  return out;
+}
+
 bool LocalMapper::keyframePose(SlamKeyframeId id, Pose3* T_w_c) const {
   Pose3 T = Pose3::Identity();
   for (int hops = 0; hops < 10000; ++hops) {

@@ -1,0 +1,29 @@
+#include "binloop/pipeline/model_files.h"
+
+#include <filesystem>
+
+#include "binloop/place/model_file.h"
+
+namespace binloop {
+
+LoopDetector::ModelFactory modelFileFactory(const std::string& dir, const OrbSlamParams& orb, bool force,
+                                            RecognizerOptions options) {
+  options.extractor.expected = extractorSettings(orb, 0);
+  options.extractor.force = force;
+  return [dir, options](const std::string& name) {
+    RecognizerOptions ro = options;
+    ro.model_file = (std::filesystem::path(dir) / (name + ".bin")).string();
+    return makePlaceRecognizer(name, ro);
+  };
+}
+
+std::shared_ptr<const VocabularyTree> loadRelocalisationVocabulary(const std::string& path, const OrbSlamParams& orb,
+                                                                   bool force) {
+  ExtractorCheck check;
+  check.expected = extractorSettings(orb, 0);
+  check.force = force;
+  checkModelExtractor(path, check);
+  return HbowRecognizer::loadVocabulary(path);
+}
+
+}  // namespace binloop

@@ -1,0 +1,144 @@
+// binloop/LocalMapping: keyframes from tracking in; refined keyframes (to the loop stages) and local-map
+// updates (to tracking and loop closing) out; loop corrections in, the corrected map out. Publishes the map
+// points (PointCloud2) and the keyframes (PoseArray) for rviz. A short onInit() over binloop::LocalMapper.
+#include <diagnostic_updater/diagnostic_updater.h>
+#include <geometry_msgs/PoseArray.h>
+#include <nodelet/nodelet.h>
+#include <pluginlib/class_list_macros.hpp>
+#include <sensor_msgs/PointCloud2.h>
+#include <sensor_msgs/point_cloud2_iterator.h>
+
+#include <memory>
+
+#include "binloop/mapping/local_mapper.h"
+#include "binloop_ros/node_params.h"
+#include "binloop_ros/stage_msg_conversion.h"
+
+namespace binloop_ros {
+
+class LocalMappingNodelet : public nodelet::Nodelet {
+ public:
+  void onInit() override;
+
+ private:
+  void onKeyframe(const binloop::KeyFrameConstPtr& m);
+  void onCorrection(const binloop::CorrectionConstPtr& m);
+  void publishMap(const ros::Time& stamp);
+  void problem(const std::string& what);
+  void diagnose(diagnostic_updater::DiagnosticStatusWrapper& s);
+
+  std::unique_ptr<binloop::LocalMapper> mapper_;
+  std::string map_frame_;
+  int cloud_every_ = 5;
+  ros::Subscriber keyframe_sub_, correction_sub_;
+  ros::Publisher refined_pub_, update_pub_, cloud_pub_, keyframes_pub_;
+  std::unique_ptr<diagnostic_updater::Updater> diag_;
+  uint64_t keyframes_ = 0, corrections_ = 0, rejected_ = 0;
+  double last_ms_ = 0, last_ba_ms_ = 0;
+  std::string last_problem_;
+};
+
+void LocalMappingNodelet::onInit() {
+  ros::NodeHandle& nh = getNodeHandle();
+  ros::NodeHandle& pnh = getPrivateNodeHandle();
+  try {
+    requireKnownParams(pnh, {"config", "map_frame", "cloud_every"});
+    mapper_ = std::make_unique<binloop::LocalMapper>(slamConfigFrom(pnh).mapper);
+  } catch (const std::exception& e) {
+    NODELET_FATAL("binloop/LocalMapping: %s", e.what());
+    throw;
+  }
+  map_frame_ = stringParam(pnh, "map_frame", "map");
+  cloud_every_ = std::max(1, static_cast<int>(numberParam(pnh, "cloud_every", 5)));
+  refined_pub_ = nh.advertise<binloop::KeyFrame>("refined_keyframe", 100);
+  update_pub_ = nh.advertise<binloop::LocalMapUpdate>("local_map_update", 100);
+  cloud_pub_ = nh.advertise<sensor_msgs::PointCloud2>("map_points", 1, true);
+  keyframes_pub_ = nh.advertise<geometry_msgs::PoseArray>("keyframes", 1, true);
+  // Deep queues: a keyframe or a correction dropped here would be lost for good.
+  keyframe_sub_ = nh.subscribe("keyframe", 1000, &LocalMappingNodelet::onKeyframe, this);
+  correction_sub_ = nh.subscribe("correction", 100, &LocalMappingNodelet::onCorrection, this);
+  diag_ = std::make_unique<diagnostic_updater::Updater>(nh, pnh);
+  diag_->setHardwareID("binloop");
+  diag_->add("local mapping", this, &LocalMappingNodelet::diagnose);
+}
+
+void LocalMappingNodelet::problem(const std::string& what) {
+  ++rejected_;
+  last_problem_ = what;
+  NODELET_WARN_THROTTLE(1.0, "binloop/LocalMapping: %s", what.c_str());
+}
+
+void LocalMappingNodelet::onKeyframe(const binloop::KeyFrameConstPtr& m) {
+  binloop::LocalMapper::Output out;
+  try {
+    out = mapper_->process(fromRos(*m));
+  } catch (const std::exception& e) {  // ConversionError, std::invalid_argument: the message is dropped
+    return problem(std::string("keyframe dropped: ") + e.what());
+  }
+  ++keyframes_;
+  last_ms_ = out.update->total_ms;
+  last_ba_ms_ = out.update->ba_ms;
+  std_msgs::Header header = m->header;
+  header.frame_id = map_frame_;
+  // The refined keyframe first: loop closing must know it before the update that names it.
+  refined_pub_.publish(boost::make_shared<binloop::KeyFrame>(toRos(*out.refined, map_frame_)));
+  update_pub_.publish(boost::make_shared<binloop::LocalMapUpdate>(toRos(*out.update, header)));
+  if (keyframes_ % cloud_every_ == 0) publishMap(m->header.stamp);
+  diag_->update();
+}
+
+void LocalMappingNodelet::onCorrection(const binloop::CorrectionConstPtr& m) {
+  binloop::msg::LocalMapUpdatePtr u;
+  try {
+    u = mapper_->apply(fromRos(*m));
+  } catch (const std::exception& e) {
+    return problem(std::string("correction dropped: ") + e.what());
+  }
+  ++corrections_;
+  std_msgs::Header header = m->header;
+  header.frame_id = map_frame_;
+  update_pub_.publish(boost::make_shared<binloop::LocalMapUpdate>(toRos(*u, header)));
+  publishMap(m->header.stamp);
+}
+
+void LocalMappingNodelet::publishMap(const ros::Time& stamp) {
+  if (cloud_pub_.getNumSubscribers() > 0 || cloud_pub_.isLatched()) {
+    const auto pts = mapper_->pointPositions();
+    sensor_msgs::PointCloud2 cloud;
+    cloud.header.stamp = stamp;
+    cloud.header.frame_id = map_frame_;
+    sensor_msgs::PointCloud2Modifier mod(cloud);
+    mod.setPointCloud2FieldsByString(1, "xyz");
+    mod.resize(pts.size());
+    sensor_msgs::PointCloud2Iterator<float> x(cloud, "x"), y(cloud, "y"), z(cloud, "z");
+    for (const auto& p : pts) {
+      *x = static_cast<float>(p.x());
+      *y = static_cast<float>(p.y());
+      *z = static_cast<float>(p.z());
+      ++x, ++y, ++z;
+    }
+    cloud_pub_.publish(cloud);
+  }
+  geometry_msgs::PoseArray kfs;
+  kfs.header.stamp = stamp;
+  kfs.header.frame_id = map_frame_;
+  for (const auto& k : mapper_->keyframes()) kfs.poses.push_back(toPoseMsg(k.T_w_c));
+  keyframes_pub_.publish(kfs);
+}
+
+void LocalMappingNodelet::diagnose(diagnostic_updater::DiagnosticStatusWrapper& s) {
+  s.summary(rejected_ ? diagnostic_msgs::DiagnosticStatus::WARN : diagnostic_msgs::DiagnosticStatus::OK,
+            rejected_ ? "mapping; some input dropped" : "mapping");
+  s.add("keyframes processed", keyframes_);
+  s.add("keyframes in map", mapper_->keyframeCount());
+  s.add("map points", mapper_->pointCount());
+  s.add("corrections applied", corrections_);
+  s.add("input dropped", rejected_);
+  s.add("last problem", last_problem_);
+  s.add("last keyframe ms", last_ms_);
+  s.add("last local BA ms", last_ba_ms_);
+}
+
+}  // namespace binloop_ros
+
+PLUGINLIB_EXPORT_CLASS(binloop_ros::LocalMappingNodelet, nodelet::Nodelet)

@@ -1,0 +1,224 @@
+// binloop/LoopClosing: refined keyframes, local-map updates and the active model's LoopCandidates in; a
+// LoopClosure per verified loop, the Correction for local mapping, the corrected keyframe path and the loop
+// edges (markers coloured by status) out; the add_external_loop service. A short onInit() over
+// binloop::LoopCloser. Across processes the candidates for a keyframe may overtake the keyframe or its
+// update, so they wait here until both have arrived.
+#include <binloop/AddExternalLoop.h>
+#include <diagnostic_updater/diagnostic_updater.h>
+#include <nav_msgs/Path.h>
+#include <nodelet/nodelet.h>
+#include <pluginlib/class_list_macros.hpp>
+#include <visualization_msgs/MarkerArray.h>
+
+#include <deque>
+#include <memory>
+#include <set>
+#include <unordered_map>
+
+#include "binloop/loop/loop_closer.h"
+#include "binloop_ros/node_params.h"
+#include "binloop_ros/stage_msg_conversion.h"
+
+namespace binloop_ros {
+
+class LoopClosingNodelet : public nodelet::Nodelet {
+ public:
+  void onInit() override;
+
+ private:
+  void onKeyframe(const binloop::KeyFrameConstPtr& m);
+  void onUpdate(const binloop::LocalMapUpdateConstPtr& m);
+  void onCandidates(const binloop::LoopCandidatesConstPtr& m);
+  bool onExternalLoop(binloop::AddExternalLoop::Request& req, binloop::AddExternalLoop::Response& res);
+  void runPending();
+  void handle(const binloop::LoopCloser::Output& out, const std_msgs::Header& header);
+  void publishPathAndEdges(const ros::Time& stamp);
+  void problem(const std::string& what);
+  void diagnose(diagnostic_updater::DiagnosticStatusWrapper& s);
+
+  std::unique_ptr<binloop::LoopCloser> closer_;
+  std::string map_frame_;
+  ros::Subscriber keyframe_sub_, update_sub_, candidates_sub_;
+  ros::Publisher correction_pub_, closure_pub_, path_pub_, edges_pub_;
+  ros::ServiceServer external_srv_;
+  std::unique_ptr<diagnostic_updater::Updater> diag_;
+  std::set<binloop::SlamKeyframeId> keyframes_seen_, updates_seen_;
+  std::deque<binloop::LoopCandidatesConstPtr> pending_;
+  struct Edge {
+    binloop::SlamKeyframeId query, match;
+    std::string status;
+  };
+  std::vector<Edge> edges_;
+  uint64_t verified_ = 0, accepted_ = 0, rejected_input_ = 0;
+  std::map<std::string, uint64_t> by_status_;
+  std::string last_problem_, last_loop_;
+};
+
+void LoopClosingNodelet::onInit() {
+  ros::NodeHandle& nh = getNodeHandle();
+  ros::NodeHandle& pnh = getPrivateNodeHandle();
+  try {
+    requireKnownParams(pnh, {"config", "map_frame", "seed"});
+    binloop::SlamConfig config = slamConfigFrom(pnh);
+    config.closer.verify.seed = static_cast<uint64_t>(numberParam(pnh, "seed", 1));
+    closer_ = std::make_unique<binloop::LoopCloser>(config.closer);
+  } catch (const std::exception& e) {
+    NODELET_FATAL("binloop/LoopClosing: %s", e.what());
+    throw;
+  }
+  map_frame_ = stringParam(pnh, "map_frame", "map");
+  correction_pub_ = nh.advertise<binloop::Correction>("correction", 10);
+  closure_pub_ = nh.advertise<binloop::LoopClosure>("loop_closure", 100);
+  path_pub_ = nh.advertise<nav_msgs::Path>("corrected_path", 1, true);
+  edges_pub_ = nh.advertise<visualization_msgs::MarkerArray>("loop_edges", 1, true);
+  keyframe_sub_ = nh.subscribe("refined_keyframe", 1000, &LoopClosingNodelet::onKeyframe, this);
+  update_sub_ = nh.subscribe("local_map_update", 1000, &LoopClosingNodelet::onUpdate, this);
+  candidates_sub_ = nh.subscribe("loop_candidates", 1000, &LoopClosingNodelet::onCandidates, this);
+  external_srv_ = nh.advertiseService("add_external_loop", &LoopClosingNodelet::onExternalLoop, this);
+  diag_ = std::make_unique<diagnostic_updater::Updater>(nh, pnh);
+  diag_->setHardwareID("binloop");
+  diag_->add("loop closing", this, &LoopClosingNodelet::diagnose);
+}
+
+void LoopClosingNodelet::problem(const std::string& what) {
+  ++rejected_input_;
+  last_problem_ = what;
+  NODELET_WARN_THROTTLE(1.0, "binloop/LoopClosing: %s", what.c_str());
+}
+
+void LoopClosingNodelet::onKeyframe(const binloop::KeyFrameConstPtr& m) {
+  try {
+    closer_->addKeyframe(std::make_shared<const binloop::msg::KeyFrame>(fromRos(*m)));
+  } catch (const std::exception& e) {
+    return problem(std::string("keyframe dropped: ") + e.what());
+  }
+  keyframes_seen_.insert(m->id);
+  runPending();
+}
+
+void LoopClosingNodelet::onUpdate(const binloop::LocalMapUpdateConstPtr& m) {
+  try {
+    closer_->apply(fromRos(*m));
+  } catch (const std::exception& e) {
+    return problem(std::string("local map update dropped: ") + e.what());
+  }
+  if (!m->correction) updates_seen_.insert(m->keyframe);
+  else publishPathAndEdges(m->header.stamp);
+  runPending();
+  diag_->update();
+}
+
+void LoopClosingNodelet::onCandidates(const binloop::LoopCandidatesConstPtr& m) {
+  if (m->shadow) return;  // shadow models are logged, never acted on
+  pending_.push_back(m);
+  runPending();
+}
+
+void LoopClosingNodelet::runPending() {
+  while (!pending_.empty()) {
+    const auto& m = pending_.front();
+    const bool ready = keyframes_seen_.count(m->query) && updates_seen_.count(m->query);
+    if (!ready && pending_.size() < 50) return;  // in order: later candidates wait for earlier ones
+    if (!ready) problem("loop candidates for keyframe " + std::to_string(m->query) + " dropped: the keyframe never arrived");
+    else {
+      try {
+        handle(closer_->process(fromRos(*m)), m->header);
+      } catch (const std::exception& e) {
+        problem(std::string("loop candidates dropped: ") + e.what());
+      }
+    }
+    pending_.pop_front();
+  }
+}
+
+void LoopClosingNodelet::handle(const binloop::LoopCloser::Output& out, const std_msgs::Header& header) {
+  std_msgs::Header h = header;
+  h.frame_id = map_frame_;
+  for (const auto& c : out.closures) {
+    ++verified_;
+    ++by_status_[c->status];
+    edges_.push_back({c->query, c->match, c->status});
+    last_loop_ = c->model + " " + std::to_string(c->query_frame) + " -> " + std::to_string(c->match_frame) + ": " +
+                 c->status + " (" + c->detail + ")";
+    NODELET_INFO("binloop/LoopClosing: loop %s", last_loop_.c_str());
+    closure_pub_.publish(boost::make_shared<binloop::LoopClosure>(toRos(*c, h)));
+  }
+  if (out.correction) {
+    ++accepted_;
+    correction_pub_.publish(boost::make_shared<binloop::Correction>(toRos(*out.correction, h)));
+  }
+  if (!out.closures.empty()) publishPathAndEdges(header.stamp);
+}
+
+bool LoopClosingNodelet::onExternalLoop(binloop::AddExternalLoop::Request& req,
+                                        binloop::AddExternalLoop::Response& res) {
+  const std::string source = req.source.empty() ? "external" : req.source;
+  const binloop::LoopCloser::Output out = closer_->addExternalLoop(req.query, req.match, source);
+  std_msgs::Header h;
+  h.stamp = ros::Time::now();
+  handle(out, h);
+  res.accepted = out.correction != nullptr;
+  for (const auto& c : out.closures) res.closures.push_back(toRos(*c, h));
+  return true;
+}
+
+void LoopClosingNodelet::publishPathAndEdges(const ros::Time& stamp) {
+  nav_msgs::Path path;
+  path.header.stamp = stamp;
+  path.header.frame_id = map_frame_;
+  std::unordered_map<binloop::SlamKeyframeId, Eigen::Vector3d> where;
+  for (const auto& k : closer_->keyframePoses()) {
+    geometry_msgs::PoseStamped p;
+    p.header.stamp = stamp;
+    p.header.frame_id = map_frame_;
+    p.pose = toPoseMsg(k.T_w_c);
+    path.poses.push_back(p);
+    where[k.id] = k.T_w_c.translation();
+  }
+  path_pub_.publish(path);
+
+  visualization_msgs::MarkerArray edges;
+  visualization_msgs::Marker line;
+  line.header = path.header;
+  line.ns = "loop_edges";
+  line.type = visualization_msgs::Marker::LINE_LIST;
+  line.action = visualization_msgs::Marker::ADD;
+  line.pose.orientation.w = 1;
+  line.scale.x = 0.5;
+  for (const auto& e : edges_) {
+    auto q = where.find(e.query), m = where.find(e.match);
+    if (q == where.end() || m == where.end()) continue;
+    std_msgs::ColorRGBA c;
+    c.a = 1;
+    if (e.status == "accepted") c.g = 1;          // green
+    else if (e.status == "held") c.r = c.g = 1;   // yellow
+    else c.r = 1;                                  // red: rejected, whatever the reason
+    for (const auto* p : {&q->second, &m->second}) {
+      geometry_msgs::Point gp;
+      gp.x = p->x();
+      gp.y = p->y();
+      gp.z = p->z();
+      line.points.push_back(gp);
+      line.colors.push_back(c);
+    }
+  }
+  if (!line.points.empty()) edges.markers.push_back(line);
+  edges_pub_.publish(edges);
+}
+
+void LoopClosingNodelet::diagnose(diagnostic_updater::DiagnosticStatusWrapper& s) {
+  s.summary(rejected_input_ ? diagnostic_msgs::DiagnosticStatus::WARN : diagnostic_msgs::DiagnosticStatus::OK,
+            rejected_input_ ? "closing loops; some input dropped" : "closing loops");
+  s.add("keyframes", closer_->keyframeCount());
+  s.add("loops verified", verified_);
+  s.add("loops accepted", accepted_);
+  for (const auto& [status, n] : by_status_) s.add("loops " + status, n);
+  s.add("last loop", last_loop_);
+  s.add("candidates waiting", pending_.size());
+  s.add("input dropped", rejected_input_);
+  s.add("last problem", last_problem_);
+}
+
+}  // namespace binloop_ros
+
+PLUGINLIB_EXPORT_CLASS(binloop_ros::LoopClosingNodelet, nodelet::Nodelet)

@@ -1,0 +1,155 @@
+// binloop/LoopDetector: refined keyframes in, LoopCandidates out (one per keyframe; shadow models on their
+// own topics). dynamic_reconfigure switches the model (`method`) and sets the detection rules and model
+// thresholds; the new index is built from the stored keyframes at the next keyframe, without stopping. A short
+// onInit() over binloop::LoopDetector.
+#include <binloop/LoopDetectorConfig.h>
+#include <diagnostic_updater/diagnostic_updater.h>
+#include <dynamic_reconfigure/server.h>
+#include <nodelet/nodelet.h>
+#include <pluginlib/class_list_macros.hpp>
+
+#include <map>
+#include <memory>
+#include <sstream>
+
+#include "binloop/loop/loop_detector.h"
+#include "binloop/pipeline/model_files.h"
+#include "binloop_ros/node_params.h"
+#include "binloop_ros/stage_msg_conversion.h"
+
+namespace binloop_ros {
+
+class LoopDetectorNodelet : public nodelet::Nodelet {
+ public:
+  void onInit() override;
+
+ private:
+  void onKeyframe(const binloop::KeyFrameConstPtr& m);
+  void onReconfigure(binloop::LoopDetectorConfig& c, uint32_t level);
+  void diagnose(diagnostic_updater::DiagnosticStatusWrapper& s);
+  ros::Publisher& shadowPublisher(const std::string& model);
+
+  binloop::SlamConfig config_;
+  std::string vocab_dir_;
+  bool force_ = false;
+  std::unique_ptr<binloop::LoopDetector> detector_;
+  std::unique_ptr<dynamic_reconfigure::Server<binloop::LoopDetectorConfig>> reconfigure_;
+  ros::Subscriber keyframe_sub_;
+  ros::Publisher candidates_pub_;
+  std::map<std::string, ros::Publisher> shadow_pubs_;
+  std::unique_ptr<diagnostic_updater::Updater> diag_;
+  uint64_t queries_ = 0, accepted_ = 0, rejected_ = 0;
+  std::string last_problem_, last_status_;
+  double last_ms_ = 0, last_switch_ms_ = 0;
+};
+
+void LoopDetectorNodelet::onInit() {
+  ros::NodeHandle& nh = getNodeHandle();
+  ros::NodeHandle& pnh = getPrivateNodeHandle();
+  try {
+    requireKnownParams(pnh, {"config", "vocab_dir", "force_extractor", "method", "consistency", "max_reference",
+                             "ignore_recent", "hbow_min_bar", "fabmap_l2_offset", "shadow"});
+    config_ = slamConfigFrom(pnh);
+  } catch (const std::exception& e) {
+    NODELET_FATAL("binloop/LoopDetector: %s", e.what());
+    throw;
+  }
+  vocab_dir_ = stringParam(pnh, "vocab_dir", "vocab/kitti08");
+  force_ = boolParam(pnh, "force_extractor", false);
+  // The file's loop_detection section gives the starting rules unless the parameters say otherwise.
+  if (!pnh.hasParam("consistency")) pnh.setParam("consistency", config_.detector.consistency);
+  if (!pnh.hasParam("max_reference")) pnh.setParam("max_reference", config_.detector.max_reference);
+  if (!pnh.hasParam("ignore_recent")) pnh.setParam("ignore_recent", config_.detector.ignore_recent);
+  candidates_pub_ = nh.advertise<binloop::LoopCandidates>("loop_candidates", 100);
+  diag_ = std::make_unique<diagnostic_updater::Updater>(nh, pnh);
+  diag_->setHardwareID("binloop");
+  diag_->add("loop detector", this, &LoopDetectorNodelet::diagnose);
+  reconfigure_ = std::make_unique<dynamic_reconfigure::Server<binloop::LoopDetectorConfig>>(pnh);
+  reconfigure_->setCallback([this](binloop::LoopDetectorConfig& c, uint32_t level) { onReconfigure(c, level); });
+  keyframe_sub_ = nh.subscribe("refined_keyframe", 1000, &LoopDetectorNodelet::onKeyframe, this);
+}
+
+void LoopDetectorNodelet::onReconfigure(binloop::LoopDetectorConfig& c, uint32_t) {
+  binloop::LoopDetectorParams p = config_.detector;
+  p.model = c.method;
+  p.consistency = c.consistency;
+  p.max_reference = c.max_reference;
+  p.ignore_recent = c.ignore_recent;
+  binloop::RecognizerOptions options;
+  options.hbow_min_bar = c.hbow_min_bar;
+  options.fabmap_l2_offset = c.fabmap_l2_offset;
+  auto make = binloop::modelFileFactory(vocab_dir_, config_.tracker.orb, force_, options);
+  std::vector<std::string> shadow;
+  if (c.shadow == "all") {
+    shadow = binloop::placeModelNames();
+  } else {
+    std::stringstream ss(c.shadow);
+    for (std::string n; std::getline(ss, n, ',');)
+      if (!n.empty()) shadow.push_back(n);
+  }
+  try {
+    if (!detector_) {
+      detector_ = std::make_unique<binloop::LoopDetector>(p, make);
+    } else {
+      detector_->reconfigure(p, make);
+    }
+    detector_->setShadowModels(shadow);
+    last_problem_.clear();
+    NODELET_INFO("binloop/LoopDetector: %s from the next keyframe (consistency %d, %zu shadow models)",
+                 p.model.c_str(), p.consistency, shadow.size());
+  } catch (const std::exception& e) {  // a missing or mismatched model file: the running model stays
+    last_problem_ = std::string("cannot use ") + p.model + ": " + e.what();
+    NODELET_ERROR("binloop/LoopDetector: %s", last_problem_.c_str());
+    if (detector_) c.method = detector_->activeModel();
+  }
+}
+
+ros::Publisher& LoopDetectorNodelet::shadowPublisher(const std::string& model) {
+  auto it = shadow_pubs_.find(model);
+  if (it == shadow_pubs_.end())
+    it = shadow_pubs_.emplace(model, getNodeHandle().advertise<binloop::LoopCandidates>("shadow/" + model + "/loop_candidates", 100)).first;
+  return it->second;
+}
+
+void LoopDetectorNodelet::onKeyframe(const binloop::KeyFrameConstPtr& m) {
+  if (!detector_) return;  // no usable model: said at start-up and in the diagnostics
+  binloop::LoopDetector::Output out;
+  try {
+    out = detector_->process(fromRos(*m));
+  } catch (const std::exception& e) {
+    ++rejected_;
+    last_problem_ = std::string("keyframe dropped: ") + e.what();
+    NODELET_WARN_THROTTLE(1.0, "binloop/LoopDetector: %s", last_problem_.c_str());
+    return;
+  }
+  if (out.switch_ms > 0) last_switch_ms_ = out.switch_ms;
+  std_msgs::Header header = m->header;
+  if (out.active) {
+    ++queries_;
+    if (out.active->accepted != binloop::kNoId) ++accepted_;
+    last_status_ = out.active->status;
+    last_ms_ = out.active->total_ms;
+    candidates_pub_.publish(boost::make_shared<binloop::LoopCandidates>(toRos(*out.active, header)));
+  }
+  for (const auto& s : out.shadow)
+    shadowPublisher(s->model).publish(boost::make_shared<binloop::LoopCandidates>(toRos(*s, header)));
+  diag_->update();
+}
+
+void LoopDetectorNodelet::diagnose(diagnostic_updater::DiagnosticStatusWrapper& s) {
+  if (!detector_) s.summary(diagnostic_msgs::DiagnosticStatus::ERROR, "no usable model: " + last_problem_);
+  else if (!last_problem_.empty()) s.summary(diagnostic_msgs::DiagnosticStatus::WARN, last_problem_);
+  else s.summary(diagnostic_msgs::DiagnosticStatus::OK, "detecting with " + detector_->activeModel());
+  s.add("active model", detector_ ? detector_->activeModel() : std::string("none"));
+  s.add("index size (keyframes)", detector_ ? detector_->keyframeCount() : 0);
+  s.add("queries", queries_);
+  s.add("candidates accepted", accepted_);
+  s.add("last status", last_status_);
+  s.add("last detection ms", last_ms_);
+  s.add("last switch rebuild ms", last_switch_ms_);
+  s.add("input dropped", rejected_);
+}
+
+}  // namespace binloop_ros
+
+PLUGINLIB_EXPORT_CLASS(binloop_ros::LoopDetectorNodelet, nodelet::Nodelet)

@@ -1,0 +1,289 @@
+// binloop/Tracking: stereo images in, the camera's pose out (pose, odometry, path, tf), keyframes to local
+// mapping; local mapping's updates back in. A short onInit() over binloop::Tracker; every message check is
+// here, so a bad message is reported (log + diagnostics) and dropped, and the nodelet goes on.
+#include <diagnostic_updater/diagnostic_updater.h>
+#include <geometry_msgs/PoseStamped.h>
+#include <message_filters/subscriber.h>
+#include <message_filters/sync_policies/approximate_time.h>
+#include <message_filters/sync_policies/exact_time.h>
+#include <message_filters/synchronizer.h>
+#include <nav_msgs/Odometry.h>
+#include <nav_msgs/Path.h>
+#include <nodelet/nodelet.h>
+#include <pluginlib/class_list_macros.hpp>
+#include <tf2_ros/transform_broadcaster.h>
+
+#include <memory>
+#include <optional>
+
+#include "binloop/pipeline/model_files.h"
+#include "binloop/tracking/tracker.h"
+#include "binloop_ros/node_params.h"
+#include "binloop_ros/stage_msg_conversion.h"
+#include "binloop_ros/topics.h"
+
+namespace binloop_ros {
+
+namespace mf = message_filters;
+using sensor_msgs::Image;
+
+class TrackingNodelet : public nodelet::Nodelet {
+ public:
+  void onInit() override;
+
+ private:
+  using Exact = mf::sync_policies::ExactTime<Image, Image>;
+  using Approx = mf::sync_policies::ApproximateTime<Image, Image>;
+
+  void onImages(const sensor_msgs::ImageConstPtr& left, const sensor_msgs::ImageConstPtr& right);
+  void onUpdate(const binloop::LocalMapUpdateConstPtr& u);
+  void onInfo(const sensor_msgs::CameraInfoConstPtr& info, bool right);
+  std::string check(const Image& left, const Image& right);
+  void publishPose(const binloop::msg::TrackedFrame& f, const std_msgs::Header& header);
+  void reject(const std::string& why);
+  void diagnose(diagnostic_updater::DiagnosticStatusWrapper& s);
+
+  binloop::SlamConfig config_;
+  std::unique_ptr<binloop::Tracker> tracker_;
+  std::optional<binloop::StereoCamera> fixed_camera_;  // from parameters, instead of camera_info
+  sensor_msgs::CameraInfoConstPtr left_info_, right_info_;
+  std::string map_frame_, odom_frame_, camera_frame_;
+  double max_stamp_diff_ = 0;
+  mf::Subscriber<Image> left_sub_, right_sub_;
+  std::unique_ptr<mf::Synchronizer<Exact>> exact_;
+  std::unique_ptr<mf::Synchronizer<Approx>> approx_;
+  ros::Subscriber left_info_sub_, right_info_sub_, update_sub_;
+  ros::Publisher keyframe_pub_, pose_pub_, odom_pub_, path_pub_;
+  std::unique_ptr<tf2_ros::TransformBroadcaster> tf_;
+  std::unique_ptr<diagnostic_updater::Updater> diag_;
+  nav_msgs::Path path_;
+  ros::Time last_stamp_;
+  uint64_t frames_ = 0, rejected_ = 0, keyframes_sent_ = 0, lost_ = 0;
+  int pending_ = 0;             // keyframes sent to mapping and not yet answered by an update
+  uint64_t corrections_ = 0;    // corrected maps applied: the map-frame pose may jump then, odom must not
+  uint64_t corrections_at_last_ = 0;
+  std::string last_problem_;
+  double last_stamp_diff_ = 0, last_latency_ms_ = 0;
+  binloop::Pose3 T_odom_c_ = binloop::Pose3::Identity(), T_w_c_last_ = binloop::Pose3::Identity();
+  binloop::Pose3 last_motion_ = binloop::Pose3::Identity();
+  bool have_last_ = false;
+};
+
+void TrackingNodelet::onInit() {
+  ros::NodeHandle& nh = getNodeHandle();
+  ros::NodeHandle& pnh = getPrivateNodeHandle();
+  try {
+    requireKnownParams(pnh, {"config", "reloc_vocab", "force_extractor", "sync", "queue_size", "max_stamp_diff",
+                             "map_frame", "odom_frame", "camera_frame", "camera", "seed"});
+    config_ = slamConfigFrom(pnh);
+    config_.tracker.seed = static_cast<uint64_t>(numberParam(pnh, "seed", 1));
+    const std::string reloc = stringParam(pnh, "reloc_vocab", "");
+    if (!reloc.empty())
+      config_.tracker.vocabulary =
+          binloop::loadRelocalisationVocabulary(reloc, config_.tracker.orb, boolParam(pnh, "force_extractor", false));
+    if (pnh.hasParam("camera")) {  // calibration from YAML (rosparam) instead of camera_info
+      binloop::StereoCamera cam;
+      cam.fx = numberParam(pnh, "camera/fx", 0);
+      cam.fy = numberParam(pnh, "camera/fy", 0);
+      cam.cx = numberParam(pnh, "camera/cx", 0);
+      cam.cy = numberParam(pnh, "camera/cy", 0);
+      cam.baseline_m = numberParam(pnh, "camera/baseline", 0);
+      cam.width = static_cast<int>(numberParam(pnh, "camera/width", 0));
+      cam.height = static_cast<int>(numberParam(pnh, "camera/height", 0));
+      fixed_camera_ = cam;
+      tracker_ = std::make_unique<binloop::Tracker>(cam, config_.tracker);  // throws for a bad camera
+    }
+  } catch (const std::exception& e) {
+    NODELET_FATAL("binloop/Tracking: %s", e.what());
+    throw;  // the manager reports the nodelet as failed to load; it does not take the manager down
+  }
+  map_frame_ = stringParam(pnh, "map_frame", "map");
+  odom_frame_ = stringParam(pnh, "odom_frame", "odom");
+  camera_frame_ = stringParam(pnh, "camera_frame", "");  // "": the left image's frame_id
+  max_stamp_diff_ = numberParam(pnh, "max_stamp_diff", 0.002);
+  const int queue = static_cast<int>(numberParam(pnh, "queue_size", 5));
+  const std::string sync = stringParam(pnh, "sync", "exact");
+  if (sync != "exact" && sync != "approximate")
+    NODELET_ERROR("~sync '%s' is not exact or approximate; using exact", sync.c_str());
+
+  keyframe_pub_ = nh.advertise<binloop::KeyFrame>("keyframe", 10);
+  pose_pub_ = nh.advertise<geometry_msgs::PoseStamped>("pose", 10);
+  odom_pub_ = nh.advertise<nav_msgs::Odometry>("odom", 10);
+  path_pub_ = nh.advertise<nav_msgs::Path>("live_path", 1, true);
+  tf_ = std::make_unique<tf2_ros::TransformBroadcaster>();
+  update_sub_ = nh.subscribe("local_map_update", 100, &TrackingNodelet::onUpdate, this);
+  left_info_sub_ = nh.subscribe<sensor_msgs::CameraInfo>(
+      topics::kLeftInfo, 2, [this](const sensor_msgs::CameraInfoConstPtr& m) { onInfo(m, false); });
+  right_info_sub_ = nh.subscribe<sensor_msgs::CameraInfo>(
+      topics::kRightInfo, 2, [this](const sensor_msgs::CameraInfoConstPtr& m) { onInfo(m, true); });
+  left_sub_.subscribe(nh, topics::kLeftImage, queue);
+  right_sub_.subscribe(nh, topics::kRightImage, queue);
+  if (sync == "approximate") {
+    approx_ = std::make_unique<mf::Synchronizer<Approx>>(Approx(queue), left_sub_, right_sub_);
+    approx_->registerCallback(&TrackingNodelet::onImages, this);
+  } else {
+    exact_ = std::make_unique<mf::Synchronizer<Exact>>(Exact(queue), left_sub_, right_sub_);
+    exact_->registerCallback(&TrackingNodelet::onImages, this);
+  }
+  diag_ = std::make_unique<diagnostic_updater::Updater>(nh, pnh);
+  diag_->setHardwareID("binloop");
+  diag_->add("tracking", this, &TrackingNodelet::diagnose);
+  NODELET_INFO("binloop/Tracking: %s sync on %s + %s, map frame '%s'", sync.c_str(), topics::kLeftImage,
+               topics::kRightImage, map_frame_.c_str());
+}
+
+void TrackingNodelet::onInfo(const sensor_msgs::CameraInfoConstPtr& info, bool right) {
+  (right ? right_info_ : left_info_) = info;
+}
+
+void TrackingNodelet::reject(const std::string& why) {
+  ++rejected_;
+  last_problem_ = why;
+  NODELET_WARN_THROTTLE(1.0, "binloop/Tracking: stereo pair dropped: %s", why.c_str());
+}
+
+std::string TrackingNodelet::check(const Image& left, const Image& right) {
+  if (!last_stamp_.isZero() && left.header.stamp <= last_stamp_)
+    return "stamp " + std::to_string(left.header.stamp.toSec()) + " s is not after the previous pair's " +
+           std::to_string(last_stamp_.toSec()) + " s (out of order or repeated)";
+  last_stamp_diff_ = std::abs((left.header.stamp - right.header.stamp).toSec());
+  if (last_stamp_diff_ > max_stamp_diff_)
+    return "left and right stamps differ by " + std::to_string(last_stamp_diff_) + " s (more than ~max_stamp_diff " +
+           std::to_string(max_stamp_diff_) + " s): not a synchronised pair";
+  if (left.width != right.width || left.height != right.height)
+    return "left is " + std::to_string(left.width) + "x" + std::to_string(left.height) + ", right " +
+           std::to_string(right.width) + "x" + std::to_string(right.height);
+  if (!tracker_) {
+    if (!left_info_ || !right_info_)
+      return std::string("no camera_info received yet on ") + (left_info_ ? topics::kRightInfo : topics::kLeftInfo) +
+             " (or give ~camera)";
+    try {
+      tracker_ = std::make_unique<binloop::Tracker>(toStereoCamera(*left_info_, *right_info_), config_.tracker);
+      NODELET_INFO("binloop/Tracking: camera from camera_info:\n%s", toStereoCamera(*left_info_, *right_info_).describe().c_str());
+    } catch (const std::exception& e) {
+      left_info_.reset();  // wait for a usable pair
+      return std::string("camera_info: ") + e.what();
+    }
+  }
+  const auto& cam = tracker_->camera();
+  if (static_cast<int>(left.width) != cam.width || static_cast<int>(left.height) != cam.height)
+    return "image is " + std::to_string(left.width) + "x" + std::to_string(left.height) + ", the camera " +
+           std::to_string(cam.width) + "x" + std::to_string(cam.height);
+  return "";
+}
+
+void TrackingNodelet::onImages(const sensor_msgs::ImageConstPtr& left, const sensor_msgs::ImageConstPtr& right) {
+  const ros::WallTime t0 = ros::WallTime::now();
+  binloop::StereoFrame frame;
+  std::string problem = check(*left, *right);
+  if (problem.empty()) {
+    try {
+      frame.left = toGray(*left);
+      frame.right = toGray(*right);
+    } catch (const ConversionError& e) {
+      problem = e.what();
+    }
+  }
+  if (!problem.empty()) return reject(problem);
+  last_stamp_ = left->header.stamp;
+  frame.index = static_cast<int>(frames_++);
+  frame.stamp_s = left->header.stamp.toSec();
+  binloop::Tracker::Output out = tracker_->track(frame, pending_);
+  if (out.frame.state == binloop::msg::TrackingState::kLost) ++lost_;
+  if (!out.frame.problem.empty()) last_problem_ = out.frame.problem;
+  if (out.keyframe) {
+    ++pending_;
+    ++keyframes_sent_;
+    keyframe_pub_.publish(boost::make_shared<binloop::KeyFrame>(toRos(*out.keyframe, map_frame_)));
+  }
+  std_msgs::Header header = left->header;
+  if (!camera_frame_.empty()) header.frame_id = camera_frame_;
+  publishPose(out.frame, header);
+  last_latency_ms_ = (ros::WallTime::now() - t0).toSec() * 1e3;
+  diag_->update();
+}
+
+void TrackingNodelet::publishPose(const binloop::msg::TrackedFrame& f, const std_msgs::Header& header) {
+  using binloop::msg::TrackingState;
+  if (f.state == TrackingState::kNotInitialized || f.state == TrackingState::kLost) return;
+  // odom: continuous by construction (REP-105). It integrates the frame-to-frame motion in the map frame,
+  // except across a loop correction, where the map-frame pose jumps: there the previous motion is repeated and
+  // map -> odom takes the jump.
+  if (have_last_) {
+    const binloop::Pose3 motion = corrections_ != corrections_at_last_ ? last_motion_ : T_w_c_last_.inverse() * f.T_w_c;
+    T_odom_c_ = T_odom_c_ * motion;
+    last_motion_ = motion;
+  } else {
+    T_odom_c_ = f.T_w_c;
+  }
+  have_last_ = true;
+  corrections_at_last_ = corrections_;
+  T_w_c_last_ = f.T_w_c;
+
+  geometry_msgs::PoseStamped pose;
+  pose.header.stamp = header.stamp;
+  pose.header.frame_id = map_frame_;
+  pose.pose = toPoseMsg(f.T_w_c);
+  pose_pub_.publish(pose);
+
+  nav_msgs::Odometry odom;
+  odom.header.stamp = header.stamp;
+  odom.header.frame_id = odom_frame_;
+  odom.child_frame_id = header.frame_id;
+  odom.pose.pose = toPoseMsg(T_odom_c_);
+  odom_pub_.publish(odom);
+
+  path_.header = pose.header;
+  path_.poses.push_back(pose);
+  path_pub_.publish(path_);
+
+  auto tf = [&](const binloop::Pose3& T, const std::string& parent, const std::string& child) {
+    geometry_msgs::TransformStamped t;
+    t.header.stamp = header.stamp;
+    t.header.frame_id = parent;
+    t.child_frame_id = child;
+    const geometry_msgs::Pose p = toPoseMsg(T);
+    t.transform.translation.x = p.position.x;
+    t.transform.translation.y = p.position.y;
+    t.transform.translation.z = p.position.z;
+    t.transform.rotation = p.orientation;
+    return t;
+  };
+  tf_->sendTransform({tf(f.T_w_c * T_odom_c_.inverse(), map_frame_, odom_frame_),
+                      tf(T_odom_c_, odom_frame_, header.frame_id)});
+}
+
+void TrackingNodelet::onUpdate(const binloop::LocalMapUpdateConstPtr& m) {
+  try {
+    const binloop::msg::LocalMapUpdate u = fromRos(*m);
+    if (!tracker_) return;
+    tracker_->apply(u);
+    if (u.correction) ++corrections_;
+    else if (pending_ > 0) --pending_;
+  } catch (const std::exception& e) {
+    ++rejected_;
+    last_problem_ = std::string("local map update dropped: ") + e.what();
+    NODELET_WARN_THROTTLE(1.0, "binloop/Tracking: %s", last_problem_.c_str());
+  }
+}
+
+void TrackingNodelet::diagnose(diagnostic_updater::DiagnosticStatusWrapper& s) {
+  const bool lost = tracker_ && tracker_->state() == binloop::msg::TrackingState::kLost;
+  if (!tracker_) s.summary(diagnostic_msgs::DiagnosticStatus::WARN, "waiting for camera_info");
+  else if (lost) s.summary(diagnostic_msgs::DiagnosticStatus::WARN, "lost");
+  else if (rejected_ > 0) s.summary(diagnostic_msgs::DiagnosticStatus::WARN, "tracking; some input dropped");
+  else s.summary(diagnostic_msgs::DiagnosticStatus::OK, "tracking");
+  s.add("frames tracked", frames_);
+  s.add("frames lost", lost_);
+  s.add("input dropped", rejected_);
+  s.add("last problem", last_problem_);
+  s.add("keyframes sent", keyframes_sent_);
+  s.add("mapping queue", pending_);
+  s.add("loop corrections applied", corrections_);
+  s.add("stereo stamp difference s", last_stamp_diff_);
+  s.add("processing ms (last frame)", last_latency_ms_);
+}
+
+}  // namespace binloop_ros
+
+PLUGINLIB_EXPORT_CLASS(binloop_ros::TrackingNodelet, nodelet::Nodelet)
