@@ -1,0 +1,265 @@
+// Runs under rostest beside a binloop graph (test/rostest/*.test start it from the launch files): plays a bag
+// made by kitti2bag from a rendered drive of 1.25 laps round a 50 x 80 m block (one revisit) into the
+// graph, switches the loop detector with dynamic_reconfigure on the way, and checks what the graph
+// publishes: a LoopClosure near the revisit, the corrected path, the final pose against the ground truth.
+// Then it sends malformed stereo pairs and checks that the graph says so and keeps tracking.
+#include <binloop/LoopCandidates.h>
+#include <binloop/LoopClosure.h>
+#include <diagnostic_msgs/DiagnosticArray.h>
+#include <dynamic_reconfigure/Reconfigure.h>
+#include <geometry_msgs/PoseStamped.h>
+#include <nav_msgs/Path.h>
+#include <ros/ros.h>
+#include <rosbag/bag.h>
+#include <rosbag/view.h>
+#include <sensor_msgs/CameraInfo.h>
+#include <sensor_msgs/Image.h>
+
+#include <map>
+#include <mutex>
+
+#include "binloop/io/trajectory_io.h"
+#include "binloop/sim/builtin_route.h"
+#include "binloop_ros/topics.h"
+#include "support/test_support.h"
+
+namespace {
+
+namespace topics = binloop_ros::topics;
+
+struct Drive {
+  std::unique_ptr<binloop::test::TempDir> dir;
+  std::vector<binloop::Pose3> route;
+  std::string bag;
+  std::string problem;  // why the drive could not be made
+};
+
+const Drive& drive() {
+  static Drive d;
+  if (d.dir) return d;
+  d.dir = std::make_unique<binloop::test::TempDir>();
+  d.route = binloop::sim::loopRoute(50, 80, 12, 8, 10, 1.25);
+  binloop::writeKittiPoses(*d.dir / "route.txt", d.route);
+  const std::string tools = BINLOOP_TOOL_DIR;
+  auto r = binloop::test::runCommand(tools + "/render --route " + (*d.dir / "route.txt") + " --calib kitti04 --out " +
+                                     (*d.dir / "seq"));
+  if (r.code != 0) d.problem = "render failed: " + r.out;
+  d.bag = *d.dir / "drive.bag";
+  if (d.problem.empty()) {
+    r = binloop::test::runCommand(tools + "/kitti2bag " + (*d.dir / "seq") + " " + d.bag);
+    if (r.code != 0) d.problem = "kitti2bag failed: " + r.out;
+  }
+  return d;
+}
+
+// What the graph publishes, collected on the spinner's thread.
+struct Observed {
+  std::mutex m;
+  std::map<double, geometry_msgs::Pose> poses;  // by stamp
+  std::vector<binloop::LoopClosure> closures;
+  std::vector<binloop::LoopCandidates> candidates;
+  nav_msgs::Path corrected_path;
+  std::map<std::string, std::string> tracking_diag;
+};
+
+class LoopGraph : public ::testing::Test {
+ protected:
+  void SetUp() override {
+    ros::NodeHandle nh;
+    left_ = nh.advertise<sensor_msgs::Image>(topics::kLeftImage, 10);
+    right_ = nh.advertise<sensor_msgs::Image>(topics::kRightImage, 10);
+    left_info_ = nh.advertise<sensor_msgs::CameraInfo>(topics::kLeftInfo, 10);
+    right_info_ = nh.advertise<sensor_msgs::CameraInfo>(topics::kRightInfo, 10);
+    subs_.push_back(nh.subscribe<geometry_msgs::PoseStamped>("/binloop/pose", 1000, [this](const auto& m) {
+      std::lock_guard<std::mutex> lk(seen_.m);
+      seen_.poses[m->header.stamp.toSec()] = m->pose;
+    }));
+    subs_.push_back(nh.subscribe<binloop::LoopClosure>("/binloop/loop_closure", 100, [this](const auto& m) {
+      std::lock_guard<std::mutex> lk(seen_.m);
+      seen_.closures.push_back(*m);
+    }));
+    subs_.push_back(nh.subscribe<binloop::LoopCandidates>("/binloop/loop_candidates", 1000, [this](const auto& m) {
+      std::lock_guard<std::mutex> lk(seen_.m);
+      seen_.candidates.push_back(*m);
+    }));
+    subs_.push_back(nh.subscribe<nav_msgs::Path>("/binloop/corrected_path", 10, [this](const auto& m) {
+      std::lock_guard<std::mutex> lk(seen_.m);
+      seen_.corrected_path = *m;
+    }));
+    subs_.push_back(nh.subscribe<diagnostic_msgs::DiagnosticArray>("/diagnostics", 100, [this](const auto& m) {
+      std::lock_guard<std::mutex> lk(seen_.m);
+      for (const auto& s : m->status)
+        if (s.name.find("tracking") != std::string::npos)
+          for (const auto& kv : s.values) seen_.tracking_diag[kv.key] = kv.value;
+    }));
+  }
+
+  // Waits for `pred` (checked under the lock) up to `seconds`.
+  template <class Pred>
+  bool waitFor(double seconds, Pred pred) {
+    const ros::WallTime until = ros::WallTime::now() + ros::WallDuration(seconds);
+    while (ros::ok() && ros::WallTime::now() < until) {
+      {
+        std::lock_guard<std::mutex> lk(seen_.m);
+        if (pred()) return true;
+      }
+      ros::WallDuration(0.005).sleep();
+    }
+    return false;
+  }
+
+  bool graphConnected() {
+    return waitFor(60, [&] { return left_.getNumSubscribers() > 0 && right_.getNumSubscribers() > 0 &&
+                                    left_info_.getNumSubscribers() > 0; });
+  }
+
+  void publishPair(const sensor_msgs::Image& l, const sensor_msgs::Image& r, const sensor_msgs::CameraInfo& li,
+                   const sensor_msgs::CameraInfo& ri) {
+    left_info_.publish(li);
+    right_info_.publish(ri);
+    left_.publish(l);
+    right_.publish(r);
+  }
+
+  ros::Publisher left_, right_, left_info_, right_info_;
+  std::vector<ros::Subscriber> subs_;
+  Observed seen_;
+};
+
+struct Pair {
+  sensor_msgs::Image left, right;
+  sensor_msgs::CameraInfo left_info, right_info;
+};
+
+std::vector<Pair> readPairs(const std::string& path) {
+  rosbag::Bag bag(path, rosbag::bagmode::Read);
+  std::map<ros::Time, Pair> by_stamp;
+  for (const rosbag::MessageInstance& m : rosbag::View(bag)) {
+    if (auto img = m.instantiate<sensor_msgs::Image>()) {
+      (m.getTopic() == topics::kLeftImage ? by_stamp[img->header.stamp].left : by_stamp[img->header.stamp].right) = *img;
+    } else if (auto info = m.instantiate<sensor_msgs::CameraInfo>()) {
+      (m.getTopic() == topics::kLeftInfo ? by_stamp[info->header.stamp].left_info
+                                         : by_stamp[info->header.stamp].right_info) = *info;
+    }
+  }
+  std::vector<Pair> out;
+  for (auto& [stamp, p] : by_stamp) out.push_back(std::move(p));
+  return out;
+}
+
+}  // namespace
+
+TEST_F(LoopGraph, TheRevisitIsClosedTheDetectorSwitchesAndBadPairsAreReported) {
+  const Drive& d = drive();
+  ASSERT_TRUE(d.problem.empty()) << d.problem;
+  const std::vector<Pair> pairs = readPairs(d.bag);
+  ASSERT_EQ(pairs.size(), d.route.size());
+  ASSERT_TRUE(graphConnected()) << "the Tracking nodelet never subscribed to the stereo topics";
+
+  const size_t lap = static_cast<size_t>(d.route.size() / 1.25), switch_at = 120;
+  size_t switched_after_candidates = 0;
+  for (size_t i = 0; i < pairs.size(); ++i) {
+    if (i == switch_at) {
+      dynamic_reconfigure::Reconfigure srv;
+      dynamic_reconfigure::StrParameter p;
+      p.name = "method";
+      p.value = "vladpq";
+      srv.request.config.strs.push_back(p);
+      ASSERT_TRUE(ros::service::call("/binloop/loop_detector/set_parameters", srv)) << "dynamic_reconfigure call failed";
+      std::lock_guard<std::mutex> lk(seen_.m);
+      switched_after_candidates = seen_.candidates.size();
+    }
+    publishPair(pairs[i].left, pairs[i].right, pairs[i].left_info, pairs[i].right_info);
+    const double stamp = pairs[i].left.header.stamp.toSec();
+    // Paced by the graph: the next pair goes when this one's pose is out (or after a second).
+    waitFor(1.0, [&] { return seen_.poses.count(stamp) > 0; });
+  }
+  const bool closed = waitFor(30, [&] {
+    for (const auto& c : seen_.closures)
+      if (c.status == binloop::LoopClosure::ACCEPTED) return true;
+    return false;
+  });
+
+  std::lock_guard<std::mutex> lk(seen_.m);
+  EXPECT_GT(seen_.poses.size(), pairs.size() * 9 / 10) << "poses published for too few pairs";
+  ASSERT_TRUE(closed) << "no LoopClosure accepted; " << seen_.closures.size() << " verified";
+  for (const auto& c : seen_.closures) {
+    if (c.status != binloop::LoopClosure::ACCEPTED) continue;
+    EXPECT_GE(c.query_frame, lap - 20) << "a loop accepted before the revisit";
+    EXPECT_LT((d.route[c.query_frame].translation() - d.route[c.match_frame].translation()).norm(), 10)
+        << "frames " << c.query_frame << " and " << c.match_frame << " are far apart: " << c.detail;
+    EXPECT_EQ(c.model, "vladpq") << "the loop came from the model switched away from";
+  }
+  // The next candidates after the switch come from the new model.
+  ASSERT_GT(seen_.candidates.size(), switched_after_candidates);
+  EXPECT_EQ(seen_.candidates.back().model, "vladpq");
+  bool later_from_new = true;
+  for (size_t i = switched_after_candidates + 1; i < seen_.candidates.size(); ++i)
+    later_from_new = later_from_new && seen_.candidates[i].model == "vladpq";
+  EXPECT_TRUE(later_from_new);
+  EXPECT_GT(seen_.corrected_path.poses.size(), 10u) << "no corrected path published";
+
+  // The last pose against the ground truth (the map frame is the first camera's).
+  const double last_stamp = pairs.back().left.header.stamp.toSec();
+  ASSERT_TRUE(seen_.poses.count(last_stamp)) << "the last pair was not tracked";
+  const geometry_msgs::Point& p = seen_.poses[last_stamp].position;
+  const Eigen::Vector3d truth = (d.route.front().inverse() * d.route.back()).translation();
+  const double err = (Eigen::Vector3d(p.x, p.y, p.z) - truth).norm();
+  std::cout << "final pose error " << err << " m; " << seen_.closures.size() << " loops verified\n";
+  EXPECT_LT(err, 0.5);
+}
+
+TEST_F(LoopGraph, MalformedPairsAreReportedAndTrackingGoesOn) {
+  const Drive& d = drive();
+  ASSERT_TRUE(d.problem.empty()) << d.problem;
+  const std::vector<Pair> pairs = readPairs(d.bag);
+  ASSERT_TRUE(graphConnected());
+  // After the first test's drive, or from the start when run alone: start the map with two good pairs.
+  Pair base = pairs.back();
+  ros::Time t = base.left.header.stamp + ros::Duration(100);
+  auto stamped = [&](Pair p, ros::Time s) {
+    p.left.header.stamp = p.right.header.stamp = p.left_info.header.stamp = p.right_info.header.stamp = s;
+    return p;
+  };
+  Pair good = stamped(base, t);
+  publishPair(good.left, good.right, good.left_info, good.right_info);
+  ASSERT_TRUE(waitFor(5, [&] { return seen_.poses.count(t.toSec()) > 0; })) << "a good pair was not tracked";
+
+  std::vector<Pair> bad;
+  Pair p = stamped(base, t + ros::Duration(0.1));
+  p.left.encoding = p.right.encoding = "16UC1";  // wrong encoding
+  bad.push_back(p);
+  p = stamped(base, t + ros::Duration(0.2));
+  p.right.width /= 2;  // left and right sizes differ
+  p.right.step /= 2;
+  bad.push_back(p);
+  p = stamped(base, t + ros::Duration(0.3));
+  p.left.data.clear();  // empty image
+  p.right.data.clear();
+  bad.push_back(p);
+  bad.push_back(stamped(base, t - ros::Duration(1)));  // stamp out of order
+  for (const Pair& b : bad) {
+    publishPair(b.left, b.right, b.left_info, b.right_info);
+    ros::WallDuration(0.3).sleep();
+  }
+  // The graph still tracks the next good pair, and its diagnostics count what was dropped.
+  const ros::Time t2 = t + ros::Duration(0.5);
+  good = stamped(base, t2);
+  publishPair(good.left, good.right, good.left_info, good.right_info);
+  EXPECT_TRUE(waitFor(5, [&] { return seen_.poses.count(t2.toSec()) > 0; })) << "tracking stopped after bad pairs";
+  EXPECT_TRUE(waitFor(5, [&] {
+    auto it = seen_.tracking_diag.find("input dropped");
+    return it != seen_.tracking_diag.end() && std::stoi(it->second) >= 4;
+  })) << "diagnostics do not count the dropped pairs";
+}
+
+int main(int argc, char** argv) {
+  testing::InitGoogleTest(&argc, argv);
+  ros::init(argc, argv, "loop_graph_rostest");
+  ros::AsyncSpinner spinner(2);
+  spinner.start();
+  const int rc = RUN_ALL_TESTS();
+  spinner.stop();
+  ros::shutdown();
+  return rc;
+}
