@@ -9,12 +9,14 @@
 #include <binloop/LocalMapUpdate.h>
 #include <binloop/LoopCandidates.h>
 #include <binloop/LoopClosure.h>
+#include <binloop/TrackedFrame.h>
 
 #include "binloop/messages/correction.h"
 #include "binloop/messages/keyframe.h"
 #include "binloop/messages/local_map_update.h"
 #include "binloop/messages/loop_candidates.h"
 #include "binloop/messages/loop_closure.h"
+#include "binloop/messages/tracked_frame.h"
 #include "binloop_ros/msg_conversion.h"
 
 namespace binloop_ros {
@@ -35,5 +37,9 @@ binloop::msg::LoopClosure fromRos(const binloop::LoopClosure& m);
 
 binloop::Correction toRos(const binloop::msg::Correction& c, const std_msgs::Header& header);
 binloop::msg::Correction fromRos(const binloop::Correction& m);
+
+/// `frame_id` names the map frame. The stamp is the frame's (TrackedFrame::stamp_s).
+binloop::TrackedFrame toRos(const binloop::msg::TrackedFrame& f, const std::string& frame_id);
+binloop::msg::TrackedFrame fromRos(const binloop::TrackedFrame& m);
 
 }  // namespace binloop_ros

@@ -13,6 +13,7 @@
 #include <pluginlib/class_list_macros.hpp>
 #include <tf2_ros/transform_broadcaster.h>
 
+#include <deque>
 #include <memory>
 #include <optional>
 
@@ -36,6 +37,8 @@ class TrackingNodelet : public nodelet::Nodelet {
   using Approx = mf::sync_policies::ApproximateTime<Image, Image>;
 
   void onImages(const sensor_msgs::ImageConstPtr& left, const sensor_msgs::ImageConstPtr& right);
+  void track(const sensor_msgs::ImageConstPtr& left, const sensor_msgs::ImageConstPtr& right);
+  void trackWaiting();
   void onUpdate(const binloop::LocalMapUpdateConstPtr& u);
   void onInfo(const sensor_msgs::CameraInfoConstPtr& info, bool right);
   std::string check(const Image& left, const Image& right);
@@ -49,11 +52,15 @@ class TrackingNodelet : public nodelet::Nodelet {
   sensor_msgs::CameraInfoConstPtr left_info_, right_info_;
   std::string map_frame_, odom_frame_, camera_frame_;
   double max_stamp_diff_ = 0;
+  // ~lockstep: a pair waits until local mapping has answered every keyframe sent, as `run --lockstep` does
+  // (for comparing the two paths; live, tracking never waits). Pairs also wait for the first camera_info.
+  bool lockstep_ = false;
+  std::deque<std::pair<sensor_msgs::ImageConstPtr, sensor_msgs::ImageConstPtr>> waiting_;
   mf::Subscriber<Image> left_sub_, right_sub_;
   std::unique_ptr<mf::Synchronizer<Exact>> exact_;
   std::unique_ptr<mf::Synchronizer<Approx>> approx_;
   ros::Subscriber left_info_sub_, right_info_sub_, update_sub_;
-  ros::Publisher keyframe_pub_, pose_pub_, odom_pub_, path_pub_;
+  ros::Publisher keyframe_pub_, frame_pub_, pose_pub_, odom_pub_, path_pub_;
   std::unique_ptr<tf2_ros::TransformBroadcaster> tf_;
   std::unique_ptr<diagnostic_updater::Updater> diag_;
   nav_msgs::Path path_;
@@ -74,7 +81,7 @@ void TrackingNodelet::onInit() {
   ros::NodeHandle& pnh = getPrivateNodeHandle();
   try {
     requireKnownParams(pnh, {"config", "reloc_vocab", "force_extractor", "sync", "queue_size", "max_stamp_diff",
-                             "map_frame", "odom_frame", "camera_frame", "camera", "seed"});
+                             "map_frame", "odom_frame", "camera_frame", "camera", "seed", "lockstep"});
     config_ = slamConfigFrom(pnh);
     config_.tracker.seed = static_cast<uint64_t>(numberParam(pnh, "seed", 1));
     const std::string reloc = stringParam(pnh, "reloc_vocab", "");
@@ -101,12 +108,14 @@ void TrackingNodelet::onInit() {
   odom_frame_ = stringParam(pnh, "odom_frame", "odom");
   camera_frame_ = stringParam(pnh, "camera_frame", "");  // "": the left image's frame_id
   max_stamp_diff_ = numberParam(pnh, "max_stamp_diff", 0.002);
+  lockstep_ = boolParam(pnh, "lockstep", false);
   const int queue = static_cast<int>(numberParam(pnh, "queue_size", 5));
   const std::string sync = stringParam(pnh, "sync", "exact");
   if (sync != "exact" && sync != "approximate")
     NODELET_ERROR("~sync '%s' is not exact or approximate; using exact", sync.c_str());
 
   keyframe_pub_ = nh.advertise<binloop::KeyFrame>("keyframe", 10);
+  frame_pub_ = nh.advertise<binloop::TrackedFrame>("tracked_frame", 100);
   pose_pub_ = nh.advertise<geometry_msgs::PoseStamped>("pose", 10);
   odom_pub_ = nh.advertise<nav_msgs::Odometry>("odom", 10);
   path_pub_ = nh.advertise<nav_msgs::Path>("live_path", 1, true);
@@ -134,6 +143,7 @@ void TrackingNodelet::onInit() {
 
 void TrackingNodelet::onInfo(const sensor_msgs::CameraInfoConstPtr& info, bool right) {
   (right ? right_info_ : left_info_) = info;
+  trackWaiting();
 }
 
 void TrackingNodelet::reject(const std::string& why) {
@@ -173,6 +183,30 @@ std::string TrackingNodelet::check(const Image& left, const Image& right) {
 }
 
 void TrackingNodelet::onImages(const sensor_msgs::ImageConstPtr& left, const sensor_msgs::ImageConstPtr& right) {
+  // Pairs wait while there is no camera yet (camera_info may come just after the first images) and, in
+  // lock-step, while mapping has not answered.
+  const bool no_camera = !tracker_ && (!left_info_ || !right_info_);
+  if (no_camera || (lockstep_ && (pending_ > 0 || !waiting_.empty()))) {
+    waiting_.emplace_back(left, right);
+    if (no_camera && waiting_.size() > 10) {
+      waiting_.pop_front();
+      reject(std::string("no camera_info received on ") + (left_info_ ? topics::kRightInfo : topics::kLeftInfo) +
+             " (or give ~camera)");
+    }
+    return;
+  }
+  track(left, right);
+}
+
+void TrackingNodelet::trackWaiting() {
+  while (!waiting_.empty() && (tracker_ || (left_info_ && right_info_)) && !(lockstep_ && pending_ > 0)) {
+    const auto pair = waiting_.front();
+    waiting_.pop_front();
+    track(pair.first, pair.second);
+  }
+}
+
+void TrackingNodelet::track(const sensor_msgs::ImageConstPtr& left, const sensor_msgs::ImageConstPtr& right) {
   const ros::WallTime t0 = ros::WallTime::now();
   binloop::StereoFrame frame;
   std::string problem = check(*left, *right);
@@ -196,6 +230,7 @@ void TrackingNodelet::onImages(const sensor_msgs::ImageConstPtr& left, const sen
     ++keyframes_sent_;
     keyframe_pub_.publish(boost::make_shared<binloop::KeyFrame>(toRos(*out.keyframe, map_frame_)));
   }
+  frame_pub_.publish(boost::make_shared<binloop::TrackedFrame>(toRos(out.frame, map_frame_)));
   std_msgs::Header header = left->header;
   if (!camera_frame_.empty()) header.frame_id = camera_frame_;
   publishPose(out.frame, header);
@@ -260,6 +295,7 @@ void TrackingNodelet::onUpdate(const binloop::LocalMapUpdateConstPtr& m) {
     tracker_->apply(u);
     if (u.correction) ++corrections_;
     else if (pending_ > 0) --pending_;
+    trackWaiting();
   } catch (const std::exception& e) {
     ++rejected_;
     last_problem_ = std::string("local map update dropped: ") + e.what();
@@ -279,6 +315,7 @@ void TrackingNodelet::diagnose(diagnostic_updater::DiagnosticStatusWrapper& s) {
   s.add("last problem", last_problem_);
   s.add("keyframes sent", keyframes_sent_);
   s.add("mapping queue", pending_);
+  s.add("pairs waiting", waiting_.size());
   s.add("loop corrections applied", corrections_);
   s.add("stereo stamp difference s", last_stamp_diff_);
   s.add("processing ms (last frame)", last_latency_ms_);

@@ -353,4 +353,45 @@ core::Correction fromRos(const binloop::Correction& m) {
   return c;
 }
 
+binloop::TrackedFrame toRos(const core::TrackedFrame& f, const std::string& frame_id) {
+  binloop::TrackedFrame m;
+  m.header.stamp = stampOf(f.stamp_s);
+  m.header.frame_id = frame_id;
+  m.frame_index = f.frame_index;
+  m.state = static_cast<uint8_t>(f.state);
+  m.pose = toPoseMsg(f.T_w_c);
+  m.reference = f.reference;
+  m.reference_to_camera = toPoseMsg(f.T_ref_c);
+  m.new_keyframe = f.new_keyframe;
+  m.features = f.features;
+  m.stereo_matches = f.stereo_matches;
+  m.tracked_points = f.tracked_points;
+  m.problem = f.problem;
+  m.extract_ms = f.extract_ms;
+  m.stereo_ms = f.stereo_ms;
+  m.track_ms = f.track_ms;
+  return m;
+}
+
+core::TrackedFrame fromRos(const binloop::TrackedFrame& m) {
+  if (m.state > binloop::TrackedFrame::RELOCALIZED)
+    throw ConversionError("TrackedFrame.state " + std::to_string(m.state) + " is not one of the constants");
+  core::TrackedFrame f;
+  f.frame_index = m.frame_index;
+  f.stamp_s = m.header.stamp.toSec();
+  f.state = static_cast<core::TrackingState>(m.state);
+  f.T_w_c = toPose3(m.pose);
+  f.reference = m.reference;
+  f.T_ref_c = toPose3(m.reference_to_camera);
+  f.new_keyframe = m.new_keyframe;
+  f.features = m.features;
+  f.stereo_matches = m.stereo_matches;
+  f.tracked_points = m.tracked_points;
+  f.problem = m.problem;
+  f.extract_ms = m.extract_ms;
+  f.stereo_ms = m.stereo_ms;
+  f.track_ms = m.track_ms;
+  return f;
+}
+
 }  // namespace binloop_ros

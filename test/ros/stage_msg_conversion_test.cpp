@@ -260,6 +260,43 @@ TEST(StageMsgConversion, CorrectionRoundTrip) {
   EXPECT_EQ(a.fuse_by_projection, b.fuse_by_projection);
 }
 
+TEST(StageMsgConversion, TrackedFrameRoundTrip) {
+  std::mt19937 rng(6);
+  core::TrackedFrame a;
+  a.frame_index = 17;
+  a.stamp_s = 2.5;
+  a.state = core::TrackingState::kRelocalized;
+  a.T_w_c = somePose(rng);
+  a.reference = 9;
+  a.T_ref_c = somePose(rng);
+  a.new_keyframe = 10;
+  a.features = 2000;
+  a.stereo_matches = 900;
+  a.tracked_points = 400;
+  a.problem = "none";
+  a.extract_ms = 20.5;
+  a.stereo_ms = 4.25;
+  a.track_ms = 12.125;
+  const core::TrackedFrame b = fromRos(toRos(a, "map"));
+  EXPECT_EQ(a.frame_index, b.frame_index);
+  EXPECT_NEAR(a.stamp_s, b.stamp_s, 1e-9);
+  EXPECT_EQ(a.state, b.state);
+  expectPose(a.T_w_c, b.T_w_c);
+  EXPECT_EQ(a.reference, b.reference);
+  expectPose(a.T_ref_c, b.T_ref_c);
+  EXPECT_EQ(a.new_keyframe, b.new_keyframe);
+  EXPECT_EQ(a.features, b.features);
+  EXPECT_EQ(a.stereo_matches, b.stereo_matches);
+  EXPECT_EQ(a.tracked_points, b.tracked_points);
+  EXPECT_EQ(a.problem, b.problem);
+  EXPECT_EQ(a.extract_ms, b.extract_ms);
+  EXPECT_EQ(a.stereo_ms, b.stereo_ms);
+  EXPECT_EQ(a.track_ms, b.track_ms);
+  binloop::TrackedFrame m = toRos(a, "map");
+  m.state = 7;
+  EXPECT_THROW(fromRos(m), ConversionError);
+}
+
 TEST(StageMsgConversion, MalformedMessagesAreRefusedNamingTheField) {
   std::mt19937 rng(5);
   const binloop::KeyFrame good = toRos(someKeyframe(rng), "map");
