@@ -11,6 +11,7 @@
 #include <memory>
 
 #include "binloop/mapping/local_mapper.h"
+#include "binloop_ros/cpu_meter.h"
 #include "binloop_ros/node_params.h"
 #include "binloop_ros/stage_msg_conversion.h"
 
@@ -33,6 +34,7 @@ class LocalMappingNodelet : public nodelet::Nodelet {
   ros::Subscriber keyframe_sub_, correction_sub_;
   ros::Publisher refined_pub_, update_pub_, cloud_pub_, keyframes_pub_;
   std::unique_ptr<diagnostic_updater::Updater> diag_;
+  CpuMeter cpu_;
   uint64_t keyframes_ = 0, corrections_ = 0, rejected_ = 0;
   double last_ms_ = 0, last_ba_ms_ = 0;
   std::string last_problem_;
@@ -69,6 +71,7 @@ void LocalMappingNodelet::problem(const std::string& what) {
 }
 
 void LocalMappingNodelet::onKeyframe(const binloop::KeyFrameConstPtr& m) {
+  CpuMeter::Scope cpu(cpu_);
   binloop::LocalMapper::Output out;
   try {
     out = mapper_->process(fromRos(*m));
@@ -88,6 +91,7 @@ void LocalMappingNodelet::onKeyframe(const binloop::KeyFrameConstPtr& m) {
 }
 
 void LocalMappingNodelet::onCorrection(const binloop::CorrectionConstPtr& m) {
+  CpuMeter::Scope cpu(cpu_);
   binloop::msg::LocalMapUpdatePtr u;
   try {
     u = mapper_->apply(fromRos(*m));
@@ -137,6 +141,7 @@ void LocalMappingNodelet::diagnose(diagnostic_updater::DiagnosticStatusWrapper& 
   s.add("last problem", last_problem_);
   s.add("last keyframe ms", last_ms_);
   s.add("last local BA ms", last_ba_ms_);
+  s.add("cpu s in callbacks", cpu_.seconds());
 }
 
 }  // namespace binloop_ros

@@ -16,6 +16,7 @@
 #include <unordered_map>
 
 #include "binloop/loop/loop_closer.h"
+#include "binloop_ros/cpu_meter.h"
 #include "binloop_ros/node_params.h"
 #include "binloop_ros/stage_msg_conversion.h"
 
@@ -42,6 +43,7 @@ class LoopClosingNodelet : public nodelet::Nodelet {
   ros::Publisher correction_pub_, closure_pub_, path_pub_, edges_pub_;
   ros::ServiceServer external_srv_;
   std::unique_ptr<diagnostic_updater::Updater> diag_;
+  CpuMeter cpu_;
   std::set<binloop::SlamKeyframeId> keyframes_seen_, updates_seen_;
   std::deque<binloop::LoopCandidatesConstPtr> pending_;
   struct Edge {
@@ -87,6 +89,7 @@ void LoopClosingNodelet::problem(const std::string& what) {
 }
 
 void LoopClosingNodelet::onKeyframe(const binloop::KeyFrameConstPtr& m) {
+  CpuMeter::Scope cpu(cpu_);
   try {
     closer_->addKeyframe(std::make_shared<const binloop::msg::KeyFrame>(fromRos(*m)));
   } catch (const std::exception& e) {
@@ -97,6 +100,7 @@ void LoopClosingNodelet::onKeyframe(const binloop::KeyFrameConstPtr& m) {
 }
 
 void LoopClosingNodelet::onUpdate(const binloop::LocalMapUpdateConstPtr& m) {
+  CpuMeter::Scope cpu(cpu_);
   try {
     closer_->apply(fromRos(*m));
   } catch (const std::exception& e) {
@@ -109,6 +113,7 @@ void LoopClosingNodelet::onUpdate(const binloop::LocalMapUpdateConstPtr& m) {
 }
 
 void LoopClosingNodelet::onCandidates(const binloop::LoopCandidatesConstPtr& m) {
+  CpuMeter::Scope cpu(cpu_);
   if (m->shadow) return;  // shadow models are logged, never acted on
   pending_.push_back(m);
   runPending();
@@ -152,6 +157,7 @@ void LoopClosingNodelet::handle(const binloop::LoopCloser::Output& out, const st
 
 bool LoopClosingNodelet::onExternalLoop(binloop::AddExternalLoop::Request& req,
                                         binloop::AddExternalLoop::Response& res) {
+  CpuMeter::Scope cpu(cpu_);
   const std::string source = req.source.empty() ? "external" : req.source;
   const binloop::LoopCloser::Output out = closer_->addExternalLoop(req.query, req.match, source);
   std_msgs::Header h;
@@ -217,6 +223,7 @@ void LoopClosingNodelet::diagnose(diagnostic_updater::DiagnosticStatusWrapper& s
   s.add("candidates waiting", pending_.size());
   s.add("input dropped", rejected_input_);
   s.add("last problem", last_problem_);
+  s.add("cpu s in callbacks", cpu_.seconds());
 }
 
 }  // namespace binloop_ros

@@ -14,6 +14,7 @@
 
 #include "binloop/loop/loop_detector.h"
 #include "binloop/pipeline/model_files.h"
+#include "binloop_ros/cpu_meter.h"
 #include "binloop_ros/node_params.h"
 #include "binloop_ros/stage_msg_conversion.h"
 
@@ -38,6 +39,7 @@ class LoopDetectorNodelet : public nodelet::Nodelet {
   ros::Publisher candidates_pub_;
   std::map<std::string, ros::Publisher> shadow_pubs_;
   std::unique_ptr<diagnostic_updater::Updater> diag_;
+  CpuMeter cpu_;
   uint64_t queries_ = 0, accepted_ = 0, rejected_ = 0;
   std::string last_problem_, last_status_;
   double last_ms_ = 0, last_switch_ms_ = 0;
@@ -70,6 +72,7 @@ void LoopDetectorNodelet::onInit() {
 }
 
 void LoopDetectorNodelet::onReconfigure(binloop::LoopDetectorConfig& c, uint32_t) {
+  CpuMeter::Scope cpu(cpu_);
   binloop::LoopDetectorParams p = config_.detector;
   p.model = c.method;
   p.consistency = c.consistency;
@@ -112,6 +115,7 @@ ros::Publisher& LoopDetectorNodelet::shadowPublisher(const std::string& model) {
 }
 
 void LoopDetectorNodelet::onKeyframe(const binloop::KeyFrameConstPtr& m) {
+  CpuMeter::Scope cpu(cpu_);
   if (!detector_) return;  // no usable model: said at start-up and in the diagnostics
   binloop::LoopDetector::Output out;
   try {
@@ -148,6 +152,7 @@ void LoopDetectorNodelet::diagnose(diagnostic_updater::DiagnosticStatusWrapper& 
   s.add("last detection ms", last_ms_);
   s.add("last switch rebuild ms", last_switch_ms_);
   s.add("input dropped", rejected_);
+  s.add("cpu s in callbacks", cpu_.seconds());
 }
 
 }  // namespace binloop_ros

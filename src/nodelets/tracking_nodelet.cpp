@@ -19,6 +19,7 @@
 
 #include "binloop/pipeline/model_files.h"
 #include "binloop/tracking/tracker.h"
+#include "binloop_ros/cpu_meter.h"
 #include "binloop_ros/node_params.h"
 #include "binloop_ros/stage_msg_conversion.h"
 #include "binloop_ros/topics.h"
@@ -63,6 +64,7 @@ class TrackingNodelet : public nodelet::Nodelet {
   ros::Publisher keyframe_pub_, frame_pub_, pose_pub_, odom_pub_, path_pub_;
   std::unique_ptr<tf2_ros::TransformBroadcaster> tf_;
   std::unique_ptr<diagnostic_updater::Updater> diag_;
+  CpuMeter cpu_;
   nav_msgs::Path path_;
   ros::Time last_stamp_;
   uint64_t frames_ = 0, rejected_ = 0, keyframes_sent_ = 0, lost_ = 0;
@@ -142,6 +144,7 @@ void TrackingNodelet::onInit() {
 }
 
 void TrackingNodelet::onInfo(const sensor_msgs::CameraInfoConstPtr& info, bool right) {
+  CpuMeter::Scope cpu(cpu_);
   (right ? right_info_ : left_info_) = info;
   trackWaiting();
 }
@@ -183,6 +186,7 @@ std::string TrackingNodelet::check(const Image& left, const Image& right) {
 }
 
 void TrackingNodelet::onImages(const sensor_msgs::ImageConstPtr& left, const sensor_msgs::ImageConstPtr& right) {
+  CpuMeter::Scope cpu(cpu_);
   // Pairs wait while there is no camera yet (camera_info may come just after the first images) and, in
   // lock-step, while mapping has not answered.
   const bool no_camera = !tracker_ && (!left_info_ || !right_info_);
@@ -289,6 +293,7 @@ void TrackingNodelet::publishPose(const binloop::msg::TrackedFrame& f, const std
 }
 
 void TrackingNodelet::onUpdate(const binloop::LocalMapUpdateConstPtr& m) {
+  CpuMeter::Scope cpu(cpu_);
   try {
     const binloop::msg::LocalMapUpdate u = fromRos(*m);
     if (!tracker_) return;
@@ -319,6 +324,7 @@ void TrackingNodelet::diagnose(diagnostic_updater::DiagnosticStatusWrapper& s) {
   s.add("loop corrections applied", corrections_);
   s.add("stereo stamp difference s", last_stamp_diff_);
   s.add("processing ms (last frame)", last_latency_ms_);
+  s.add("cpu s in callbacks", cpu_.seconds());
 }
 
 }  // namespace binloop_ros

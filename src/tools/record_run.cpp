@@ -6,6 +6,7 @@
 #include <binloop/LoopCandidates.h>
 #include <binloop/LoopClosure.h>
 #include <binloop/TrackedFrame.h>
+#include <diagnostic_msgs/DiagnosticArray.h>
 #include <ros/ros.h>
 
 #include <csignal>
@@ -26,6 +27,15 @@ namespace fs = std::filesystem;
 namespace {
 
 volatile std::sig_atomic_t g_stop = 0;
+
+std::string quoted(const std::string& text) {
+  std::string out = "\"";
+  for (char c : text) {
+    if (c == '"' || c == '\\') out += '\\';
+    if (static_cast<unsigned char>(c) >= 0x20) out += c;
+  }
+  return out + "\"";
+}
 void onSignal(int) { g_stop = 1; }
 
 struct Recorder {
@@ -39,8 +49,17 @@ struct Recorder {
   std::map<SlamKeyframeId, size_t> loop_entry;  // query keyframe -> its entry
   ros::WallTime last_message = ros::WallTime::now();
 
+  std::map<std::string, std::map<std::string, std::string>> diagnostics;  // the last of each status
   std::vector<double> latency_ms;  // image stamp -> tracked frame received (ROS time: the bag's clock)
   std::vector<double> track_ms;    // extraction + stereo + tracking, per pair
+
+  void onDiagnostics(const diagnostic_msgs::DiagnosticArrayConstPtr& m) {
+    for (const auto& st : m->status) {
+      auto& d = diagnostics[st.name];
+      d["summary"] = st.message;
+      for (const auto& kv : st.values) d[kv.key] = kv.value;
+    }
+  }
 
   void onFrame(const binloop::TrackedFrameConstPtr& m) {
     latency_ms.push_back((ros::Time::now() - m->header.stamp).toSec() * 1e3);
@@ -121,9 +140,21 @@ struct Recorder {
       js << (first ? "" : ", ") << "\"" << s << "\": " << n;
       first = false;
     }
-    js << "},\n  \"latency_ms_median\": " << percentile(latency_ms, 50) << ",\n  \"latency_ms_p95\": "
-       << percentile(latency_ms, 95) << ",\n  \"tracking_ms_median\": " << percentile(track_ms, 50)
-       << ",\n  \"tracking_ms_p95\": " << percentile(track_ms, 95) << "\n}\n";
+    js << "},\n  \"latency_ms_median\": " << percentile(latency_ms, 0.5) << ",\n  \"latency_ms_p95\": "
+       << percentile(latency_ms, 0.95) << ",\n  \"tracking_ms_median\": " << percentile(track_ms, 0.5)
+       << ",\n  \"tracking_ms_p95\": " << percentile(track_ms, 0.95) << ",\n  \"diagnostics\": {";
+    bool first_status = true;
+    for (const auto& [name, values] : diagnostics) {
+      js << (first_status ? "\n" : ",\n") << "    " << quoted(name) << ": {";
+      bool first_value = true;
+      for (const auto& [k, v] : values) {
+        js << (first_value ? "" : ", ") << quoted(k) << ": " << quoted(v);
+        first_value = false;
+      }
+      js << "}";
+      first_status = false;
+    }
+    js << "\n  }\n}\n";
   }
 };
 
@@ -148,7 +179,8 @@ int main(int argc, char** argv) {
     auto subs = {nh.subscribe("tracked_frame", 10000, &Recorder::onFrame, &r),
                  nh.subscribe("local_map_update", 10000, &Recorder::onUpdate, &r),
                  nh.subscribe("loop_candidates", 10000, &Recorder::onCandidates, &r),
-                 nh.subscribe("loop_closure", 10000, &Recorder::onClosure, &r)};
+                 nh.subscribe("loop_closure", 10000, &Recorder::onClosure, &r),
+                 nh.subscribe("/diagnostics", 1000, &Recorder::onDiagnostics, &r)};
     while (!g_stop && ros::ok()) {
       ros::spinOnce();
       ros::WallDuration(0.01).sleep();
