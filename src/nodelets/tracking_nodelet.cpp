@@ -11,6 +11,7 @@
 #include <nav_msgs/Path.h>
 #include <nodelet/nodelet.h>
 #include <pluginlib/class_list_macros.hpp>
+#include <tf2_ros/static_transform_broadcaster.h>
 #include <tf2_ros/transform_broadcaster.h>
 
 #include <deque>
@@ -63,6 +64,7 @@ class TrackingNodelet : public nodelet::Nodelet {
   ros::Subscriber left_info_sub_, right_info_sub_, update_sub_;
   ros::Publisher keyframe_pub_, frame_pub_, pose_pub_, odom_pub_, path_pub_;
   std::unique_ptr<tf2_ros::TransformBroadcaster> tf_;
+  std::unique_ptr<tf2_ros::StaticTransformBroadcaster> static_tf_;
   std::unique_ptr<diagnostic_updater::Updater> diag_;
   CpuMeter cpu_;
   nav_msgs::Path path_;
@@ -83,7 +85,8 @@ void TrackingNodelet::onInit() {
   ros::NodeHandle& pnh = getPrivateNodeHandle();
   try {
     requireKnownParams(pnh, {"config", "reloc_vocab", "force_extractor", "sync", "queue_size", "max_stamp_diff",
-                             "map_frame", "odom_frame", "camera_frame", "camera", "seed", "lockstep"});
+                             "map_frame", "odom_frame", "camera_frame", "camera", "seed", "lockstep",
+                             "view_frame", "ground_truth_frame"});
     config_ = slamConfigFrom(pnh);
     config_.tracker.seed = static_cast<uint64_t>(numberParam(pnh, "seed", 1));
     const std::string reloc = stringParam(pnh, "reloc_vocab", "");
@@ -122,6 +125,33 @@ void TrackingNodelet::onInit() {
   odom_pub_ = nh.advertise<nav_msgs::Odometry>("odom", 10);
   path_pub_ = nh.advertise<nav_msgs::Path>("live_path", 1, true);
   tf_ = std::make_unique<tf2_ros::TransformBroadcaster>();
+  // The map frame is the first camera's optical frame (z forward, y down). ~view_frame: a z-up frame over it
+  // (x forward, y left) for rviz's top views. ~ground_truth_frame: a frame that coincides with the map (KITTI's
+  // ground truth starts at the first camera as the map does), so a bag's ground truth shows beside the path.
+  std::vector<geometry_msgs::TransformStamped> statics;
+  auto fixed = [&](const std::string& parent, const std::string& child, const Eigen::Matrix3d& R) {
+    binloop::Pose3 T = binloop::Pose3::Identity();
+    T.linear() = R;
+    const geometry_msgs::Pose p = toPoseMsg(T);
+    geometry_msgs::TransformStamped t;
+    t.header.stamp = ros::Time(0);
+    t.header.frame_id = parent;
+    t.child_frame_id = child;
+    t.transform.rotation = p.orientation;
+    statics.push_back(t);
+  };
+  const std::string view = stringParam(pnh, "view_frame", "map_view");
+  const std::string truth = stringParam(pnh, "ground_truth_frame", "");
+  if (!view.empty()) {
+    Eigen::Matrix3d R;  // columns: the map's x (right), y (down), z (forward) in the view frame
+    R << 0, 0, 1, -1, 0, 0, 0, -1, 0;
+    fixed(view, map_frame_, R);
+  }
+  if (!truth.empty()) fixed(map_frame_, truth, Eigen::Matrix3d::Identity());
+  if (!statics.empty()) {
+    static_tf_ = std::make_unique<tf2_ros::StaticTransformBroadcaster>();
+    static_tf_->sendTransform(statics);
+  }
   update_sub_ = nh.subscribe("local_map_update", 100, &TrackingNodelet::onUpdate, this);
   left_info_sub_ = nh.subscribe<sensor_msgs::CameraInfo>(
       topics::kLeftInfo, 2, [this](const sensor_msgs::CameraInfoConstPtr& m) { onInfo(m, false); });
