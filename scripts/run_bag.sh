@@ -3,13 +3,14 @@
 # files (trajectory, loops.csv, summary.json) into --out, so the ROS path and `scripts/binloop run` can be
 # compared. Starts a master if none runs; stops everything it started.
 #   scripts/binloop run-bag <bag> --out <dir> [--detector hbow] [--rate 1.0] [--split] [--lockstep]
-#                           [--launch-args "arg:=value ..."]
+#                           [--launch-args "arg:=value ..."] [--screenshot shot.png]
 # --lockstep: tracking waits for local mapping after each keyframe, as `run --lockstep` (for comparisons).
+# --screenshot: also runs rviz (under Xvfb when there is no display) and saves its window after the bag.
 set -euo pipefail
 source "$(dirname "${BASH_SOURCE[0]}")/env.sh"
 
-usage() { sed -n '2,8p' "$0" | sed 's/^# \{0,1\}//'; }
-bag="" out="" detector="hbow" rate="1.0" launch="kitti_stereo.launch" extra=""
+usage() { sed -n '2,9p' "$0" | sed 's/^# \{0,1\}//'; }
+bag="" out="" detector="hbow" rate="1.0" launch="kitti_stereo.launch" extra="" shot=""
 while [ $# -gt 0 ]; do
   case "$1" in
     --out) out="$2"; shift 2 ;;
@@ -18,6 +19,7 @@ while [ $# -gt 0 ]; do
     --split) launch="kitti_stereo_split.launch"; shift ;;
     --lockstep) extra="$extra lockstep:=true"; shift ;;
     --launch-args) extra="$2"; shift 2 ;;
+    --screenshot) shot="$2"; shift 2 ;;
     -h|--help) usage; exit 0 ;;
     -*) echo "run-bag: unknown option $1" >&2; usage >&2; exit 2 ;;
     *) bag="$1"; shift ;;
@@ -36,6 +38,16 @@ cleanup() {
 }
 trap cleanup EXIT
 
+if [ -n "$shot" ]; then
+  case "$shot" in /*) ;; *) shot="$PWD/$shot" ;; esac
+  if [ -z "${DISPLAY:-}" ]; then
+    Xvfb :97 -screen 0 1600x1000x24 >"$out/xvfb.log" 2>&1 &
+    pids+=($!)
+    export DISPLAY=:97
+    sleep 1
+  fi
+  extra="$extra rviz:=true"
+fi
 if ! rosnode list >/dev/null 2>&1; then
   roscore >"$out/roscore.log" 2>&1 &
   pids+=($!)
@@ -57,6 +69,10 @@ echo "run-bag: playing $bag at rate $rate through $launch (detector $detector); 
 rosbag play --clock -q -r "$rate" "$bag"
 # The recorder writes once the graph has been quiet for 3 s (it may still be working through queued pairs).
 kill -INT "$recorder"; wait "$recorder" || true
+if [ -n "$shot" ]; then
+  sleep 2  # rviz draws the last messages
+  import -window root "$shot" && echo "run-bag: rviz screenshot in $shot"
+fi
 kill -INT "$graph"; wait "$graph" || true
 cat "$out/record.log"
 echo "run-bag: results in $out"

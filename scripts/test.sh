@@ -53,7 +53,9 @@ read -r core_p core_f core_s < <("$BINLOOP_ROOT/scripts/junit_summary.py" "$log/
 
 echo "== ROS tests (gtest, rostest)"
 rm -rf "$BINLOOP_WS/build/test_results"
-(cd "$BINLOOP_WS" && catkin_make -j"$BINLOOP_JOBS" run_tests) >"$log/ros.txt" 2>&1
+# One test at a time: two rostests side by side (make -j2) share the 2 cores with eight SLAM processes and
+# the unpaced split graph then tracks differently (a final-pose error of 0.84 m instead of 0.11 was seen).
+(cd "$BINLOOP_WS" && catkin_make -j1 run_tests) >"$log/ros.txt" 2>&1
 grep -E '^\[ *(FAILED|SKIPPED) *\]|Failure|FAILURE|ERROR' "$log/ros.txt" || true
 shopt -s nullglob
 ros_xml=("$BINLOOP_WS"/build/test_results/binloop/*.xml)

@@ -14,6 +14,7 @@
 #include "binloop_ros/cpu_meter.h"
 #include "binloop_ros/node_params.h"
 #include "binloop_ros/stage_msg_conversion.h"
+#include "binloop_ros/stage_services.h"
 
 namespace binloop_ros {
 
@@ -28,7 +29,10 @@ class LocalMappingNodelet : public nodelet::Nodelet {
   void problem(const std::string& what);
   void diagnose(diagnostic_updater::DiagnosticStatusWrapper& s);
 
+  binloop::LocalMapperParams params_;
   std::unique_ptr<binloop::LocalMapper> mapper_;
+  std::unique_ptr<StageServices> services_;
+  std::string counts() const;
   std::string map_frame_;
   int cloud_every_ = 5;
   ros::Subscriber keyframe_sub_, correction_sub_;
@@ -45,7 +49,8 @@ void LocalMappingNodelet::onInit() {
   ros::NodeHandle& pnh = getPrivateNodeHandle();
   try {
     requireKnownParams(pnh, {"config", "map_frame", "cloud_every"});
-    mapper_ = std::make_unique<binloop::LocalMapper>(slamConfigFrom(pnh).mapper);
+    params_ = slamConfigFrom(pnh).mapper;
+    mapper_ = std::make_unique<binloop::LocalMapper>(params_);
   } catch (const std::exception& e) {
     NODELET_FATAL("binloop/LocalMapping: %s", e.what());
     throw;
@@ -62,6 +67,31 @@ void LocalMappingNodelet::onInit() {
   diag_ = std::make_unique<diagnostic_updater::Updater>(nh, pnh);
   diag_->setHardwareID("binloop");
   diag_->add("local mapping", this, &LocalMappingNodelet::diagnose);
+  StageServiceHandlers h;
+  h.save = [this](const std::string& path) {
+    const size_t bytes = saveStage(*mapper_, path, "local_mapping");
+    return counts() + ", " + std::to_string(bytes >> 20) + " MB";
+  };
+  h.load = [this](const std::string& path) {
+    mapper_ = loadStage(std::make_unique<binloop::LocalMapper>(params_), path, "local_mapping");
+    publishMap(ros::Time::now());
+    return counts();
+  };
+  h.reset = [this] {
+    mapper_ = std::make_unique<binloop::LocalMapper>(params_);
+    publishMap(ros::Time::now());
+  };
+  h.statistics = [this] {
+    return StageStatistics{{"keyframes", std::to_string(mapper_->keyframeCount())},
+                           {"map_points", std::to_string(mapper_->pointCount())},
+                           {"corrections", std::to_string(mapper_->correctionsApplied())}};
+  };
+  services_ = std::make_unique<StageServices>(pnh, "local_mapping", h);
+}
+
+std::string LocalMappingNodelet::counts() const {
+  return std::to_string(mapper_->keyframeCount()) + " keyframes, " + std::to_string(mapper_->pointCount()) +
+         " map points";
 }
 
 void LocalMappingNodelet::problem(const std::string& what) {

@@ -19,6 +19,7 @@
 #include "binloop_ros/cpu_meter.h"
 #include "binloop_ros/node_params.h"
 #include "binloop_ros/stage_msg_conversion.h"
+#include "binloop_ros/stage_services.h"
 
 namespace binloop_ros {
 
@@ -37,7 +38,12 @@ class LoopClosingNodelet : public nodelet::Nodelet {
   void problem(const std::string& what);
   void diagnose(diagnostic_updater::DiagnosticStatusWrapper& s);
 
+  void startOver(std::unique_ptr<binloop::LoopCloser> c);
+  std::string counts() const;
+
+  binloop::LoopCloserParams params_;
   std::unique_ptr<binloop::LoopCloser> closer_;
+  std::unique_ptr<StageServices> services_;
   std::string map_frame_;
   ros::Subscriber keyframe_sub_, update_sub_, candidates_sub_;
   ros::Publisher correction_pub_, closure_pub_, path_pub_, edges_pub_;
@@ -63,7 +69,8 @@ void LoopClosingNodelet::onInit() {
     requireKnownParams(pnh, {"config", "map_frame", "seed"});
     binloop::SlamConfig config = slamConfigFrom(pnh);
     config.closer.verify.seed = static_cast<uint64_t>(numberParam(pnh, "seed", 1));
-    closer_ = std::make_unique<binloop::LoopCloser>(config.closer);
+    params_ = config.closer;
+    closer_ = std::make_unique<binloop::LoopCloser>(params_);
   } catch (const std::exception& e) {
     NODELET_FATAL("binloop/LoopClosing: %s", e.what());
     throw;
@@ -80,6 +87,39 @@ void LoopClosingNodelet::onInit() {
   diag_ = std::make_unique<diagnostic_updater::Updater>(nh, pnh);
   diag_->setHardwareID("binloop");
   diag_->add("loop closing", this, &LoopClosingNodelet::diagnose);
+  StageServiceHandlers h;
+  h.save = [this](const std::string& path) {
+    const size_t bytes = saveStage(*closer_, path, "loop_closing");
+    return counts() + ", " + std::to_string(bytes >> 20) + " MB";
+  };
+  h.load = [this](const std::string& path) {
+    startOver(loadStage(std::make_unique<binloop::LoopCloser>(params_), path, "loop_closing"));
+    return counts();
+  };
+  h.reset = [this] { startOver(std::make_unique<binloop::LoopCloser>(params_)); };
+  h.statistics = [this] {
+    return StageStatistics{{"keyframes", std::to_string(closer_->keyframeCount())},
+                           {"loops", std::to_string(closer_->loops().size())},
+                           {"corrections", std::to_string(closer_->correctionsMade())},
+                           {"loops_verified", std::to_string(verified_)}};
+  };
+  services_ = std::make_unique<StageServices>(pnh, "loop_closing", h);
+}
+
+// A loaded map or a reset: what the nodelet kept of the old closer's input goes; a loaded map's loops show.
+void LoopClosingNodelet::startOver(std::unique_ptr<binloop::LoopCloser> c) {
+  closer_ = std::move(c);
+  pending_.clear();
+  keyframes_seen_.clear();
+  updates_seen_.clear();
+  edges_.clear();
+  for (const auto& e : closer_->loops()) edges_.push_back({e.query, e.candidate, "accepted"});
+  publishPathAndEdges(ros::Time::now());
+}
+
+std::string LoopClosingNodelet::counts() const {
+  return std::to_string(closer_->keyframeCount()) + " keyframes, " + std::to_string(closer_->loops().size()) +
+         " loops closed";
 }
 
 void LoopClosingNodelet::problem(const std::string& what) {

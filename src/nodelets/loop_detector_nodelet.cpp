@@ -17,6 +17,7 @@
 #include "binloop_ros/cpu_meter.h"
 #include "binloop_ros/node_params.h"
 #include "binloop_ros/stage_msg_conversion.h"
+#include "binloop_ros/stage_services.h"
 
 namespace binloop_ros {
 
@@ -29,6 +30,14 @@ class LoopDetectorNodelet : public nodelet::Nodelet {
   void onReconfigure(binloop::LoopDetectorConfig& c, uint32_t level);
   void diagnose(diagnostic_updater::DiagnosticStatusWrapper& s);
   ros::Publisher& shadowPublisher(const std::string& model);
+  /// A detector with the rules, models and shadow models of the last reconfiguration.
+  std::unique_ptr<binloop::LoopDetector> makeDetector() const;
+  std::string counts() const;
+
+  binloop::LoopDetectorParams params_;
+  binloop::LoopDetector::ModelFactory make_;
+  std::vector<std::string> shadow_;
+  std::unique_ptr<StageServices> services_;
 
   binloop::SlamConfig config_;
   std::string vocab_dir_;
@@ -69,6 +78,48 @@ void LoopDetectorNodelet::onInit() {
   reconfigure_ = std::make_unique<dynamic_reconfigure::Server<binloop::LoopDetectorConfig>>(pnh);
   reconfigure_->setCallback([this](binloop::LoopDetectorConfig& c, uint32_t level) { onReconfigure(c, level); });
   keyframe_sub_ = nh.subscribe("refined_keyframe", 1000, &LoopDetectorNodelet::onKeyframe, this);
+  StageServiceHandlers h;
+  auto need = [this] {
+    if (!detector_) throw std::runtime_error("no usable loop model: " + last_problem_);
+  };
+  h.save = [this, need](const std::string& path) {
+    need();
+    const size_t bytes = saveStage(*detector_, path, "loop_detector");
+    return counts() + ", " + std::to_string(bytes >> 20) + " MB";
+  };
+  h.load = [this, need](const std::string& path) {
+    need();
+    detector_ = loadStage(makeDetector(), path, "loop_detector");
+    return counts() + " (index rebuilt from the map's keyframes)";
+  };
+  h.reset = [this, need] {
+    need();
+    detector_ = makeDetector();
+  };
+  h.statistics = [this] {
+    StageStatistics s{{"queries", std::to_string(queries_)}, {"candidates_accepted", std::to_string(accepted_)}};
+    if (detector_) {
+      s.emplace_back("model", detector_->activeModel());
+      s.emplace_back("keyframes", std::to_string(detector_->keyframeCount()));
+      s.emplace_back("index_keyframes", std::to_string(detector_->indexSize()));
+      s.emplace_back("index_bytes", std::to_string(detector_->indexBytes()));
+    }
+    return s;
+  };
+  services_ = std::make_unique<StageServices>(pnh, "loop_detector", h);
+}
+
+std::unique_ptr<binloop::LoopDetector> LoopDetectorNodelet::makeDetector() const {
+  auto d = std::make_unique<binloop::LoopDetector>(params_, make_);
+  d->setShadowModels(shadow_);
+  d->setModelIdentity(binloop::modelFileIdentities(vocab_dir_));
+  return d;
+}
+
+std::string LoopDetectorNodelet::counts() const {
+  return std::to_string(detector_->keyframeCount()) + " keyframes, " + detector_->activeModel() + " index of " +
+         std::to_string(detector_->indexSize()) + " keyframes (" + std::to_string(detector_->indexBytes() >> 10) +
+         " kB)";
 }
 
 void LoopDetectorNodelet::onReconfigure(binloop::LoopDetectorConfig& c, uint32_t) {
@@ -97,6 +148,10 @@ void LoopDetectorNodelet::onReconfigure(binloop::LoopDetectorConfig& c, uint32_t
       detector_->reconfigure(p, make);
     }
     detector_->setShadowModels(shadow);
+    detector_->setModelIdentity(binloop::modelFileIdentities(vocab_dir_));
+    params_ = p;
+    make_ = make;
+    shadow_ = shadow;
     last_problem_.clear();
     NODELET_INFO("binloop/LoopDetector: %s from the next keyframe (consistency %d, %zu shadow models)",
                  p.model.c_str(), p.consistency, shadow.size());

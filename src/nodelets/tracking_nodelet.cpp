@@ -10,6 +10,7 @@
 #include <nav_msgs/Odometry.h>
 #include <nav_msgs/Path.h>
 #include <nodelet/nodelet.h>
+#include <opencv2/imgproc.hpp>
 #include <pluginlib/class_list_macros.hpp>
 #include <tf2_ros/static_transform_broadcaster.h>
 #include <tf2_ros/transform_broadcaster.h>
@@ -23,6 +24,7 @@
 #include "binloop_ros/cpu_meter.h"
 #include "binloop_ros/node_params.h"
 #include "binloop_ros/stage_msg_conversion.h"
+#include "binloop_ros/stage_services.h"
 #include "binloop_ros/topics.h"
 
 namespace binloop_ros {
@@ -46,7 +48,10 @@ class TrackingNodelet : public nodelet::Nodelet {
   std::string check(const Image& left, const Image& right);
   void publishPose(const binloop::msg::TrackedFrame& f, const std_msgs::Header& header);
   void reject(const std::string& why);
+  void publishDebugImage(const cv::Mat& gray, const binloop::msg::TrackedFrame& f, const std_msgs::Header& header);
   void diagnose(diagnostic_updater::DiagnosticStatusWrapper& s);
+  void startOver(std::unique_ptr<binloop::Tracker> t);
+  std::unique_ptr<StageServices> services_;
 
   binloop::SlamConfig config_;
   std::unique_ptr<binloop::Tracker> tracker_;
@@ -62,7 +67,7 @@ class TrackingNodelet : public nodelet::Nodelet {
   std::unique_ptr<mf::Synchronizer<Exact>> exact_;
   std::unique_ptr<mf::Synchronizer<Approx>> approx_;
   ros::Subscriber left_info_sub_, right_info_sub_, update_sub_;
-  ros::Publisher keyframe_pub_, frame_pub_, pose_pub_, odom_pub_, path_pub_;
+  ros::Publisher keyframe_pub_, frame_pub_, pose_pub_, odom_pub_, path_pub_, debug_pub_;
   std::unique_ptr<tf2_ros::TransformBroadcaster> tf_;
   std::unique_ptr<tf2_ros::StaticTransformBroadcaster> static_tf_;
   std::unique_ptr<diagnostic_updater::Updater> diag_;
@@ -76,6 +81,10 @@ class TrackingNodelet : public nodelet::Nodelet {
   std::string last_problem_;
   double last_stamp_diff_ = 0, last_latency_ms_ = 0;
   binloop::Pose3 T_odom_c_ = binloop::Pose3::Identity(), T_w_c_last_ = binloop::Pose3::Identity();
+  // ~base_frame with ~camera_in_base [x y z qx qy qz qw]: the robot's frame, whose pose odom then publishes
+  // (odom starts where the base starts); empty: odom publishes the camera's pose.
+  std::string base_frame_;
+  binloop::Pose3 T_base_c_ = binloop::Pose3::Identity();
   binloop::Pose3 last_motion_ = binloop::Pose3::Identity();
   bool have_last_ = false;
 };
@@ -86,13 +95,14 @@ void TrackingNodelet::onInit() {
   try {
     requireKnownParams(pnh, {"config", "reloc_vocab", "force_extractor", "sync", "queue_size", "max_stamp_diff",
                              "map_frame", "odom_frame", "camera_frame", "camera", "seed", "lockstep",
-                             "view_frame", "ground_truth_frame"});
+                             "view_frame", "ground_truth_frame", "base_frame", "camera_in_base"});
     config_ = slamConfigFrom(pnh);
     config_.tracker.seed = static_cast<uint64_t>(numberParam(pnh, "seed", 1));
     const std::string reloc = stringParam(pnh, "reloc_vocab", "");
     if (!reloc.empty())
       config_.tracker.vocabulary =
           binloop::loadRelocalisationVocabulary(reloc, config_.tracker.orb, boolParam(pnh, "force_extractor", false));
+    if (!reloc.empty()) config_.tracker.vocabulary_identity = binloop::modelFileIdentity(reloc);
     if (pnh.hasParam("camera")) {  // calibration from YAML (rosparam) instead of camera_info
       binloop::StereoCamera cam;
       cam.fx = numberParam(pnh, "camera/fx", 0);
@@ -112,6 +122,23 @@ void TrackingNodelet::onInit() {
   map_frame_ = stringParam(pnh, "map_frame", "map");
   odom_frame_ = stringParam(pnh, "odom_frame", "odom");
   camera_frame_ = stringParam(pnh, "camera_frame", "");  // "": the left image's frame_id
+  base_frame_ = stringParam(pnh, "base_frame", "");
+  if (!base_frame_.empty()) {
+    std::vector<double> v;
+    if (!pnh.getParam("camera_in_base", v) || v.size() != 7) {
+      NODELET_FATAL("binloop/Tracking: ~base_frame needs ~camera_in_base: [x, y, z, qx, qy, qz, qw], the camera's pose in it");
+      throw ConversionError("~camera_in_base must be a list of 7 numbers");
+    }
+    geometry_msgs::Pose p;
+    p.position.x = v[0];
+    p.position.y = v[1];
+    p.position.z = v[2];
+    p.orientation.x = v[3];
+    p.orientation.y = v[4];
+    p.orientation.z = v[5];
+    p.orientation.w = v[6];
+    T_base_c_ = toPose3(p);
+  }
   max_stamp_diff_ = numberParam(pnh, "max_stamp_diff", 0.002);
   lockstep_ = boolParam(pnh, "lockstep", false);
   const int queue = static_cast<int>(numberParam(pnh, "queue_size", 5));
@@ -124,6 +151,7 @@ void TrackingNodelet::onInit() {
   pose_pub_ = nh.advertise<geometry_msgs::PoseStamped>("pose", 10);
   odom_pub_ = nh.advertise<nav_msgs::Odometry>("odom", 10);
   path_pub_ = nh.advertise<nav_msgs::Path>("live_path", 1, true);
+  debug_pub_ = nh.advertise<sensor_msgs::Image>("debug_image", 1);
   tf_ = std::make_unique<tf2_ros::TransformBroadcaster>();
   // The map frame is the first camera's optical frame (z forward, y down). ~view_frame: a z-up frame over it
   // (x forward, y left) for rviz's top views. ~ground_truth_frame: a frame that coincides with the map (KITTI's
@@ -169,8 +197,46 @@ void TrackingNodelet::onInit() {
   diag_ = std::make_unique<diagnostic_updater::Updater>(nh, pnh);
   diag_->setHardwareID("binloop");
   diag_->add("tracking", this, &TrackingNodelet::diagnose);
+  StageServiceHandlers h;
+  h.save = [this](const std::string& path) {
+    if (!tracker_) throw std::runtime_error("tracking has no camera yet, so no map");
+    const size_t bytes = saveStage(*tracker_, path, "tracking");
+    return std::to_string(tracker_->map().keyframeCount()) + " keyframes, " +
+           std::to_string(tracker_->map().pointCount()) + " map points in its replica, " +
+           std::to_string(bytes >> 20) + " MB";
+  };
+  h.load = [this](const std::string& path) {
+    // Without a camera yet, the map's own: the first camera_info must then agree with it (image sizes are checked).
+    const binloop::StereoCamera cam = tracker_ ? tracker_->camera() : binloop::Tracker::savedCamera(path);
+    startOver(loadStage(std::make_unique<binloop::Tracker>(cam, config_.tracker), path, "tracking"));
+    return std::to_string(tracker_->map().keyframeCount()) + " keyframes, " +
+           std::to_string(tracker_->map().pointCount()) + " map points; lost until the next frames are relocalised";
+  };
+  h.reset = [this] {
+    startOver(fixed_camera_ ? std::make_unique<binloop::Tracker>(*fixed_camera_, config_.tracker) : nullptr);
+  };
+  h.statistics = [this] {
+    StageStatistics s{{"frames", std::to_string(frames_)}, {"frames_lost", std::to_string(lost_)},
+                      {"input_dropped", std::to_string(rejected_)}, {"keyframes_sent", std::to_string(keyframes_sent_)}};
+    if (tracker_) {
+      s.emplace_back("state", binloop::msg::toString(tracker_->state()));
+      s.emplace_back("keyframes", std::to_string(tracker_->map().keyframeCount()));
+      s.emplace_back("map_points", std::to_string(tracker_->map().pointCount()));
+    }
+    return s;
+  };
+  services_ = std::make_unique<StageServices>(pnh, "tracking", h);
   NODELET_INFO("binloop/Tracking: %s sync on %s + %s, map frame '%s'", sync.c_str(), topics::kLeftImage,
                topics::kRightImage, map_frame_.c_str());
+}
+
+// A loaded map or a reset: the tracker is replaced, and what the nodelet kept of the old one's frames goes.
+void TrackingNodelet::startOver(std::unique_ptr<binloop::Tracker> t) {
+  tracker_ = std::move(t);
+  pending_ = 0;
+  have_last_ = false;
+  last_stamp_ = ros::Time();
+  path_.poses.clear();
 }
 
 void TrackingNodelet::onInfo(const sensor_msgs::CameraInfoConstPtr& info, bool right) {
@@ -268,6 +334,7 @@ void TrackingNodelet::track(const sensor_msgs::ImageConstPtr& left, const sensor
   std_msgs::Header header = left->header;
   if (!camera_frame_.empty()) header.frame_id = camera_frame_;
   publishPose(out.frame, header);
+  if (debug_pub_.getNumSubscribers() > 0) publishDebugImage(frame.left, out.frame, header);
   last_latency_ms_ = (ros::WallTime::now() - t0).toSec() * 1e3;
   diag_->update();
 }
@@ -283,7 +350,7 @@ void TrackingNodelet::publishPose(const binloop::msg::TrackedFrame& f, const std
     T_odom_c_ = T_odom_c_ * motion;
     last_motion_ = motion;
   } else {
-    T_odom_c_ = f.T_w_c;
+    T_odom_c_ = base_frame_.empty() ? f.T_w_c : T_base_c_;  // odom starts at the first camera / base pose
   }
   have_last_ = true;
   corrections_at_last_ = corrections_;
@@ -298,8 +365,10 @@ void TrackingNodelet::publishPose(const binloop::msg::TrackedFrame& f, const std
   nav_msgs::Odometry odom;
   odom.header.stamp = header.stamp;
   odom.header.frame_id = odom_frame_;
-  odom.child_frame_id = header.frame_id;
-  odom.pose.pose = toPoseMsg(T_odom_c_);
+  const bool base = !base_frame_.empty();
+  const binloop::Pose3 T_odom_x = base ? binloop::Pose3(T_odom_c_ * T_base_c_.inverse()) : T_odom_c_;
+  odom.child_frame_id = base ? base_frame_ : header.frame_id;
+  odom.pose.pose = toPoseMsg(T_odom_x);
   odom_pub_.publish(odom);
 
   path_.header = pose.header;
@@ -318,8 +387,39 @@ void TrackingNodelet::publishPose(const binloop::msg::TrackedFrame& f, const std
     t.transform.rotation = p.orientation;
     return t;
   };
-  tf_->sendTransform({tf(f.T_w_c * T_odom_c_.inverse(), map_frame_, odom_frame_),
-                      tf(T_odom_c_, odom_frame_, header.frame_id)});
+  std::vector<geometry_msgs::TransformStamped> tfs = {tf(f.T_w_c * T_odom_c_.inverse(), map_frame_, odom_frame_),
+                                                      tf(T_odom_x, odom_frame_, odom.child_frame_id)};
+  if (base) tfs.push_back(tf(T_base_c_, base_frame_, header.frame_id));
+  tf_->sendTransform(tfs);
+}
+
+// The left image with its features: green tracked (matched to a map point and an inlier), orange matched but
+// rejected as an outlier, blue with a stereo match only, grey the rest; the state and counts on top.
+void TrackingNodelet::publishDebugImage(const cv::Mat& gray, const binloop::msg::TrackedFrame& f,
+                                        const std_msgs::Header& header) {
+  cv::Mat img;
+  cv::cvtColor(gray, img, cv::COLOR_GRAY2BGR);
+  const binloop::Frame* last = tracker_->lastFrame();
+  if (last && last->index == f.frame_index) {
+    for (size_t i = 0; i < last->size(); ++i) {
+      const auto& k = last->keypoints[i];
+      cv::Scalar colour(150, 150, 150);
+      if (last->points[i] != binloop::kNoId) colour = last->outlier[i] ? cv::Scalar(0, 140, 255) : cv::Scalar(0, 220, 0);
+      else if (k.right_x >= 0) colour = cv::Scalar(255, 120, 0);
+      cv::circle(img, cv::Point2f(k.x, k.y), 2 + k.octave, colour, 1, cv::LINE_AA);
+    }
+  }
+  const std::string text = std::string(binloop::msg::toString(f.state)) + "  features " + std::to_string(f.features) +
+                           "  stereo " + std::to_string(f.stereo_matches) + "  tracked " + std::to_string(f.tracked_points);
+  cv::putText(img, text, cv::Point(10, 25), cv::FONT_HERSHEY_SIMPLEX, 0.7, cv::Scalar(0, 255, 255), 2, cv::LINE_AA);
+  auto msg = boost::make_shared<sensor_msgs::Image>();
+  msg->header = header;
+  msg->height = img.rows;
+  msg->width = img.cols;
+  msg->encoding = "bgr8";
+  msg->step = img.cols * 3;
+  msg->data.assign(img.data, img.data + img.total() * 3);
+  debug_pub_.publish(msg);
 }
 
 void TrackingNodelet::onUpdate(const binloop::LocalMapUpdateConstPtr& m) {

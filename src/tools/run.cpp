@@ -46,6 +46,7 @@ int main(int argc, char** argv) {
                "scripts/binloop run <sequence_dir> --out <dir> [--config config/kitti.yaml]\n"
                "    [--detector hbow|fabmap|vlad|hmvlad|vladpq|none] [--shadow all|M,M] [--switch-detector-at KF:M]\n"
                "    [--lockstep] [--seed N] [--start N] [--end N] [--reloc-vocab vocab/kitti08/hbow.bin|none]\n"
+               "    [--load-map <dir>] [--save-map <dir>]\n"
                "Tracks and maps a KITTI-layout stereo sequence (image_0/, image_1/, calib.txt, times.txt), closes loops,\n"
                "and writes trajectory.kitti.txt / .tum.txt (every frame, loop-corrected), keyframes.kitti.txt / .tum.txt,\n"
                "timing.csv, loops.csv (one row per keyframe and model queried), summary.json.");
@@ -64,6 +65,8 @@ int main(int argc, char** argv) {
               "hbow vocabulary that indexes the keyframes for relocalisation anywhere in the map; 'none': only the "
               "most recent keyframes are tried (also when the default file is missing, with a warning)",
               "vocab/kitti08/hbow.bin")
+      .option("load-map", "start in a map saved by --save-map or the ROS save_map service (tracking relocalises in it)")
+      .option("save-map", "save the map at the end (one state file per stage, as the ROS save_map service)")
       .flag("force-extractor", "use a vocabulary trained with other extractor settings than config's orb section");
   return runTool("run", [&] {
     if (!args.parse(argc, argv)) return 0;
@@ -93,6 +96,7 @@ int main(int argc, char** argv) {
       } else {
         config.tracker.vocabulary =
             loadRelocalisationVocabulary(reloc_vocab, config.tracker.orb, args.has("force-extractor"));
+        config.tracker.vocabulary_identity = modelFileIdentity(reloc_vocab);
       }
     }
     const KittiSequence seq = KittiSequence::open(args.str("sequence_dir"));
@@ -116,6 +120,7 @@ int main(int argc, char** argv) {
       l.closer = config.closer;
       l.closer.verify.seed = config.tracker.seed;
       l.make_model = modelFileFactory(args.str("vocab-dir"), config.tracker.orb, args.has("force-extractor"));
+      l.model_identity = modelFileIdentities(args.str("vocab-dir"));
       if (args.has("shadow")) {
         std::string s = args.str("shadow");
         if (s == "all") {
@@ -149,6 +154,7 @@ int main(int argc, char** argv) {
     }
     SlamPipeline slam(seq.camera(), config.tracker, config.mapper,
                       lockstep ? PipelineMode::kLockStep : PipelineMode::kThreaded, 3, loops);
+    if (args.has("load-map")) slam.loadMap(args.str("load-map"));
     std::vector<msg::TrackedFrame> frames;
     ProgressBar bar("run", static_cast<size_t>(end - start));
     const auto t0 = std::chrono::steady_clock::now();
@@ -175,6 +181,10 @@ int main(int argc, char** argv) {
     }
     slam.finish();
     bar.finish();
+    if (args.has("save-map")) {
+      slam.saveMap(args.str("save-map"));
+      std::cerr << "run: map saved in " << args.str("save-map") << "\n";
+    }
     const double wall_s = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
 
     // Final poses: each frame rides on its reference keyframe as local mapping left it.

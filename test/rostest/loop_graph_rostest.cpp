@@ -2,9 +2,15 @@
 // made by kitti2bag from a rendered drive of 1.25 laps round a 50 x 80 m block (one revisit) into the
 // graph, switches the loop detector with dynamic_reconfigure on the way, and checks what the graph
 // publishes: a LoopClosure near the revisit, the corrected path, the final pose against the ground truth.
-// Then it sends malformed stereo pairs and checks that the graph says so and keeps tracking.
+// Then it saves the map, resets the graph and loads the map into it (the same keyframes and index, and a
+// pair of the start tracked in it again), and sends malformed stereo pairs and checks that the graph says
+// so and keeps tracking.
 #include <binloop/LoopCandidates.h>
+#include <binloop/LoadMap.h>
 #include <binloop/LoopClosure.h>
+#include <binloop/Reset.h>
+#include <binloop/SaveMap.h>
+#include <binloop/Statistics.h>
 #include <diagnostic_msgs/DiagnosticArray.h>
 #include <dynamic_reconfigure/Reconfigure.h>
 #include <geometry_msgs/PoseStamped.h>
@@ -207,6 +213,93 @@ TEST_F(LoopGraph, TheRevisitIsClosedTheDetectorSwitchesAndBadPairsAreReported) {
   const double err = (Eigen::Vector3d(p.x, p.y, p.z) - truth).norm();
   std::cout << "final pose error " << err << " m; " << seen_.closures.size() << " loops verified\n";
   EXPECT_LT(err, 0.5);
+}
+
+std::map<std::string, std::string> statistics() {
+  binloop::Statistics srv;
+  std::map<std::string, std::string> out;
+  if (!ros::service::call("/binloop/statistics", srv)) return out;
+  for (const auto& kv : srv.response.values) out[kv.key] = kv.value;
+  return out;
+}
+
+// After the first test's drive (or alone, after a short one): save, reset, load into the emptied graph.
+TEST_F(LoopGraph, TheMapIsSavedAndLoadedIntoAFreshGraphWithTheSameKeyframesAndIndex) {
+  const Drive& d = drive();
+  ASSERT_TRUE(d.problem.empty()) << d.problem;
+  const std::vector<Pair> pairs = readPairs(d.bag);
+  ASSERT_TRUE(graphConnected());
+  ASSERT_TRUE(ros::service::waitForService("/binloop/save_map", ros::Duration(30)));
+  const auto at_start = statistics();
+  auto kfs = at_start.find("local_mapping/keyframes");
+  if (kfs == at_start.end() || std::stoi(kfs->second) < 10)  // run alone: map a stretch first
+    for (size_t i = 0; i < 80; ++i) {
+      publishPair(pairs[i].left, pairs[i].right, pairs[i].left_info, pairs[i].right_info);
+      const double stamp = pairs[i].left.header.stamp.toSec();
+      waitFor(1.0, [&] { return seen_.poses.count(stamp) > 0; });
+    }
+  ros::WallDuration(2.0).sleep();  // the last keyframes through mapping and the loop stages
+  const auto before = statistics();
+  ASSERT_FALSE(before.empty()) << "no /binloop/statistics";
+  for (const char* k : {"local_mapping/keyframes", "loop_detector/keyframes", "loop_closing/keyframes"})
+    ASSERT_TRUE(before.count(k)) << k;
+  EXPECT_GT(std::stoi(before.at("local_mapping/keyframes")), 10);
+
+  binloop::test::TempDir dir;
+  binloop::SaveMap save;
+  save.request.directory = dir / "map";
+  ASSERT_TRUE(ros::service::call("/binloop/save_map", save));
+  ASSERT_TRUE(save.response.success) << save.response.message;
+  std::cout << "saved: " << save.response.message << "\n";
+
+  binloop::Reset reset;
+  ASSERT_TRUE(ros::service::call("/binloop/reset", reset));
+  ASSERT_TRUE(reset.response.success) << reset.response.message;
+  const auto empty = statistics();
+  EXPECT_EQ(empty.at("local_mapping/keyframes"), "0");
+  EXPECT_EQ(empty.at("loop_detector/keyframes"), "0");
+  EXPECT_EQ(empty.at("loop_closing/keyframes"), "0");
+
+  binloop::LoadMap bad;
+  bad.request.directory = dir / "nothing";
+  ASSERT_TRUE(ros::service::call("/binloop/load_map", bad));
+  EXPECT_FALSE(bad.response.success);
+  EXPECT_NE(bad.response.message.find("no such state file"), std::string::npos) << bad.response.message;
+
+  binloop::LoadMap load;
+  load.request.directory = dir / "map";
+  ASSERT_TRUE(ros::service::call("/binloop/load_map", load));
+  ASSERT_TRUE(load.response.success) << load.response.message;
+  std::cout << "loaded: " << load.response.message << "\n";
+  const auto after = statistics();
+  for (const char* k : {"tracking/keyframes", "tracking/map_points", "local_mapping/keyframes", "local_mapping/map_points",
+                        "loop_detector/model", "loop_detector/keyframes", "loop_detector/index_keyframes",
+                        "loop_detector/index_bytes", "loop_closing/keyframes", "loop_closing/loops"})
+    EXPECT_EQ(after.count(k) ? after.at(k) : "missing", before.count(k) ? before.at(k) : "missing") << k;
+  EXPECT_EQ(after.at("tracking/state"), "lost");
+
+  // A pair seen before, later in time: relocalised in the loaded map, where it was. (Without a relocalisation
+  // vocabulary, as here, tracking tries the map's most recent keyframes: a pair from the last stretch.)
+  const size_t i = pairs.size() - 12;
+  Pair p = pairs[i];
+  const ros::Time t = pairs.back().left.header.stamp + ros::Duration(50);
+  p.left.header.stamp = p.right.header.stamp = p.left_info.header.stamp = p.right_info.header.stamp = t;
+  bool placed = false;
+  for (int tries = 0; tries < 3 && !placed; ++tries) {  // the first may only find the place, the next tracks it
+    const ros::Time s = t + ros::Duration(0.1 * tries);
+    p.left.header.stamp = p.right.header.stamp = p.left_info.header.stamp = p.right_info.header.stamp = s;
+    publishPair(p.left, p.right, p.left_info, p.right_info);
+    waitFor(5, [&] { return seen_.poses.count(s.toSec()) > 0; });
+    std::lock_guard<std::mutex> lk(seen_.m);
+    auto it = seen_.poses.find(s.toSec());
+    if (it == seen_.poses.end()) continue;
+    const Eigen::Vector3d truth = (d.route.front().inverse() * d.route[i]).translation();
+    const geometry_msgs::Point& q = it->second.position;
+    const double err = (Eigen::Vector3d(q.x, q.y, q.z) - truth).norm();
+    std::cout << "pair " << i << " after the load, try " << tries << ": " << err << " m from the truth\n";
+    placed = err < 0.5;
+  }
+  EXPECT_TRUE(placed) << "a place of the loaded map was not found again";
 }
 
 TEST_F(LoopGraph, MalformedPairsAreReportedAndTrackingGoesOn) {

@@ -39,6 +39,9 @@
 
 namespace binloop {
 
+class StateWriter;
+class StateReader;
+
 struct LoopCloserParams {
   LoopVerifierParams verify;
   EssentialGraphParams graph;
@@ -84,6 +87,12 @@ class LoopCloser {
   std::vector<KeyframePose> keyframePoses() const;
   const std::vector<LoopEdge>& loops() const { return loops_; }
   uint64_t correctionsMade() const { return history_.applied(); }
+
+  /// Its keyframes (as refined and corrected), the loops closed and the corrections made. A held loop is not
+  /// saved: it waits for a confirmation that a loaded map will not bring.
+  void save(StateWriter& w) const;
+  /// Into a newly made closer. Throws DataError for a broken file.
+  void load(StateReader& r);
 
  private:
   struct Held {

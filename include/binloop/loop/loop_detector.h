@@ -22,6 +22,9 @@
 
 namespace binloop {
 
+class StateWriter;
+class StateReader;
+
 struct LoopDetectorParams {
   std::string model = "hbow";
   int max_reference = 10;   // strongest covisible neighbours that set the bar
@@ -61,6 +64,22 @@ class LoopDetector {
 
   const std::string& activeModel() const { return active_name_; }
   size_t keyframeCount() const { return order_.size(); }
+  /// Keyframes in the active model's index (equal to keyframeCount() except between a switch and the next
+  /// keyframe, when the new index is built).
+  size_t indexSize() const { return active_.recognizer->size(); }
+  size_t indexBytes() const { return active_.recognizer->size() * active_.recognizer->indexBytesPerKeyframe(); }
+
+  /// What a model's index depends on besides the keyframes (its vocabulary file: model_files.h), for the
+  /// check when a saved map is loaded; "" = unknown, not checked.
+  using ModelIdentity = std::function<std::string(const std::string& name)>;
+  void setModelIdentity(ModelIdentity id) { identity_ = std::move(id); }
+  /// Every keyframe's descriptors and covisibility, and which models had an index with which vocabulary
+  /// (an index is rebuilt from the descriptors on load, so the same keyframes give the same index).
+  void save(StateWriter& w) const;
+  /// Into a newly made detector: its own models (active and shadow) are built from the saved keyframes.
+  /// Throws DataError for a broken file, or when the map's index of a model was built with another vocabulary
+  /// than this detector's model of that name.
+  void load(StateReader& r);
 
  private:
   struct Model {
@@ -85,6 +104,7 @@ class LoopDetector {
   std::vector<SlamKeyframeId> order_;
   std::vector<Descriptors> descriptors_;
   std::unordered_map<SlamKeyframeId, std::map<SlamKeyframeId, uint32_t>> covisible_;  // both directions
+  ModelIdentity identity_;
 };
 
 }  // namespace binloop

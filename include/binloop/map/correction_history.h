@@ -11,6 +11,9 @@
 
 namespace binloop {
 
+class StateWriter;
+class StateReader;
+
 class CorrectionHistory {
  public:
   /// Starts correction `sequence` (1, 2, ...: each follows the one before).
@@ -26,6 +29,9 @@ class CorrectionHistory {
   /// since(), and records that keyframe `id` (made late) moved with `anchor` in those corrections, so that
   /// keyframes made on it later move the same way.
   Pose3 adopt(uint64_t seen, SlamKeyframeId id, SlamKeyframeId anchor);
+
+  void save(StateWriter& w) const;
+  void load(StateReader& r);
 
  private:
   std::vector<std::unordered_map<SlamKeyframeId, Pose3>> deltas_;  // [sequence - 1]

@@ -22,6 +22,8 @@ class IdCounter {
   explicit IdCounter(IdIssuer who) : base_(uint64_t(static_cast<uint8_t>(who)) << 56) {}
   uint64_t next() { return base_ | ++count_; }
   uint64_t issued() const { return count_; }
+  /// Continues after `issued` ids (a loaded map), so that no id is issued twice.
+  void restore(uint64_t issued) { count_ = issued; }
 
  private:
   uint64_t base_;

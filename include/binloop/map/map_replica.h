@@ -11,6 +11,11 @@
 #include "binloop/messages/local_map_update.h"
 
 namespace binloop {
+class StateWriter;
+class StateReader;
+}  // namespace binloop
+
+namespace binloop {
 
 class MapReplica {
  public:
@@ -36,6 +41,10 @@ class MapReplica {
   size_t pointCount() const { return points_.size(); }
   size_t keyframeCount() const { return keyframes_.size(); }
   SlamKeyframeId lastKeyframe() const { return last_keyframe_; }
+
+  /// Its whole content, in id order (two saves of the same replica give the same bytes); load() replaces it.
+  void save(StateWriter& w) const;
+  void load(StateReader& r);
 
  private:
   void unlinkKeyframe(const msg::KeyframeState& kf);

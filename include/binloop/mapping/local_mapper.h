@@ -22,6 +22,9 @@
 
 namespace binloop {
 
+class StateWriter;
+class StateReader;
+
 struct LocalMapperParams {
   int covisibility_min = 15;       // shared points for an edge of the covisibility graph
   int cull_after_keyframes = 2;    // a new point is judged this many keyframes after its creation...
@@ -81,6 +84,12 @@ class LocalMapper {
   std::vector<Eigen::Vector3d> pointPositions() const;
   size_t keyframeCount() const { return kfs_.size(); }
   size_t pointCount() const { return pts_.size(); }
+
+  /// The whole map it owns (keyframes with keypoints and descriptors, points with their observations, the
+  /// culled keyframes' anchors, corrections made), in id order: two saves of one map give the same bytes.
+  void save(StateWriter& w) const;
+  /// Into a newly made mapper. Throws DataError for a broken file.
+  void load(StateReader& r);
 
  private:
   struct KF {

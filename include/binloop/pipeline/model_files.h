@@ -17,6 +17,11 @@ namespace binloop {
 LoopDetector::ModelFactory modelFileFactory(const std::string& dir, const OrbSlamParams& orb, bool force,
                                             RecognizerOptions options = {});
 
+/// The identity (place/model_file.h, modelIdentity) of <dir>/<name>.bin, "" when it cannot be read: what a
+/// saved map records and checks of the vocabularies its indices were built with.
+std::string modelFileIdentity(const std::string& path);
+LoopDetector::ModelIdentity modelFileIdentities(const std::string& dir);
+
 /// The hbow vocabulary tracking indexes its keyframes with for relocalisation, checked like a model.
 /// Throws PlaceError for a missing, corrupt or mismatched file.
 std::shared_ptr<const VocabularyTree> loadRelocalisationVocabulary(const std::string& path, const OrbSlamParams& orb,

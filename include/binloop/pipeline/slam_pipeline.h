@@ -32,6 +32,7 @@ struct LoopClosingSetup {
   LoopCloserParams closer;
   std::vector<std::string> shadow;
   std::vector<std::pair<size_t, std::string>> switches;  // (keyframes seen by the detector, model)
+  LoopDetector::ModelIdentity model_identity;  // vocabularies a saved map records (model_files.h)
 };
 
 class SlamPipeline {
@@ -52,6 +53,15 @@ class SlamPipeline {
   /// The model loop detection uses from its next keyframe on (any thread). Throws PlaceError for a model
   /// that cannot be made; the running one stays.
   void switchDetector(const std::string& model);
+
+  /// Writes every stage's state into `directory` (made if missing), one file per stage as the ROS map services
+  /// do (io/state_file.h, stageStatePath). In lock-step, or after finish(). Throws DataError.
+  void saveMap(const std::string& directory) const;
+  /// Loads a map saved by saveMap (or the ROS save_map service) into this new pipeline, before its first
+  /// frame: tracking then relocalises in it and the loop stages search and correct it. Throws DataError
+  /// (a missing or broken file, another camera, extractor or vocabulary), and the pipeline must then be
+  /// discarded.
+  void loadMap(const std::string& directory);
 
   /// A loop between two keyframes from outside (another front end, a person), verified and guarded like a
   /// detected one by loop closing, on its thread, after what it has queued; the outcome appears in the loop

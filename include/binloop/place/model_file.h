@@ -76,6 +76,7 @@ struct ModelHeader {
   uint64_t training_descriptors = 0;
   uint64_t training_images = 0;
   ExtractorSettings extractor;  // what made the training descriptors (version 3; unknown before)
+  uint64_t payload_checksum = 0;  // of the file read (set by readers; the writer computes its own)
 
   std::string describe() const;
 };
@@ -83,6 +84,9 @@ struct ModelHeader {
 /// Reads and checks only the 128-byte header (magic, version, descriptor size): no mapping, no checksum,
 /// so a caller can look at a model before loading it. Throws PlaceError as ModelReader does.
 ModelHeader readModelHeader(const std::string& path);
+/// One line that tells two vocabularies apart (model type, words, training data hash, payload checksum): what a
+/// saved map records of the vocabulary its indices were built with.
+std::string modelIdentity(const ModelHeader& h);
 
 /// What a caller that loads a model will feed it, so that a model trained on other descriptors is caught
 /// at load time instead of silently finding nothing. `expected` unknown = no check.

@@ -15,6 +15,9 @@
 
 namespace binloop {
 
+class StateWriter;
+class StateReader;
+
 class KeyframeDatabase {
  public:
   explicit KeyframeDatabase(std::shared_ptr<const VocabularyTree> voc);
@@ -23,6 +26,10 @@ class KeyframeDatabase {
   /// A keyframe local mapping culled: never a candidate again.
   void remove(SlamKeyframeId id);
   size_t size() const { return bows_.size(); }
+  /// The bag-of-words vectors (in id order); load() replaces them and rebuilds the inverted file. Only
+  /// meaningful with the vocabulary that made them: the tracker checks its identity.
+  void save(StateWriter& w) const;
+  void load(StateReader& r);
 
   /// Keyframes that look like `d`, best first, at most `max`: those sharing at least 80 % of the largest
   /// number of words any keyframe shares with it are scored (L1); each one's score is summed with its

@@ -16,6 +16,9 @@
 
 namespace binloop {
 
+class StateWriter;
+class StateReader;
+
 struct TrackerParams {
   OrbSlamParams orb;
   StereoMatchParams stereo;
@@ -41,6 +44,8 @@ struct TrackerParams {
   /// The hbow vocabulary that indexes tracking's keyframes for relocalisation anywhere in the map; without
   /// one, only the most recent keyframes are tried.
   std::shared_ptr<const VocabularyTree> vocabulary;
+  /// Which vocabulary that is (model_files.h, modelFileIdentity), checked when a saved map is loaded.
+  std::string vocabulary_identity;
   int reloc_min_matches = 15;    // descriptor matches a keyframe needs before PnP is tried
   PnpRansacParams pnp;
   uint64_t seed = 1;             // for the RANSAC samples
@@ -82,6 +87,18 @@ class Tracker {
   const MapReplica& map() const { return map_; }
   const TrackerParams& params() const { return p_; }
   const StereoCamera& camera() const { return cam_; }
+  /// The last frame tracked (its keypoints and the map point each matched), null before the first; for
+  /// display (the ROS debug image).
+  const Frame* lastFrame() const { return last_.get(); }
+
+  /// Its map replica, the ids it issued, the corrections it applied and its relocalisation index, with the
+  /// camera, the extractor settings and the vocabulary they depend on.
+  void save(StateWriter& w) const;
+  /// Into a newly made tracker (same camera, extractor settings and vocabulary, else DataError naming both).
+  /// It then starts lost: the next frame is relocalised in the loaded map.
+  void load(StateReader& r);
+  /// The camera a saved tracking state was made with, to make the tracker that loads it.
+  static StereoCamera savedCamera(const std::string& path);
 
  private:
   bool initialize(Frame& f, msg::KeyFramePtr* kf);

@@ -1,5 +1,8 @@
 #include "binloop/map/correction_history.h"
 
+#include "binloop/messages/message_state.h"
+
+#include <algorithm>
 #include <stdexcept>
 #include <string>
 
@@ -34,6 +37,35 @@ Pose3 CorrectionHistory::adopt(uint64_t seen, SlamKeyframeId id, SlamKeyframeId 
     deltas_[k][id] = it->second;
   }
   return d;
+}
+
+}  // namespace binloop
+
+namespace binloop {
+
+void CorrectionHistory::save(StateWriter& w) const {
+  w.put<uint64_t>(deltas_.size());
+  for (const auto& d : deltas_) {
+    std::vector<SlamKeyframeId> ids;
+    for (const auto& e : d) ids.push_back(e.first);
+    std::sort(ids.begin(), ids.end());
+    w.put<uint64_t>(ids.size());
+    for (SlamKeyframeId id : ids) {
+      w.put<uint64_t>(id);
+      writePose(w, d.at(id));
+    }
+  }
+}
+
+void CorrectionHistory::load(StateReader& r) {
+  deltas_.assign(r.getCount("corrections", 8), {});
+  for (auto& d : deltas_) {
+    const uint64_t n = r.getCount("corrected keyframes", 64);
+    for (uint64_t i = 0; i < n; ++i) {
+      const SlamKeyframeId id = r.get<uint64_t>("corrected keyframe");
+      d[id] = readPose(r, "correction");
+    }
+  }
 }
 
 }  // namespace binloop

@@ -17,6 +17,20 @@ LoopDetector::ModelFactory modelFileFactory(const std::string& dir, const OrbSla
   };
 }
 
+std::string modelFileIdentity(const std::string& path) {
+  try {
+    return modelIdentity(readModelHeader(path));
+  } catch (const PlaceError&) {
+    return "";
+  }
+}
+
+LoopDetector::ModelIdentity modelFileIdentities(const std::string& dir) {
+  return [dir](const std::string& name) {
+    return modelFileIdentity((std::filesystem::path(dir) / (name + ".bin")).string());
+  };
+}
+
 std::shared_ptr<const VocabularyTree> loadRelocalisationVocabulary(const std::string& path, const OrbSlamParams& orb,
                                                                    bool force) {
   ExtractorCheck check;

@@ -1,5 +1,10 @@
 #include "binloop/pipeline/slam_pipeline.h"
 
+#include <filesystem>
+
+#include "binloop/io/filesystem.h"
+#include "binloop/io/state_file.h"
+
 #include <chrono>
 
 namespace binloop {
@@ -14,6 +19,7 @@ SlamPipeline::SlamPipeline(const StereoCamera& cam, const TrackerParams& tp, con
       updates_(1u << 20) {
   if (loops) {
     detector_ = std::make_unique<LoopDetector>(loops->detector, loops->make_model);
+    if (loops->model_identity) detector_->setModelIdentity(loops->model_identity);
     if (!loops->shadow.empty()) detector_->setShadowModels(loops->shadow);
     closer_ = std::make_unique<LoopCloser>(loops->closer);
     switches_ = loops->switches;
@@ -32,6 +38,44 @@ SlamPipeline::SlamPipeline(const StereoCamera& cam, const TrackerParams& tp, con
 }
 
 SlamPipeline::~SlamPipeline() { finish(); }
+
+namespace {
+
+template <class Stage>
+void saveStage(const Stage& s, const std::string& dir, const char* name) {
+  StateWriter w(stageStatePath(dir, name), name);
+  s.save(w);
+  w.finish();
+}
+
+template <class Stage>
+void loadStage(Stage& s, const std::string& dir, const char* name) {
+  StateReader r(stageStatePath(dir, name), name);
+  s.load(r);
+}
+
+}  // namespace
+
+void SlamPipeline::saveMap(const std::string& directory) const {
+  std::error_code ec;
+  std::filesystem::create_directories(directory, ec);
+  if (ec) throw dataError(directory, 0, "cannot make the map folder: " + ec.message());
+  saveStage(tracker_, directory, "tracking");
+  saveStage(mapper_, directory, "local_mapping");
+  if (detector_) saveStage(*detector_, directory, "loop_detector");
+  if (closer_) saveStage(*closer_, directory, "loop_closing");
+}
+
+void SlamPipeline::loadMap(const std::string& directory) {
+  requireDirectory(directory);
+  if (detector_ && !std::filesystem::exists(stageStatePath(directory, "loop_detector")))
+    throw dataError(directory, 0, "the map has no loop_detector.state (saved without loop closing): load it with "
+                                  "loop closing off (--detector none)");
+  loadStage(tracker_, directory, "tracking");
+  loadStage(mapper_, directory, "local_mapping");
+  if (detector_) loadStage(*detector_, directory, "loop_detector");
+  if (closer_) loadStage(*closer_, directory, "loop_closing");
+}
 
 void SlamPipeline::switchDetector(const std::string& model) {
   if (!detector_) throw PlaceError("loop closing is off: no detector to switch");

@@ -72,6 +72,7 @@ ModelHeader decodeHeader(const std::string& path, const uint8_t* file, size_t si
   h.training_images = c.get<uint64_t>();
   *payload = c.get<uint64_t>();
   *checksum = c.get<uint64_t>();
+  h.payload_checksum = *checksum;
   if (h.version >= 3) {  // versions 1-2 left these bytes zero: extractor unknown
     ExtractorSettings& e = h.extractor;
     e.kind = static_cast<ExtractorKind>(c.get<uint32_t>());
@@ -327,6 +328,14 @@ ModelHeader readModelHeader(const std::string& path) {
   ModelHeader h = decodeHeader(path, bytes, n, &payload, &checksum);
   checkDescriptorBits(path, h);
   return h;
+}
+
+std::string modelIdentity(const ModelHeader& h) {
+  char buf[160];
+  std::snprintf(buf, sizeof buf, "%s vocabulary of %llu words (training data %016llx, checksum %016llx)",
+                modelTypeName(h.type).c_str(), static_cast<unsigned long long>(h.words),
+                static_cast<unsigned long long>(h.training_hash), static_cast<unsigned long long>(h.payload_checksum));
+  return buf;
 }
 
 void ModelReader::expectType(ModelType t) const {

@@ -15,51 +15,13 @@
 #include "binloop/sim/stereo_renderer.h"
 #include "binloop/sim/texture_bank.h"
 #include "support/test_support.h"
+#include "core/pipeline/loop_drive.h"
 
 using namespace binloop;
+using binloop::test::LoopDrive;
+using binloop::test::loopDrive;
 
 namespace {
-
-struct LoopDrive {
-  std::vector<Pose3> route;
-  std::vector<StereoFrame> frames;
-  StereoCamera cam = kittiCameraByName("kitti04");
-  std::unique_ptr<test::TempDir> dir;
-  std::string vocabulary;
-  size_t lap = 0;  // frames in one lap
-};
-
-const LoopDrive* loopDrive() {
-  static std::unique_ptr<LoopDrive> d;
-  if (d) return d.get();
-  const std::vector<std::string> photos = sim::defaultTexturePhotos();
-  for (const auto& p : photos)
-    if (!std::filesystem::exists(p)) return nullptr;
-  d = std::make_unique<LoopDrive>();
-  d->route = sim::loopRoute(50, 80, 12, 8, 10, 1.25);
-  d->lap = static_cast<size_t>(d->route.size() / 1.25);
-  const auto world = sim::World::build(d->route, sim::TextureBank::build(photos, 1), {}, 1);
-  sim::StereoRenderer r(world, d->cam, {}, 1);
-  for (size_t i = 0; i < d->route.size(); ++i) {
-    StereoFrame f;
-    f.index = i;
-    f.stamp_s = 0.1 * static_cast<double>(i);
-    r.render(static_cast<int>(i), f.stamp_s, d->route[i], &f.left, &f.right);
-    d->frames.push_back(std::move(f));
-  }
-  const OrbSlamParams orb;
-  OrbSlamExtractor ex(orb);
-  std::vector<Descriptors> images;
-  for (size_t i = 0; i < d->lap; i += 10) images.push_back(ex.extract(d->frames[i].left).descriptors);
-  d->dir = std::make_unique<test::TempDir>();
-  d->vocabulary = *d->dir / "hbow.bin";
-  TrainOptions o;
-  o.k = 10;
-  o.levels = 3;
-  o.extractor = extractorSettings(orb, 0);
-  trainModel(ModelType::kHbow, images, o, d->vocabulary);
-  return d.get();
-}
 
 struct DriveRun {
   std::vector<Pose3> poses;  // every frame, on its reference keyframe's final pose
@@ -73,12 +35,7 @@ DriveRun runDrive(const LoopDrive& d, bool close_loops, PipelineMode mode = Pipe
   std::optional<LoopClosingSetup> loops;
   if (close_loops) {
     LoopClosingSetup l;
-    const std::string voc = d.vocabulary;
-    l.make_model = [voc](const std::string& name) {
-      RecognizerOptions ro;
-      ro.model_file = voc;
-      return makePlaceRecognizer(name, ro);
-    };
+    l.make_model = test::tinyVocabularyFactory(d);
     loops = l;
   }
   SlamPipeline slam(d.cam, {}, {}, mode, 3, loops);

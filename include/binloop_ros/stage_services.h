@@ -1,0 +1,68 @@
+#pragma once
+// The map services each stage nodelet offers in its private namespace: ~save_state, ~load_state, ~reset and
+// ~statistics (srv/). The nodelet gives what its stage does for each; this class owns the service servers,
+// turns exceptions into an answer (success false, the reason), and logs. /binloop/save_map and the other
+// graph-wide services (src/nodes/map_services.cpp) call these, one stage after another.
+#include <binloop/LoadMap.h>
+#include <binloop/Reset.h>
+#include <binloop/SaveMap.h>
+#include <binloop/Statistics.h>
+#include <ros/node_handle.h>
+
+#include <functional>
+#include <memory>
+#include <string>
+#include <utility>
+#include <vector>
+
+#include "binloop/io/state_file.h"
+
+namespace binloop_ros {
+
+using StageStatistics = std::vector<std::pair<std::string, std::string>>;
+
+struct StageServiceHandlers {
+  /// Writes the stage's file at the path given; returns a one-line summary. Throws on failure.
+  std::function<std::string(const std::string& path)> save;
+  /// Loads the stage's file into a new stage and, only when that worked, puts it in place of the running one.
+  std::function<std::string(const std::string& path)> load;
+  std::function<void()> reset;
+  std::function<StageStatistics()> statistics;
+};
+
+/// Saves a core stage (anything with save(StateWriter&)) to `path` as stage `name`; returns the bytes written.
+template <class Stage>
+size_t saveStage(const Stage& s, const std::string& path, const std::string& name) {
+  binloop::StateWriter w(path, name);
+  s.save(w);
+  w.finish();
+  return w.size();
+}
+
+/// Loads `path` into `fresh` (a newly made stage) and returns it; throws and changes nothing else on failure.
+template <class Stage>
+std::unique_ptr<Stage> loadStage(std::unique_ptr<Stage> fresh, const std::string& path, const std::string& name) {
+  binloop::StateReader r(path, name);
+  fresh->load(r);
+  return fresh;
+}
+
+class StageServices {
+ public:
+  /// `stage` names the file (<directory>/<stage>.state) and prefixes the statistics.
+  StageServices(ros::NodeHandle& pnh, std::string stage, StageServiceHandlers h);
+  /// <directory>/<stage>.state
+  static std::string statePath(const std::string& directory, const std::string& stage);
+
+ private:
+  bool onSave(binloop::SaveMap::Request& req, binloop::SaveMap::Response& res);
+  bool onLoad(binloop::LoadMap::Request& req, binloop::LoadMap::Response& res);
+  bool onReset(binloop::Reset::Request& req, binloop::Reset::Response& res);
+  bool onStatistics(binloop::Statistics::Request& req, binloop::Statistics::Response& res);
+
+  std::string stage_;
+  StageServiceHandlers h_;
+  ros::ServiceServer save_, load_, reset_, statistics_;
+};
+
+}  // namespace binloop_ros

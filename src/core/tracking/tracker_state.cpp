@@ -1,0 +1,76 @@
+// Tracker's save/load (tracking's state file).
+#include "binloop/features/orb_slam_extractor.h"
+#include "binloop/io/state_file.h"
+#include "binloop/messages/message_state.h"
+#include "binloop/tracking/tracker.h"
+
+namespace binloop {
+
+void Tracker::save(StateWriter& w) const {
+  writeCamera(w, cam_);
+  w.putString(extractorSettings(p_.orb, 0).describe());
+  w.put<uint64_t>(keyframe_ids_.issued());
+  w.put<uint64_t>(point_ids_.issued());
+  w.put<uint64_t>(corrections_seen_);
+  map_.save(w);
+  w.put<uint8_t>(keyframe_db_ ? 1 : 0);
+  if (keyframe_db_) {
+    w.putString(p_.vocabulary_identity);
+    keyframe_db_->save(w);
+  }
+}
+
+void Tracker::load(StateReader& r) {
+  if (state_ != msg::TrackingState::kNotInitialized) r.fail("tracking has started already; a map loads into a new tracker");
+  const StereoCamera cam = readCamera(r);
+  if (!(cam == cam_)) r.fail("the map was made with another camera:\n" + cam.describe() + "\nthis tracker has\n" + cam_.describe());
+  const std::string extractor = r.getString("extractor");
+  const std::string mine = extractorSettings(p_.orb, 0).describe();
+  if (extractor != mine)
+    r.fail("the map's descriptors come from " + extractor + ", but this tracker extracts with " + mine +
+           ": they would not match (use the orb settings the map was made with)");
+  keyframe_ids_.restore(r.get<uint64_t>("keyframe ids issued"));
+  point_ids_.restore(r.get<uint64_t>("point ids issued"));
+  corrections_seen_ = r.get<uint64_t>("corrections applied");
+  map_.load(r);
+  const bool has_index = r.get<uint8_t>("relocalisation index") != 0;
+  if (has_index) {
+    const std::string voc = r.getString("relocalisation vocabulary");
+    if (keyframe_db_) {
+      if (!voc.empty() && !p_.vocabulary_identity.empty() && voc != p_.vocabulary_identity)
+        r.fail("the map's relocalisation index was made with " + voc + ", but this tracker's vocabulary is " +
+               p_.vocabulary_identity + " (load the map with the vocabulary it was made with)");
+      keyframe_db_->load(r);
+    } else {
+      // Read past it: without a vocabulary, relocalisation tries the most recent keyframes.
+      const uint64_t n = r.getCount("relocalisation index", 16);
+      for (uint64_t i = 0; i < n; ++i) {
+        r.get<uint64_t>("relocalisation keyframe");
+        const uint64_t words = r.getCount("bag of words", 8);
+        for (uint64_t j = 0; j < words; ++j) {
+          r.get<uint32_t>("word");
+          r.get<float>("word weight");
+        }
+      }
+    }
+  } else if (keyframe_db_) {
+    r.fail("the map has no relocalisation index (it was saved by a tracker without a vocabulary), so this "
+           "tracker's vocabulary could not find its places; load it with reloc_vocab none");
+  }
+  r.expectEnd();
+  // Lost at the last keyframe: the next frame is searched for around it, then relocalised anywhere.
+  state_ = msg::TrackingState::kLost;
+  reference_ = last_ref_ = map_.lastKeyframe();
+  T_ref_last_ = Pose3::Identity();
+  last_ = std::make_unique<Frame>();
+  if (const msg::KeyframeState* ref = map_.keyframe(reference_)) last_->T_w_c = ref->T_w_c;
+  have_velocity_ = false;
+  have_stamp_ = false;
+}
+
+StereoCamera Tracker::savedCamera(const std::string& path) {
+  StateReader r(path, "tracking");
+  return readCamera(r);
+}
+
+}  // namespace binloop

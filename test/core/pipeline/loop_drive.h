@@ -1,0 +1,73 @@
+#pragma once
+// A rendered drive of 1.25 laps round a 50 x 80 m block (the built-in route; no data files needed), made once
+// per test program, with a small hbow vocabulary (1000 words) trained on every 10th frame of the first lap:
+// the loop-closing and map save/load tests drive the SLAM over it.
+#include <filesystem>
+#include <memory>
+#include <string>
+#include <vector>
+
+#include "binloop/features/orb_slam_extractor.h"
+#include "binloop/loop/loop_detector.h"
+#include "binloop/place/model_training.h"
+#include "binloop/sim/builtin_route.h"
+#include "binloop/sim/stereo_renderer.h"
+#include "binloop/sim/texture_bank.h"
+#include "binloop/tracking/frame.h"
+#include "support/test_support.h"
+
+namespace binloop::test {
+
+struct LoopDrive {
+  std::vector<Pose3> route;
+  std::vector<StereoFrame> frames;
+  StereoCamera cam = kittiCameraByName("kitti04");
+  std::unique_ptr<test::TempDir> dir;
+  std::string vocabulary;
+  size_t lap = 0;  // frames in one lap
+};
+
+/// Null when the texture photos are missing (the tests then skip and say so).
+inline const LoopDrive* loopDrive() {
+  static std::unique_ptr<LoopDrive> d;
+  if (d) return d.get();
+  const std::vector<std::string> photos = sim::defaultTexturePhotos();
+  for (const auto& p : photos)
+    if (!std::filesystem::exists(p)) return nullptr;
+  d = std::make_unique<LoopDrive>();
+  d->route = sim::loopRoute(50, 80, 12, 8, 10, 1.25);
+  d->lap = static_cast<size_t>(d->route.size() / 1.25);
+  const auto world = sim::World::build(d->route, sim::TextureBank::build(photos, 1), {}, 1);
+  sim::StereoRenderer r(world, d->cam, {}, 1);
+  for (size_t i = 0; i < d->route.size(); ++i) {
+    StereoFrame f;
+    f.index = i;
+    f.stamp_s = 0.1 * static_cast<double>(i);
+    r.render(static_cast<int>(i), f.stamp_s, d->route[i], &f.left, &f.right);
+    d->frames.push_back(std::move(f));
+  }
+  const OrbSlamParams orb;
+  OrbSlamExtractor ex(orb);
+  std::vector<Descriptors> images;
+  for (size_t i = 0; i < d->lap; i += 10) images.push_back(ex.extract(d->frames[i].left).descriptors);
+  d->dir = std::make_unique<test::TempDir>();
+  d->vocabulary = *d->dir / "hbow.bin";
+  TrainOptions o;
+  o.k = 10;
+  o.levels = 3;
+  o.extractor = extractorSettings(orb, 0);
+  trainModel(ModelType::kHbow, images, o, d->vocabulary);
+  return d.get();
+}
+
+/// Makes any model from the drive's vocabulary (hbow is the only model trained here).
+inline LoopDetector::ModelFactory tinyVocabularyFactory(const LoopDrive& d) {
+  const std::string voc = d.vocabulary;
+  return [voc](const std::string& name) {
+    RecognizerOptions ro;
+    ro.model_file = voc;
+    return makePlaceRecognizer(name, ro);
+  };
+}
+
+}  // namespace binloop::test
