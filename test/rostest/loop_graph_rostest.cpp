@@ -346,6 +346,33 @@ TEST_F(LoopGraph, MalformedPairsAreReportedAndTrackingGoesOn) {
   })) << "diagnostics do not count the dropped pairs";
 }
 
+// Run alone on a fresh graph by no_camera_info.test (the other .test files leave it out): pairs that come
+// without any camera_info wait, then are dropped with the reason; once camera_info comes, tracking starts.
+TEST_F(LoopGraph, PairsWithoutCameraInfoAreReportedThenTrackingStarts) {
+  const Drive& d = drive();
+  ASSERT_TRUE(d.problem.empty()) << d.problem;
+  const std::vector<Pair> pairs = readPairs(d.bag);
+  ASSERT_TRUE(graphConnected());
+  for (size_t i = 0; i < 15; ++i) {  // images only
+    left_.publish(pairs[i].left);
+    right_.publish(pairs[i].right);
+    ros::WallDuration(0.1).sleep();
+  }
+  EXPECT_TRUE(waitFor(10, [&] {
+    auto dropped = seen_.tracking_diag.find("input dropped"), why = seen_.tracking_diag.find("last problem");
+    return dropped != seen_.tracking_diag.end() && std::stoi(dropped->second) >= 1 &&
+           why != seen_.tracking_diag.end() && why->second.find("no camera_info") != std::string::npos;
+  })) << "pairs without camera_info were not reported";
+  {
+    std::lock_guard<std::mutex> lk(seen_.m);
+    EXPECT_TRUE(seen_.poses.empty()) << "a pose without a camera";
+  }
+  const Pair& p = pairs[20];
+  publishPair(p.left, p.right, p.left_info, p.right_info);
+  EXPECT_TRUE(waitFor(10, [&] { return seen_.poses.count(p.left.header.stamp.toSec()) > 0; }))
+      << "tracking did not start once camera_info came";
+}
+
 int main(int argc, char** argv) {
   testing::InitGoogleTest(&argc, argv);
   ros::init(argc, argv, "loop_graph_rostest");
