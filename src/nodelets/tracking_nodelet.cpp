@@ -249,6 +249,7 @@ void TrackingNodelet::reject(const std::string& why) {
   ++rejected_;
   last_problem_ = why;
   NODELET_WARN_THROTTLE(1.0, "binloop/Tracking: stereo pair dropped: %s", why.c_str());
+  diag_->update();  // also when nothing is tracked (no camera yet): the updater limits the rate itself
 }
 
 std::string TrackingNodelet::check(const Image& left, const Image& right) {
