@@ -30,31 +30,24 @@ struct StageServiceHandlers {
   std::function<StageStatistics()> statistics;
 };
 
-/// Saves a core stage (anything with save(StateWriter&)) to `path` as stage `name`; returns the bytes written.
-template <class Stage>
-size_t saveStage(const Stage& s, const std::string& path, const std::string& name) {
-  binloop::StateWriter w(path, name);
-  s.save(w);
-  w.finish();
-  return w.size();
-}
-
-/// Loads `path` into `fresh` (a newly made stage) and returns it; throws and changes nothing else on failure.
+/// Loads `path` into `fresh` (a newly made stage) and returns it, so that the running stage is replaced only
+/// when the load worked (binloop::loadStateFile throws otherwise).
 template <class Stage>
 std::unique_ptr<Stage> loadStage(std::unique_ptr<Stage> fresh, const std::string& path, const std::string& name) {
-  binloop::StateReader r(path, name);
-  fresh->load(r);
+  binloop::loadStateFile(*fresh, path, name);
   return fresh;
 }
 
 class StageServices {
  public:
-  /// `stage` names the file (<directory>/<stage>.state) and prefixes the statistics.
+  /// `stage` names the file (binloop::stageStatePath) and prefixes the statistics.
   StageServices(ros::NodeHandle& pnh, std::string stage, StageServiceHandlers h);
-  /// <directory>/<stage>.state
-  static std::string statePath(const std::string& directory, const std::string& stage);
 
  private:
+  /// Runs `act` (which returns what was done) and answers success and message, logged as "<done>: ..."; an
+  /// exception is the answer "<stage>: <failed>: <why>".
+  template <class Response>
+  void answer(const char* done, const char* failed, const std::function<std::string()>& act, Response& res);
   bool onSave(binloop::SaveMap::Request& req, binloop::SaveMap::Response& res);
   bool onLoad(binloop::LoadMap::Request& req, binloop::LoadMap::Response& res);
   bool onReset(binloop::Reset::Request& req, binloop::Reset::Response& res);

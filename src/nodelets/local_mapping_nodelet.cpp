@@ -12,6 +12,7 @@
 
 #include "binloop/mapping/local_mapper.h"
 #include "binloop_ros/cpu_meter.h"
+#include "binloop_ros/diagnostics_timer.h"
 #include "binloop_ros/node_params.h"
 #include "binloop_ros/stage_msg_conversion.h"
 #include "binloop_ros/stage_services.h"
@@ -38,6 +39,7 @@ class LocalMappingNodelet : public nodelet::Nodelet {
   ros::Subscriber keyframe_sub_, correction_sub_;
   ros::Publisher refined_pub_, update_pub_, cloud_pub_, keyframes_pub_;
   std::unique_ptr<diagnostic_updater::Updater> diag_;
+  ros::WallTimer diag_timer_;
   CpuMeter cpu_;
   uint64_t keyframes_ = 0, corrections_ = 0, rejected_ = 0;
   double last_ms_ = 0, last_ba_ms_ = 0;
@@ -67,9 +69,10 @@ void LocalMappingNodelet::onInit() {
   diag_ = std::make_unique<diagnostic_updater::Updater>(nh, pnh);
   diag_->setHardwareID("binloop");
   diag_->add("local mapping", this, &LocalMappingNodelet::diagnose);
+  diag_timer_ = publishDiagnosticsEverySecond(nh, *diag_);
   StageServiceHandlers h;
   h.save = [this](const std::string& path) {
-    const size_t bytes = saveStage(*mapper_, path, "local_mapping");
+    const size_t bytes = binloop::saveStateFile(*mapper_, path, "local_mapping");
     return counts() + ", " + std::to_string(bytes >> 20) + " MB";
   };
   h.load = [this](const std::string& path) {
@@ -117,7 +120,6 @@ void LocalMappingNodelet::onKeyframe(const binloop::KeyFrameConstPtr& m) {
   refined_pub_.publish(boost::make_shared<binloop::KeyFrame>(toRos(*out.refined, map_frame_)));
   update_pub_.publish(boost::make_shared<binloop::LocalMapUpdate>(toRos(*out.update, header)));
   if (keyframes_ % cloud_every_ == 0) publishMap(m->header.stamp);
-  diag_->update();
 }
 
 void LocalMappingNodelet::onCorrection(const binloop::CorrectionConstPtr& m) {

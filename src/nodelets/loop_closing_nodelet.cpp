@@ -17,6 +17,7 @@
 
 #include "binloop/loop/loop_closer.h"
 #include "binloop_ros/cpu_meter.h"
+#include "binloop_ros/diagnostics_timer.h"
 #include "binloop_ros/node_params.h"
 #include "binloop_ros/stage_msg_conversion.h"
 #include "binloop_ros/stage_services.h"
@@ -49,6 +50,7 @@ class LoopClosingNodelet : public nodelet::Nodelet {
   ros::Publisher correction_pub_, closure_pub_, path_pub_, edges_pub_;
   ros::ServiceServer external_srv_;
   std::unique_ptr<diagnostic_updater::Updater> diag_;
+  ros::WallTimer diag_timer_;
   CpuMeter cpu_;
   std::set<binloop::SlamKeyframeId> keyframes_seen_, updates_seen_;
   std::deque<binloop::LoopCandidatesConstPtr> pending_;
@@ -87,9 +89,10 @@ void LoopClosingNodelet::onInit() {
   diag_ = std::make_unique<diagnostic_updater::Updater>(nh, pnh);
   diag_->setHardwareID("binloop");
   diag_->add("loop closing", this, &LoopClosingNodelet::diagnose);
+  diag_timer_ = publishDiagnosticsEverySecond(nh, *diag_);
   StageServiceHandlers h;
   h.save = [this](const std::string& path) {
-    const size_t bytes = saveStage(*closer_, path, "loop_closing");
+    const size_t bytes = binloop::saveStateFile(*closer_, path, "loop_closing");
     return counts() + ", " + std::to_string(bytes >> 20) + " MB";
   };
   h.load = [this](const std::string& path) {
@@ -149,7 +152,6 @@ void LoopClosingNodelet::onUpdate(const binloop::LocalMapUpdateConstPtr& m) {
   if (!m->correction) updates_seen_.insert(m->keyframe);
   else publishPathAndEdges(m->header.stamp);
   runPending();
-  diag_->update();
 }
 
 void LoopClosingNodelet::onCandidates(const binloop::LoopCandidatesConstPtr& m) {

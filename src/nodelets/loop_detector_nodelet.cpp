@@ -15,6 +15,7 @@
 #include "binloop/loop/loop_detector.h"
 #include "binloop/pipeline/model_files.h"
 #include "binloop_ros/cpu_meter.h"
+#include "binloop_ros/diagnostics_timer.h"
 #include "binloop_ros/node_params.h"
 #include "binloop_ros/stage_msg_conversion.h"
 #include "binloop_ros/stage_services.h"
@@ -48,6 +49,7 @@ class LoopDetectorNodelet : public nodelet::Nodelet {
   ros::Publisher candidates_pub_;
   std::map<std::string, ros::Publisher> shadow_pubs_;
   std::unique_ptr<diagnostic_updater::Updater> diag_;
+  ros::WallTimer diag_timer_;
   CpuMeter cpu_;
   uint64_t queries_ = 0, accepted_ = 0, rejected_ = 0;
   std::string last_problem_, last_status_;
@@ -75,6 +77,7 @@ void LoopDetectorNodelet::onInit() {
   diag_ = std::make_unique<diagnostic_updater::Updater>(nh, pnh);
   diag_->setHardwareID("binloop");
   diag_->add("loop detector", this, &LoopDetectorNodelet::diagnose);
+  diag_timer_ = publishDiagnosticsEverySecond(nh, *diag_);
   reconfigure_ = std::make_unique<dynamic_reconfigure::Server<binloop::LoopDetectorConfig>>(pnh);
   reconfigure_->setCallback([this](binloop::LoopDetectorConfig& c, uint32_t level) { onReconfigure(c, level); });
   keyframe_sub_ = nh.subscribe("refined_keyframe", 1000, &LoopDetectorNodelet::onKeyframe, this);
@@ -84,7 +87,7 @@ void LoopDetectorNodelet::onInit() {
   };
   h.save = [this, need](const std::string& path) {
     need();
-    const size_t bytes = saveStage(*detector_, path, "loop_detector");
+    const size_t bytes = binloop::saveStateFile(*detector_, path, "loop_detector");
     return counts() + ", " + std::to_string(bytes >> 20) + " MB";
   };
   h.load = [this, need](const std::string& path) {
@@ -144,11 +147,11 @@ void LoopDetectorNodelet::onReconfigure(binloop::LoopDetectorConfig& c, uint32_t
   try {
     if (!detector_) {
       detector_ = std::make_unique<binloop::LoopDetector>(p, make);
+      detector_->setModelIdentity(binloop::modelFileIdentities(vocab_dir_));
     } else {
       detector_->reconfigure(p, make);
     }
     detector_->setShadowModels(shadow);
-    detector_->setModelIdentity(binloop::modelFileIdentities(vocab_dir_));
     params_ = p;
     make_ = make;
     shadow_ = shadow;
@@ -192,7 +195,6 @@ void LoopDetectorNodelet::onKeyframe(const binloop::KeyFrameConstPtr& m) {
   }
   for (const auto& s : out.shadow)
     shadowPublisher(s->model).publish(boost::make_shared<binloop::LoopCandidates>(toRos(*s, header)));
-  diag_->update();
 }
 
 void LoopDetectorNodelet::diagnose(diagnostic_updater::DiagnosticStatusWrapper& s) {

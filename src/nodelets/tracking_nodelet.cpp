@@ -22,6 +22,7 @@
 #include "binloop/pipeline/model_files.h"
 #include "binloop/tracking/tracker.h"
 #include "binloop_ros/cpu_meter.h"
+#include "binloop_ros/diagnostics_timer.h"
 #include "binloop_ros/node_params.h"
 #include "binloop_ros/stage_msg_conversion.h"
 #include "binloop_ros/stage_services.h"
@@ -71,6 +72,7 @@ class TrackingNodelet : public nodelet::Nodelet {
   std::unique_ptr<tf2_ros::TransformBroadcaster> tf_;
   std::unique_ptr<tf2_ros::StaticTransformBroadcaster> static_tf_;
   std::unique_ptr<diagnostic_updater::Updater> diag_;
+  ros::WallTimer diag_timer_;
   CpuMeter cpu_;
   nav_msgs::Path path_;
   ros::Time last_stamp_;
@@ -197,10 +199,11 @@ void TrackingNodelet::onInit() {
   diag_ = std::make_unique<diagnostic_updater::Updater>(nh, pnh);
   diag_->setHardwareID("binloop");
   diag_->add("tracking", this, &TrackingNodelet::diagnose);
+  diag_timer_ = publishDiagnosticsEverySecond(nh, *diag_);
   StageServiceHandlers h;
   h.save = [this](const std::string& path) {
     if (!tracker_) throw std::runtime_error("tracking has no camera yet, so no map");
-    const size_t bytes = saveStage(*tracker_, path, "tracking");
+    const size_t bytes = binloop::saveStateFile(*tracker_, path, "tracking");
     return std::to_string(tracker_->map().keyframeCount()) + " keyframes, " +
            std::to_string(tracker_->map().pointCount()) + " map points in its replica, " +
            std::to_string(bytes >> 20) + " MB";
@@ -249,7 +252,6 @@ void TrackingNodelet::reject(const std::string& why) {
   ++rejected_;
   last_problem_ = why;
   NODELET_WARN_THROTTLE(1.0, "binloop/Tracking: stereo pair dropped: %s", why.c_str());
-  diag_->update();  // also when nothing is tracked (no camera yet): the updater limits the rate itself
 }
 
 std::string TrackingNodelet::check(const Image& left, const Image& right) {
@@ -337,7 +339,6 @@ void TrackingNodelet::track(const sensor_msgs::ImageConstPtr& left, const sensor
   publishPose(out.frame, header);
   if (debug_pub_.getNumSubscribers() > 0) publishDebugImage(frame.left, out.frame, header);
   last_latency_ms_ = (ros::WallTime::now() - t0).toSec() * 1e3;
-  diag_->update();
 }
 
 void TrackingNodelet::publishPose(const binloop::msg::TrackedFrame& f, const std_msgs::Header& header) {

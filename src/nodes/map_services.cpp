@@ -21,61 +21,46 @@ namespace {
 std::vector<std::string> g_stages;
 double g_timeout_s = 120;
 
-// Calls `service` of every stage in order; stops at the first that cannot be reached.
+// Calls `service` of every stage in order; stops at the first that cannot be reached. `success` and `message`
+// gather the stages' answers (services without them, such as Statistics, leave them as they are).
 template <class Srv>
-bool callEach(const std::string& service, typename Srv::Request req, bool* success, std::string* message,
+void callEach(const std::string& service, const typename Srv::Request& req, bool* success, std::string* message,
               std::vector<typename Srv::Response>* answers = nullptr) {
   *success = true;
   message->clear();
+  auto say = [&](const std::string& line) { *message += (message->empty() ? "" : "\n") + line; };
   ros::NodeHandle nh;
   for (const std::string& stage : g_stages) {
     const std::string name = nh.resolveName(stage + "/" + service);
     if (!ros::service::waitForService(name, ros::Duration(g_timeout_s))) {
       *success = false;
-      *message += (message->empty() ? "" : "\n") + stage + ": no service " + name + " (is the stage running?)";
-      return true;
+      return say(stage + ": no service " + name + " (is the stage running?)");
     }
-    ros::ServiceClient c = nh.serviceClient<Srv>(name);
     Srv srv;
     srv.request = req;
-    if (!c.call(srv)) {
+    if (!nh.serviceClient<Srv>(name).call(srv)) {
       *success = false;
-      *message += (message->empty() ? "" : "\n") + stage + ": " + name + " failed";
+      say(stage + ": " + name + " failed");
       continue;
     }
     if (answers) answers->push_back(srv.response);
     if constexpr (!std::is_same_v<Srv, binloop::Statistics>) {
       *success = *success && srv.response.success;
-      *message += (message->empty() ? "" : "\n") + srv.response.message;
+      say(srv.response.message);
     }
   }
-  return true;
 }
 
-bool onSave(binloop::SaveMap::Request& req, binloop::SaveMap::Response& res) {
-  bool ok = false;
-  callEach<binloop::SaveMap>("save_state", req, &ok, &res.message);
-  res.success = ok;
-  ROS_INFO("binloop/map_services: save_map %s: %s\n%s", req.directory.c_str(), res.success ? "saved" : "FAILED",
-           res.message.c_str());
-  return true;
-}
-
-bool onLoad(binloop::LoadMap::Request& req, binloop::LoadMap::Response& res) {
-  bool ok = false;
-  callEach<binloop::LoadMap>("load_state", req, &ok, &res.message);
-  res.success = ok;
-  ROS_INFO("binloop/map_services: load_map %s: %s\n%s", req.directory.c_str(), res.success ? "loaded" : "FAILED",
-           res.message.c_str());
-  return true;
-}
-
-bool onReset(binloop::Reset::Request& req, binloop::Reset::Response& res) {
-  bool ok = false;
-  callEach<binloop::Reset>("reset", req, &ok, &res.message);
-  res.success = ok;
-  ROS_INFO("binloop/map_services: reset: %s", res.message.c_str());
-  return true;
+// /binloop/<what>: every stage's `service`, with their answers joined.
+template <class Srv>
+auto forward(const std::string& what, const std::string& service) {
+  return [what, service](typename Srv::Request& req, typename Srv::Response& res) {
+    bool ok = false;
+    callEach<Srv>(service, req, &ok, &res.message);
+    res.success = ok;
+    ROS_INFO("binloop/map_services: %s: %s\n%s", what.c_str(), ok ? "done" : "FAILED", res.message.c_str());
+    return true;
+  };
 }
 
 bool onStatistics(binloop::Statistics::Request& req, binloop::Statistics::Response& res) {
@@ -96,9 +81,12 @@ int main(int argc, char** argv) {
   g_stages = {"tracking", "local_mapping", "loop_detector", "loop_closing"};
   pnh.getParam("stages", g_stages);
   pnh.getParam("timeout_s", g_timeout_s);
-  ros::ServiceServer save = nh.advertiseService("save_map", onSave);
-  ros::ServiceServer load = nh.advertiseService("load_map", onLoad);
-  ros::ServiceServer reset = nh.advertiseService("reset", onReset);
+  ros::ServiceServer save = nh.advertiseService<binloop::SaveMap::Request, binloop::SaveMap::Response>(
+      "save_map", forward<binloop::SaveMap>("save_map", "save_state"));
+  ros::ServiceServer load = nh.advertiseService<binloop::LoadMap::Request, binloop::LoadMap::Response>(
+      "load_map", forward<binloop::LoadMap>("load_map", "load_state"));
+  ros::ServiceServer reset = nh.advertiseService<binloop::Reset::Request, binloop::Reset::Response>(
+      "reset", forward<binloop::Reset>("reset", "reset"));
   ros::ServiceServer stats = nh.advertiseService("statistics", onStatistics);
   // Services call other services: more than one thread, so a statistics request can be answered while a
   // long save waits on a stage.

@@ -14,50 +14,42 @@ StageServices::StageServices(ros::NodeHandle& pnh, std::string stage, StageServi
   statistics_ = pnh.advertiseService("statistics", &StageServices::onStatistics, this);
 }
 
-std::string StageServices::statePath(const std::string& directory, const std::string& stage) {
-  return binloop::stageStatePath(directory, stage);
+template <class Response>
+void StageServices::answer(const char* done, const char* failed, const std::function<std::string()>& act,
+                           Response& res) {
+  try {
+    res.message = stage_ + ": " + act();
+    res.success = true;
+    ROS_INFO("binloop/%s: %s: %s", stage_.c_str(), done, res.message.c_str());
+  } catch (const std::exception& e) {
+    res.success = false;
+    res.message = stage_ + ": " + failed + ": " + e.what();
+    ROS_ERROR("binloop/%s", res.message.c_str());
+  }
 }
 
 bool StageServices::onSave(binloop::SaveMap::Request& req, binloop::SaveMap::Response& res) {
-  try {
+  answer("saved", "not saved", [&] {
     if (req.directory.empty()) throw std::invalid_argument("no directory given");
     std::filesystem::create_directories(req.directory);
-    res.message = stage_ + ": " + h_.save(statePath(req.directory, stage_));
-    res.success = true;
-    ROS_INFO("binloop/%s: saved: %s", stage_.c_str(), res.message.c_str());
-  } catch (const std::exception& e) {
-    res.success = false;
-    res.message = stage_ + ": not saved: " + e.what();
-    ROS_ERROR("binloop/%s", res.message.c_str());
-  }
+    return h_.save(binloop::stageStatePath(req.directory, stage_));
+  }, res);
   return true;
 }
 
 bool StageServices::onLoad(binloop::LoadMap::Request& req, binloop::LoadMap::Response& res) {
-  try {
+  answer("loaded", "not loaded, the running map stays", [&] {
     if (req.directory.empty()) throw std::invalid_argument("no directory given");
-    res.message = stage_ + ": " + h_.load(statePath(req.directory, stage_));
-    res.success = true;
-    ROS_INFO("binloop/%s: loaded: %s", stage_.c_str(), res.message.c_str());
-  } catch (const std::exception& e) {
-    res.success = false;
-    res.message = stage_ + ": not loaded, the running map stays: " + e.what();
-    ROS_ERROR("binloop/%s", res.message.c_str());
-  }
+    return h_.load(binloop::stageStatePath(req.directory, stage_));
+  }, res);
   return true;
 }
 
 bool StageServices::onReset(binloop::Reset::Request&, binloop::Reset::Response& res) {
-  try {
+  answer("reset", "not reset", [&] {
     h_.reset();
-    res.success = true;
-    res.message = stage_ + ": reset";
-    ROS_INFO("binloop/%s: reset", stage_.c_str());
-  } catch (const std::exception& e) {
-    res.success = false;
-    res.message = stage_ + ": not reset: " + e.what();
-    ROS_ERROR("binloop/%s", res.message.c_str());
-  }
+    return std::string("reset");
+  }, res);
   return true;
 }
 

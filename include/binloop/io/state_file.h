@@ -94,4 +94,21 @@ class StateReader {
   size_t pos_ = 0;
 };
 
+/// Writes a stage (anything with save(StateWriter&)) into its state file `path` as stage `name`; returns the
+/// payload bytes written.
+template <class Stage>
+size_t saveStateFile(const Stage& s, const std::string& path, const std::string& name) {
+  StateWriter w(path, name);
+  s.save(w);
+  w.finish();
+  return w.size();
+}
+
+/// Loads the state file `path` of stage `name` into `s` (a newly made stage). Throws DataError.
+template <class Stage>
+void loadStateFile(Stage& s, const std::string& path, const std::string& name) {
+  StateReader r(path, name);
+  s.load(r);
+}
+
 }  // namespace binloop

@@ -89,6 +89,8 @@ class LoopDetector {
   };
   Model makeModel(const std::string& name) const;
   void fillFrom(Model& m) const;  // every stored keyframe, in order
+  /// The models whose index a saved map records: the active one (or the one about to take over) and the shadows.
+  std::vector<std::string> indexedModels() const;
   std::shared_ptr<msg::LoopCandidates> query(Model& m, SlamKeyframeId id, uint64_t frame, bool shadow) const;
   std::vector<KeyframeId> referenceOf(SlamKeyframeId id) const;
   std::set<SlamKeyframeId> groupOf(SlamKeyframeId id) const;

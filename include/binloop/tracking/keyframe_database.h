@@ -27,7 +27,8 @@ class KeyframeDatabase {
   void remove(SlamKeyframeId id);
   size_t size() const { return bows_.size(); }
   /// The bag-of-words vectors (in id order); load() replaces them and rebuilds the inverted file. Only
-  /// meaningful with the vocabulary that made them: the tracker checks its identity.
+  /// meaningful with the vocabulary that made them: the tracker checks its identity. A database made without a
+  /// vocabulary (null) can load, to read past an index it will not use.
   void save(StateWriter& w) const;
   void load(StateReader& r);
 

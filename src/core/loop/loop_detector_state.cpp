@@ -1,15 +1,20 @@
 // LoopDetector's save/load (the loop detector's state file).
-#include <algorithm>
 #include <map>
 
 #include "binloop/io/state_file.h"
 #include "binloop/loop/loop_detector.h"
+#include "binloop/util/sorted_keys.h"
 
 namespace binloop {
 
+std::vector<std::string> LoopDetector::indexedModels() const {
+  std::vector<std::string> names{pending_ ? pending_->name : active_name_};
+  for (const Model& m : shadow_) names.push_back(m.name);
+  return names;
+}
+
 void LoopDetector::save(StateWriter& w) const {
-  std::vector<std::string> models{pending_ ? pending_->name : active_name_};
-  for (const Model& m : shadow_) models.push_back(m.name);
+  const std::vector<std::string> models = indexedModels();
   w.put<uint64_t>(models.size());
   for (const std::string& m : models) {
     w.putString(m);
@@ -20,11 +25,8 @@ void LoopDetector::save(StateWriter& w) const {
     w.put<uint64_t>(order_[k]);
     w.putArray(descriptors_[k]);
   }
-  std::vector<SlamKeyframeId> ids;
-  for (const auto& e : covisible_) ids.push_back(e.first);
-  std::sort(ids.begin(), ids.end());
-  w.put<uint64_t>(ids.size());
-  for (SlamKeyframeId id : ids) {
+  w.put<uint64_t>(covisible_.size());
+  for (SlamKeyframeId id : sortedKeys(covisible_)) {
     const auto& edges = covisible_.at(id);
     w.put<uint64_t>(id);
     w.put<uint64_t>(edges.size());
@@ -43,9 +45,7 @@ void LoopDetector::load(StateReader& r) {
     std::string name = r.getString("model name");
     saved[name] = r.getString("model vocabulary");
   }
-  std::vector<std::string> mine{pending_ ? pending_->name : active_name_};
-  for (const Model& m : shadow_) mine.push_back(m.name);
-  for (const std::string& m : mine) {
+  for (const std::string& m : indexedModels()) {
     auto it = saved.find(m);
     const std::string now = identity_ ? identity_(m) : "";
     if (it != saved.end() && !it->second.empty() && !now.empty() && it->second != now)

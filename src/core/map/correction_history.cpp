@@ -1,8 +1,8 @@
 #include "binloop/map/correction_history.h"
 
 #include "binloop/messages/message_state.h"
+#include "binloop/util/sorted_keys.h"
 
-#include <algorithm>
 #include <stdexcept>
 #include <string>
 
@@ -46,11 +46,8 @@ namespace binloop {
 void CorrectionHistory::save(StateWriter& w) const {
   w.put<uint64_t>(deltas_.size());
   for (const auto& d : deltas_) {
-    std::vector<SlamKeyframeId> ids;
-    for (const auto& e : d) ids.push_back(e.first);
-    std::sort(ids.begin(), ids.end());
-    w.put<uint64_t>(ids.size());
-    for (SlamKeyframeId id : ids) {
+    w.put<uint64_t>(d.size());
+    for (SlamKeyframeId id : sortedKeys(d)) {
       w.put<uint64_t>(id);
       writePose(w, d.at(id));
     }

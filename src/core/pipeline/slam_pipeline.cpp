@@ -1,11 +1,10 @@
 #include "binloop/pipeline/slam_pipeline.h"
 
+#include <chrono>
 #include <filesystem>
 
 #include "binloop/io/filesystem.h"
 #include "binloop/io/state_file.h"
-
-#include <chrono>
 
 namespace binloop {
 
@@ -39,31 +38,14 @@ SlamPipeline::SlamPipeline(const StereoCamera& cam, const TrackerParams& tp, con
 
 SlamPipeline::~SlamPipeline() { finish(); }
 
-namespace {
-
-template <class Stage>
-void saveStage(const Stage& s, const std::string& dir, const char* name) {
-  StateWriter w(stageStatePath(dir, name), name);
-  s.save(w);
-  w.finish();
-}
-
-template <class Stage>
-void loadStage(Stage& s, const std::string& dir, const char* name) {
-  StateReader r(stageStatePath(dir, name), name);
-  s.load(r);
-}
-
-}  // namespace
-
 void SlamPipeline::saveMap(const std::string& directory) const {
   std::error_code ec;
   std::filesystem::create_directories(directory, ec);
   if (ec) throw dataError(directory, 0, "cannot make the map folder: " + ec.message());
-  saveStage(tracker_, directory, "tracking");
-  saveStage(mapper_, directory, "local_mapping");
-  if (detector_) saveStage(*detector_, directory, "loop_detector");
-  if (closer_) saveStage(*closer_, directory, "loop_closing");
+  saveStateFile(tracker_, stageStatePath(directory, "tracking"), "tracking");
+  saveStateFile(mapper_, stageStatePath(directory, "local_mapping"), "local_mapping");
+  if (detector_) saveStateFile(*detector_, stageStatePath(directory, "loop_detector"), "loop_detector");
+  if (closer_) saveStateFile(*closer_, stageStatePath(directory, "loop_closing"), "loop_closing");
 }
 
 void SlamPipeline::loadMap(const std::string& directory) {
@@ -71,10 +53,10 @@ void SlamPipeline::loadMap(const std::string& directory) {
   if (detector_ && !std::filesystem::exists(stageStatePath(directory, "loop_detector")))
     throw dataError(directory, 0, "the map has no loop_detector.state (saved without loop closing): load it with "
                                   "loop closing off (--detector none)");
-  loadStage(tracker_, directory, "tracking");
-  loadStage(mapper_, directory, "local_mapping");
-  if (detector_) loadStage(*detector_, directory, "loop_detector");
-  if (closer_) loadStage(*closer_, directory, "loop_closing");
+  loadStateFile(tracker_, stageStatePath(directory, "tracking"), "tracking");
+  loadStateFile(mapper_, stageStatePath(directory, "local_mapping"), "local_mapping");
+  if (detector_) loadStateFile(*detector_, stageStatePath(directory, "loop_detector"), "loop_detector");
+  if (closer_) loadStateFile(*closer_, stageStatePath(directory, "loop_closing"), "loop_closing");
 }
 
 void SlamPipeline::switchDetector(const std::string& model) {

@@ -1,17 +1,13 @@
 // KeyframeDatabase's save/load (tracking's state file).
-#include <algorithm>
-
 #include "binloop/io/state_file.h"
 #include "binloop/tracking/keyframe_database.h"
+#include "binloop/util/sorted_keys.h"
 
 namespace binloop {
 
 void KeyframeDatabase::save(StateWriter& w) const {
-  std::vector<SlamKeyframeId> ids;
-  for (const auto& e : bows_) ids.push_back(e.first);
-  std::sort(ids.begin(), ids.end());
-  w.put<uint64_t>(ids.size());
-  for (SlamKeyframeId id : ids) {
+  w.put<uint64_t>(bows_.size());
+  for (SlamKeyframeId id : sortedKeys(bows_)) {
     w.put<uint64_t>(id);
     const BowVector& b = bows_.at(id);
     w.put<uint64_t>(b.size());
@@ -32,7 +28,7 @@ void KeyframeDatabase::load(StateReader& r) {
     for (BowEntry& e : b) {
       e.word = r.get<uint32_t>("word");
       e.value = r.get<float>("word weight");
-      if (e.word >= voc_->words()) r.fail("word " + std::to_string(e.word) + " is not in the vocabulary");
+      if (voc_ && e.word >= voc_->words()) r.fail("word " + std::to_string(e.word) + " is not in the vocabulary");
     }
     for (const BowEntry& e : b) inverted_[e.word].push_back(id);
     bows_[id] = std::move(b);

@@ -42,16 +42,7 @@ void Tracker::load(StateReader& r) {
                p_.vocabulary_identity + " (load the map with the vocabulary it was made with)");
       keyframe_db_->load(r);
     } else {
-      // Read past it: without a vocabulary, relocalisation tries the most recent keyframes.
-      const uint64_t n = r.getCount("relocalisation index", 16);
-      for (uint64_t i = 0; i < n; ++i) {
-        r.get<uint64_t>("relocalisation keyframe");
-        const uint64_t words = r.getCount("bag of words", 8);
-        for (uint64_t j = 0; j < words; ++j) {
-          r.get<uint32_t>("word");
-          r.get<float>("word weight");
-        }
-      }
+      KeyframeDatabase(nullptr).load(r);  // read past it: relocalisation then tries the most recent keyframes
     }
   } else if (keyframe_db_) {
     r.fail("the map has no relocalisation index (it was saved by a tracker without a vocabulary), so this "
