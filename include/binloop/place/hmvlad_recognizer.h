@@ -5,6 +5,7 @@
 #include <memory>
 
 #include "binloop/place/place_recognizer.h"
+#include "binloop/place/signature_store.h"
 #include "binloop/place/vlad_vocabulary.h"
 
 namespace binloop {
@@ -21,7 +22,7 @@ class HmvladRecognizer : public PlaceRecognizer {
 
  private:
   std::shared_ptr<const VladVocabulary> voc_;
-  std::vector<BinarySignature> short_, long_;  // per slot
+  SignatureStore short_, long_;  // per slot
 };
 
 }  // namespace binloop

@@ -5,13 +5,10 @@
 #include <memory>
 
 #include "binloop/place/place_recognizer.h"
+#include "binloop/place/signature_store.h"
 #include "binloop/place/vlad_vocabulary.h"
 
 namespace binloop {
-
-/// Smallest Hamming distance from `q` to the signatures (per slot) of the reference slots, or -1.
-int closestReference(const BinarySignature& q, const std::vector<uint32_t>& ref_slots,
-                     const std::vector<BinarySignature>& sigs);
 
 class VladRecognizer : public PlaceRecognizer {
  public:
@@ -26,7 +23,7 @@ class VladRecognizer : public PlaceRecognizer {
 
  private:
   std::shared_ptr<const VladVocabulary> voc_;
-  std::vector<BinarySignature> sigs_;  // per slot
+  SignatureStore sigs_;  // per slot
 };
 
 }  // namespace binloop

@@ -15,24 +15,24 @@ HmvladRecognizer::HmvladRecognizer(std::shared_ptr<const VladVocabulary> voc) : 
 
 void HmvladRecognizer::addSignature(Slot, const Descriptors& d) {
   const auto levels = voc_->aggregate(d);
-  short_.push_back(binarizeSigns(levels.front()));
-  long_.push_back(binarizeSigns(levels.back()));
+  short_.push(binarizeSigns(levels.front()));
+  long_.push(binarizeSigns(levels.back()));
 }
 
 size_t HmvladRecognizer::indexBytesPerKeyframe() const {
   if (short_.empty()) return 0;
-  return (short_.front().size() + long_.front().size()) * sizeof(uint64_t);
+  return (short_.words() + long_.words()) * sizeof(uint64_t);
 }
 
 QueryResult HmvladRecognizer::querySignature(const SlotScope& scope) const {
   QueryResult r;
-  const BinarySignature& qs = short_[scope.query];
-  const BinarySignature& ql = long_[scope.query];
+  const uint64_t* qs = short_[scope.query];
+  const uint64_t* ql = long_[scope.query];
   auto t = std::chrono::steady_clock::now();
   const size_t refs = scope.reference.size();
-  const int bar_short = closestReference(qs, scope.reference, short_);
-  const int bar_long = closestReference(ql, scope.reference, long_);
-  const double cap = ranking().distance_cap * static_cast<double>(ql.size() * 64);
+  const int bar_short = closestReference(short_, scope.query, scope.reference);
+  const int bar_long = closestReference(long_, scope.query, scope.reference);
+  const double cap = ranking().distance_cap * static_cast<double>(long_.words() * 64);
   r.threshold = bar_long;
   r.timings.push_back({"reference", msSince(t)});
   if (!refs) {
@@ -46,21 +46,21 @@ QueryResult HmvladRecognizer::querySignature(const SlotScope& scope) const {
   int closest_short_d = 0;
   for (Slot k = 0; k < short_.size(); ++k) {
     if (scope.excluded[k]) continue;
-    const int d = hammingBits(qs, short_[k]);
+    const int d = short_.distance(qs, k);
     if (d < bar_short) pre.push_back(k);
     if (closest_short < 0 || d < closest_short_d) closest_short = static_cast<int>(k), closest_short_d = d;
   }
   r.timings.push_back({"short_reject", msSince(t)});
   t = std::chrono::steady_clock::now();
   for (Slot k : pre) {
-    const int d = hammingBits(ql, long_[k]);
+    const int d = long_.distance(ql, k);
     const Candidate c{idAt(k), -static_cast<double>(d), distanceConfidence(bar_long, d, cap)};
     offer(r, c, d < bar_long);
   }
   if (closest_short >= 0 && closest_short_d >= bar_short) {
     // Nothing passed the short signature, or this one did not: it still stands as the best rejected, so
     // that a query always names the model's nearest keyframe.
-    const int d = hammingBits(ql, long_[closest_short]);
+    const int d = long_.distance(ql, static_cast<size_t>(closest_short));
     offer(r, {idAt(closest_short), -static_cast<double>(d), distanceConfidence(bar_long, d, cap)}, false);
   }
   sortCandidates(r);
@@ -68,7 +68,7 @@ QueryResult HmvladRecognizer::querySignature(const SlotScope& scope) const {
     std::vector<Candidate> all;
     for (Slot k = 0; k < long_.size(); ++k) {
       if (scope.excluded[k]) continue;
-      const int d = hammingBits(ql, long_[k]);
+      const int d = long_.distance(ql, k);
       all.push_back({idAt(k), -static_cast<double>(d), distanceConfidence(bar_long, d, cap)});
     }
     keepRanked(r, std::move(all), scope.max_ranked);

@@ -7,16 +7,6 @@
 
 namespace binloop {
 
-int closestReference(const BinarySignature& q, const std::vector<uint32_t>& ref_slots,
-                     const std::vector<BinarySignature>& sigs) {
-  int best = -1;
-  for (uint32_t k : ref_slots) {
-    const int d = hammingBits(q, sigs[k]);
-    if (best < 0 || d < best) best = d;
-  }
-  return best;
-}
-
 VladRecognizer::VladRecognizer(std::shared_ptr<const VladVocabulary> voc) : voc_(std::move(voc)) {
   if (!voc_) throw PlaceError("vlad: no vocabulary");
 }
@@ -30,27 +20,27 @@ std::shared_ptr<const VladVocabulary> VladRecognizer::loadVocabulary(const std::
 }
 
 void VladRecognizer::addSignature(Slot, const Descriptors& d) {
-  sigs_.push_back(binarizeSigns(voc_->aggregate(d).back()));
+  sigs_.push(binarizeSigns(voc_->aggregate(d).back()));
 }
 
 size_t VladRecognizer::indexBytesPerKeyframe() const {
-  return sigs_.empty() ? 0 : sigs_.front().size() * sizeof(uint64_t);
+  return sigs_.words() * sizeof(uint64_t);
 }
 
 QueryResult VladRecognizer::querySignature(const SlotScope& scope) const {
   QueryResult r;
-  const BinarySignature& q = sigs_[scope.query];
+  const uint64_t* q = sigs_[scope.query];
   auto t = std::chrono::steady_clock::now();
   const size_t refs = scope.reference.size();
-  const int bar = closestReference(q, scope.reference, sigs_);
-  const double cap = ranking().distance_cap * static_cast<double>(q.size() * 64);
+  const int bar = closestReference(sigs_, scope.query, scope.reference);
+  const double cap = ranking().distance_cap * static_cast<double>(sigs_.words() * 64);
   r.threshold = bar;
   r.timings.push_back({"reference", msSince(t)});
   t = std::chrono::steady_clock::now();
   std::vector<Candidate> all;
   for (Slot k = 0; k < sigs_.size(); ++k) {
     if (scope.excluded[k]) continue;
-    const int d = hammingBits(q, sigs_[k]);
+    const int d = sigs_.distance(q, k);
     const Candidate c{idAt(k), -static_cast<double>(d), distanceConfidence(refs ? bar : 0, d, cap)};
     offer(r, c, refs && d < bar);
     if (scope.max_ranked) all.push_back(c);

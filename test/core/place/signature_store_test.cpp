@@ -1,0 +1,31 @@
+#include "binloop/place/signature_store.h"
+
+#include <gtest/gtest.h>
+
+#include "binloop/place/place_error.h"
+#include "support/test_support.h"
+
+using namespace binloop;
+
+TEST(SignatureStore, DistancesAreThoseOfTheSignaturesPushed) {
+  SignatureStore s;
+  EXPECT_TRUE(s.empty());
+  s.push({0x0, 0x0});
+  s.push({0xFF, 0x1});            // 8 + 1 bits set
+  s.push({~uint64_t{0}, 0x0});    // 64 bits set
+  ASSERT_EQ(s.size(), 3u);
+  EXPECT_EQ(s.words(), 2u);
+  EXPECT_EQ(s.distance(s[0], 1), 9);
+  EXPECT_EQ(s.distance(s[1], 2), 64 - 8 + 1);
+  EXPECT_EQ(s.distance(s[2], 2), 0);
+  EXPECT_EQ(closestReference(s, 0, {1, 2}), 9);
+  EXPECT_EQ(closestReference(s, 0, {}), -1);
+}
+
+TEST(SignatureStore, SignatureOfAnotherLengthIsRefused) {
+  SignatureStore s;
+  s.push({1, 2, 3});
+  EXPECT_THROW_WITH(s.push({1, 2}), PlaceError, "a signature of 2 words among ones of 3");
+  EXPECT_THROW_WITH(s.push({}), PlaceError, "empty signature");
+  EXPECT_EQ(s.size(), 1u);
+}
