@@ -29,7 +29,8 @@ struct LoopDetectorParams {
   std::string model = "hbow";
   int max_reference = 10;   // strongest covisible neighbours that set the bar
   int ignore_recent = 20;   // keyframes just before the query are never candidates (they are not loops)
-  int consistency = 3;      // consecutive consistent queries before a candidate is accepted (ORB-SLAM2)
+  int consistency = 2;      // consecutive consistent queries before a candidate is accepted (ORB-SLAM2: 3;
+                            // config/kitti.yaml says why 2)
 };
 
 class LoopDetector {
