@@ -22,7 +22,8 @@ namespace binloop_ros {
 using StageStatistics = std::vector<std::pair<std::string, std::string>>;
 
 struct StageServiceHandlers {
-  /// Writes the stage's file at the path given; returns a one-line summary. Throws on failure.
+  /// Writes the stage's file at the path given; returns a one-line summary (the file's size is added to it).
+  /// Throws on failure.
   std::function<std::string(const std::string& path)> save;
   /// Loads the stage's file into a new stage and, only when that worked, puts it in place of the running one.
   std::function<std::string(const std::string& path)> load;

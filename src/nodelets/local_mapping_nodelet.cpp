@@ -1,7 +1,6 @@
 // binloop/LocalMapping: keyframes from tracking in; refined keyframes (to the loop stages) and local-map
 // updates (to tracking and loop closing) out; loop corrections in, the corrected map out. Publishes the map
 // points (PointCloud2) and the keyframes (PoseArray) for rviz. A short onInit() over binloop::LocalMapper.
-#include <diagnostic_updater/diagnostic_updater.h>
 #include <geometry_msgs/PoseArray.h>
 #include <nodelet/nodelet.h>
 #include <pluginlib/class_list_macros.hpp>
@@ -12,7 +11,7 @@
 
 #include "binloop/mapping/local_mapper.h"
 #include "binloop_ros/cpu_meter.h"
-#include "binloop_ros/diagnostics_timer.h"
+#include "binloop_ros/stage_diagnostics.h"
 #include "binloop_ros/node_params.h"
 #include "binloop_ros/stage_msg_conversion.h"
 #include "binloop_ros/stage_services.h"
@@ -38,8 +37,7 @@ class LocalMappingNodelet : public nodelet::Nodelet {
   int cloud_every_ = 5;
   ros::Subscriber keyframe_sub_, correction_sub_;
   ros::Publisher refined_pub_, update_pub_, cloud_pub_, keyframes_pub_;
-  std::unique_ptr<diagnostic_updater::Updater> diag_;
-  ros::WallTimer diag_timer_;
+  std::unique_ptr<StageDiagnostics> diag_;
   CpuMeter cpu_;
   uint64_t keyframes_ = 0, corrections_ = 0, rejected_ = 0;
   double last_ms_ = 0, last_ba_ms_ = 0;
@@ -66,14 +64,12 @@ void LocalMappingNodelet::onInit() {
   // Deep queues: a keyframe or a correction dropped here would be lost for good.
   keyframe_sub_ = nh.subscribe("keyframe", 1000, &LocalMappingNodelet::onKeyframe, this);
   correction_sub_ = nh.subscribe("correction", 100, &LocalMappingNodelet::onCorrection, this);
-  diag_ = std::make_unique<diagnostic_updater::Updater>(nh, pnh);
-  diag_->setHardwareID("binloop");
-  diag_->add("local mapping", this, &LocalMappingNodelet::diagnose);
-  diag_timer_ = publishDiagnosticsEverySecond(nh, *diag_);
+  diag_ = std::make_unique<StageDiagnostics>(
+      nh, pnh, "local mapping", [this](diagnostic_updater::DiagnosticStatusWrapper& s) { diagnose(s); });
   StageServiceHandlers h;
   h.save = [this](const std::string& path) {
-    const size_t bytes = binloop::saveStateFile(*mapper_, path, "local_mapping");
-    return counts() + ", " + std::to_string(bytes >> 20) + " MB";
+    binloop::saveStateFile(*mapper_, path, "local_mapping");
+    return counts();
   };
   h.load = [this](const std::string& path) {
     mapper_ = loadStage(std::make_unique<binloop::LocalMapper>(params_), path, "local_mapping");

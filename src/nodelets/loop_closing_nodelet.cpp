@@ -4,7 +4,6 @@
 // binloop::LoopCloser. Across processes the candidates for a keyframe may overtake the keyframe or its
 // update, so they wait here until both have arrived.
 #include <binloop/AddExternalLoop.h>
-#include <diagnostic_updater/diagnostic_updater.h>
 #include <nav_msgs/Path.h>
 #include <nodelet/nodelet.h>
 #include <pluginlib/class_list_macros.hpp>
@@ -17,7 +16,7 @@
 
 #include "binloop/loop/loop_closer.h"
 #include "binloop_ros/cpu_meter.h"
-#include "binloop_ros/diagnostics_timer.h"
+#include "binloop_ros/stage_diagnostics.h"
 #include "binloop_ros/node_params.h"
 #include "binloop_ros/stage_msg_conversion.h"
 #include "binloop_ros/stage_services.h"
@@ -49,8 +48,7 @@ class LoopClosingNodelet : public nodelet::Nodelet {
   ros::Subscriber keyframe_sub_, update_sub_, candidates_sub_;
   ros::Publisher correction_pub_, closure_pub_, path_pub_, edges_pub_;
   ros::ServiceServer external_srv_;
-  std::unique_ptr<diagnostic_updater::Updater> diag_;
-  ros::WallTimer diag_timer_;
+  std::unique_ptr<StageDiagnostics> diag_;
   CpuMeter cpu_;
   std::set<binloop::SlamKeyframeId> keyframes_seen_, updates_seen_;
   std::deque<binloop::LoopCandidatesConstPtr> pending_;
@@ -86,14 +84,12 @@ void LoopClosingNodelet::onInit() {
   update_sub_ = nh.subscribe("local_map_update", 1000, &LoopClosingNodelet::onUpdate, this);
   candidates_sub_ = nh.subscribe("loop_candidates", 1000, &LoopClosingNodelet::onCandidates, this);
   external_srv_ = nh.advertiseService("add_external_loop", &LoopClosingNodelet::onExternalLoop, this);
-  diag_ = std::make_unique<diagnostic_updater::Updater>(nh, pnh);
-  diag_->setHardwareID("binloop");
-  diag_->add("loop closing", this, &LoopClosingNodelet::diagnose);
-  diag_timer_ = publishDiagnosticsEverySecond(nh, *diag_);
+  diag_ = std::make_unique<StageDiagnostics>(
+      nh, pnh, "loop closing", [this](diagnostic_updater::DiagnosticStatusWrapper& s) { diagnose(s); });
   StageServiceHandlers h;
   h.save = [this](const std::string& path) {
-    const size_t bytes = binloop::saveStateFile(*closer_, path, "loop_closing");
-    return counts() + ", " + std::to_string(bytes >> 20) + " MB";
+    binloop::saveStateFile(*closer_, path, "loop_closing");
+    return counts();
   };
   h.load = [this](const std::string& path) {
     startOver(loadStage(std::make_unique<binloop::LoopCloser>(params_), path, "loop_closing"));

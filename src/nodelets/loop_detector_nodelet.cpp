@@ -3,7 +3,6 @@
 // thresholds; the new index is built from the stored keyframes at the next keyframe, without stopping. A short
 // onInit() over binloop::LoopDetector.
 #include <binloop/LoopDetectorConfig.h>
-#include <diagnostic_updater/diagnostic_updater.h>
 #include <dynamic_reconfigure/server.h>
 #include <nodelet/nodelet.h>
 #include <pluginlib/class_list_macros.hpp>
@@ -15,7 +14,7 @@
 #include "binloop/loop/loop_detector.h"
 #include "binloop/pipeline/model_files.h"
 #include "binloop_ros/cpu_meter.h"
-#include "binloop_ros/diagnostics_timer.h"
+#include "binloop_ros/stage_diagnostics.h"
 #include "binloop_ros/node_params.h"
 #include "binloop_ros/stage_msg_conversion.h"
 #include "binloop_ros/stage_services.h"
@@ -48,8 +47,7 @@ class LoopDetectorNodelet : public nodelet::Nodelet {
   ros::Subscriber keyframe_sub_;
   ros::Publisher candidates_pub_;
   std::map<std::string, ros::Publisher> shadow_pubs_;
-  std::unique_ptr<diagnostic_updater::Updater> diag_;
-  ros::WallTimer diag_timer_;
+  std::unique_ptr<StageDiagnostics> diag_;
   CpuMeter cpu_;
   uint64_t queries_ = 0, accepted_ = 0, rejected_ = 0;
   std::string last_problem_, last_status_;
@@ -74,10 +72,8 @@ void LoopDetectorNodelet::onInit() {
   if (!pnh.hasParam("max_reference")) pnh.setParam("max_reference", config_.detector.max_reference);
   if (!pnh.hasParam("ignore_recent")) pnh.setParam("ignore_recent", config_.detector.ignore_recent);
   candidates_pub_ = nh.advertise<binloop::LoopCandidates>("loop_candidates", 100);
-  diag_ = std::make_unique<diagnostic_updater::Updater>(nh, pnh);
-  diag_->setHardwareID("binloop");
-  diag_->add("loop detector", this, &LoopDetectorNodelet::diagnose);
-  diag_timer_ = publishDiagnosticsEverySecond(nh, *diag_);
+  diag_ = std::make_unique<StageDiagnostics>(
+      nh, pnh, "loop detector", [this](diagnostic_updater::DiagnosticStatusWrapper& s) { diagnose(s); });
   reconfigure_ = std::make_unique<dynamic_reconfigure::Server<binloop::LoopDetectorConfig>>(pnh);
   reconfigure_->setCallback([this](binloop::LoopDetectorConfig& c, uint32_t level) { onReconfigure(c, level); });
   keyframe_sub_ = nh.subscribe("refined_keyframe", 1000, &LoopDetectorNodelet::onKeyframe, this);
@@ -87,8 +83,8 @@ void LoopDetectorNodelet::onInit() {
   };
   h.save = [this, need](const std::string& path) {
     need();
-    const size_t bytes = binloop::saveStateFile(*detector_, path, "loop_detector");
-    return counts() + ", " + std::to_string(bytes >> 20) + " MB";
+    binloop::saveStateFile(*detector_, path, "loop_detector");
+    return counts();
   };
   h.load = [this, need](const std::string& path) {
     need();

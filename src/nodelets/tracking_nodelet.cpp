@@ -1,7 +1,6 @@
 // binloop/Tracking: stereo images in, the camera's pose out (pose, odometry, path, tf), keyframes to local
 // mapping; local mapping's updates back in. A short onInit() over binloop::Tracker; every message check is
 // here, so a bad message is reported (log + diagnostics) and dropped, and the nodelet goes on.
-#include <diagnostic_updater/diagnostic_updater.h>
 #include <geometry_msgs/PoseStamped.h>
 #include <message_filters/subscriber.h>
 #include <message_filters/sync_policies/approximate_time.h>
@@ -22,7 +21,7 @@
 #include "binloop/pipeline/model_files.h"
 #include "binloop/tracking/tracker.h"
 #include "binloop_ros/cpu_meter.h"
-#include "binloop_ros/diagnostics_timer.h"
+#include "binloop_ros/stage_diagnostics.h"
 #include "binloop_ros/node_params.h"
 #include "binloop_ros/stage_msg_conversion.h"
 #include "binloop_ros/stage_services.h"
@@ -71,8 +70,7 @@ class TrackingNodelet : public nodelet::Nodelet {
   ros::Publisher keyframe_pub_, frame_pub_, pose_pub_, odom_pub_, path_pub_, debug_pub_;
   std::unique_ptr<tf2_ros::TransformBroadcaster> tf_;
   std::unique_ptr<tf2_ros::StaticTransformBroadcaster> static_tf_;
-  std::unique_ptr<diagnostic_updater::Updater> diag_;
-  ros::WallTimer diag_timer_;
+  std::unique_ptr<StageDiagnostics> diag_;
   CpuMeter cpu_;
   nav_msgs::Path path_;
   ros::Time last_stamp_;
@@ -196,17 +194,14 @@ void TrackingNodelet::onInit() {
     exact_ = std::make_unique<mf::Synchronizer<Exact>>(Exact(queue), left_sub_, right_sub_);
     exact_->registerCallback(&TrackingNodelet::onImages, this);
   }
-  diag_ = std::make_unique<diagnostic_updater::Updater>(nh, pnh);
-  diag_->setHardwareID("binloop");
-  diag_->add("tracking", this, &TrackingNodelet::diagnose);
-  diag_timer_ = publishDiagnosticsEverySecond(nh, *diag_);
+  diag_ = std::make_unique<StageDiagnostics>(
+      nh, pnh, "tracking", [this](diagnostic_updater::DiagnosticStatusWrapper& s) { diagnose(s); });
   StageServiceHandlers h;
   h.save = [this](const std::string& path) {
     if (!tracker_) throw std::runtime_error("tracking has no camera yet, so no map");
-    const size_t bytes = binloop::saveStateFile(*tracker_, path, "tracking");
+    binloop::saveStateFile(*tracker_, path, "tracking");
     return std::to_string(tracker_->map().keyframeCount()) + " keyframes, " +
-           std::to_string(tracker_->map().pointCount()) + " map points in its replica, " +
-           std::to_string(bytes >> 20) + " MB";
+           std::to_string(tracker_->map().pointCount()) + " map points in its replica";
   };
   h.load = [this](const std::string& path) {
     // Without a camera yet, the map's own: the first camera_info must then agree with it (image sizes are checked).

@@ -32,7 +32,9 @@ bool StageServices::onSave(binloop::SaveMap::Request& req, binloop::SaveMap::Res
   answer("saved", "not saved", [&] {
     if (req.directory.empty()) throw std::invalid_argument("no directory given");
     std::filesystem::create_directories(req.directory);
-    return h_.save(binloop::stageStatePath(req.directory, stage_));
+    const std::string path = binloop::stageStatePath(req.directory, stage_);
+    const std::string what = h_.save(path);
+    return what + ", " + std::to_string(std::filesystem::file_size(path) >> 20) + " MB";
   }, res);
   return true;
 }

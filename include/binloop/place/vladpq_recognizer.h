@@ -9,6 +9,7 @@
 
 #include "binloop/place/place_recognizer.h"
 #include "binloop/place/pq_codebooks.h"
+#include "binloop/place/signature_store.h"
 #include "binloop/place/vlad_vocabulary.h"
 
 namespace binloop {
@@ -35,7 +36,7 @@ class VladPqRecognizer : public PlaceRecognizer {
   VladPqModel model_;
   PqVerify verify_;
   // Per slot:
-  std::vector<BinarySignature> sigs_;
+  SignatureStore sigs_;
   std::vector<PqCodes> codes_;
   std::vector<std::vector<float>> raw_;  // only kept for ADC
   std::vector<std::vector<Slot>> inverted_;  // per (word, code)

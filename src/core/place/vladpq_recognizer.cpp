@@ -29,9 +29,8 @@ VladPqRecognizer::VladPqRecognizer(VladPqModel model, PqVerify verify) : model_(
 
 void VladPqRecognizer::addSignature(Slot slot, const Descriptors& d) {
   auto v = model_.vlad->aggregate(d).back();
-  BinarySignature sig = binarizeSigns(v);
+  sigs_.push(binarizeSigns(v));
   PqCodes codes = model_.pq->encode(v);
-  sigs_.push_back(std::move(sig));
   codes_.push_back(std::move(codes));
   const PqCodes& c = codes_.back();
   for (int w = 0; w < model_.pq->words(); ++w) inverted_[static_cast<size_t>(w) * model_.pq->m() + c[w]].push_back(slot);
@@ -41,14 +40,14 @@ void VladPqRecognizer::addSignature(Slot slot, const Descriptors& d) {
 size_t VladPqRecognizer::indexBytesPerKeyframe() const {
   if (sigs_.empty()) return 0;
   const size_t words = static_cast<size_t>(model_.pq->words());
-  size_t b = sigs_.front().size() * sizeof(uint64_t) + words * (sizeof(uint16_t) + sizeof(Slot));
+  size_t b = sigs_.words() * sizeof(uint64_t) + words * (sizeof(uint16_t) + sizeof(Slot));
   if (verify_ == PqVerify::kAdc) b += words * model_.pq->dims() * sizeof(float);
   return b;
 }
 
 double VladPqRecognizer::distance(Slot q, Slot k) const {
   switch (verify_) {
-    case PqVerify::kHamming: return hammingBits(sigs_[q], sigs_[k]);
+    case PqVerify::kHamming: return sigs_.distance(sigs_[q], k);
     case PqVerify::kSdc: return model_.pq->sdc(codes_[q], codes_[k]);
     case PqVerify::kAdc: return model_.pq->adc(raw_[q], codes_[k]);
   }
@@ -80,7 +79,7 @@ QueryResult VladPqRecognizer::querySignature(const SlotScope& scope) const {
   }
   r.threshold = bar;
   // The cap is in the verification distance's units: bits for Hamming; SDC/ADC distances are not capped.
-  const double cap = verify_ == PqVerify::kHamming ? ranking().distance_cap * static_cast<double>(sigs_[id].size() * 64)
+  const double cap = verify_ == PqVerify::kHamming ? ranking().distance_cap * static_cast<double>(sigs_.words() * 64)
                                                    : std::numeric_limits<double>::max();
   t = std::chrono::steady_clock::now();
   size_t pre = 0;
