@@ -21,6 +21,7 @@
 #include <vector>
 
 #include "binloop/place/place_error.h"
+#include "binloop/util/checksum.h"  // checksum64, the version-2 payload checksum (~10x hashBytes)
 
 namespace binloop {
 
@@ -190,8 +191,5 @@ class ModelReader {
 
 /// A 64-bit hash for training-data fingerprints and version-1 payload checksums (one word at a time).
 uint64_t hashBytes(const void* data, size_t n, uint64_t seed = 0);
-/// The version-2 payload checksum: four independent lanes over 32-byte blocks, so it runs at memory
-/// speed (about 10x hashBytes, whose every step waits for the one before).
-uint64_t checksum64(const void* data, size_t n);
 
 }  // namespace binloop

@@ -4,29 +4,13 @@
 #include <cstdio>
 #include <fstream>
 
+#include "binloop/util/checksum.h"
+
 namespace binloop {
 namespace {
 
 constexpr char kMagic[8] = {'B', 'L', 'S', 'T', 'A', 'T', 'E', '1'};
 constexpr size_t kHeaderBytes = 32;
-
-// Four independent multiply-rotate lanes over 8-byte words, so the check runs near memory speed on the
-// hundreds of megabytes a long route's keyframes take.
-uint64_t stateChecksum(const uint8_t* p, size_t n) {
-  uint64_t lane[4] = {0x9E3779B97F4A7C15ull, 0xC2B2AE3D27D4EB4Full, 0x165667B19E3779F9ull, 0x27D4EB2F165667C5ull};
-  size_t i = 0;
-  for (; i + 32 <= n; i += 32)
-    for (int l = 0; l < 4; ++l) {
-      uint64_t w;
-      std::memcpy(&w, p + i + 8 * l, 8);
-      lane[l] = ((lane[l] ^ w) * 0x9E3779B97F4A7C15ull);
-      lane[l] = (lane[l] << 31) | (lane[l] >> 33);
-    }
-  uint64_t h = n;
-  for (; i < n; ++i) h = (h ^ p[i]) * 0x100000001B3ull;
-  for (uint64_t l : lane) h = (h ^ l) * 0x9E3779B97F4A7C15ull, h ^= h >> 29;
-  return h;
-}
 
 template <class T>
 void store(uint8_t* at, T v) {
@@ -58,7 +42,7 @@ void StateWriter::finish() {
   store<uint32_t>(header + 8, kVersion);
   store<uint32_t>(header + 12, static_cast<uint32_t>(stage_.size()));
   store<uint64_t>(header + 16, bytes_.size());
-  store<uint64_t>(header + 24, stateChecksum(bytes_.data(), bytes_.size()));
+  store<uint64_t>(header + 24, checksum64(bytes_.data(), bytes_.size()));
   const std::string partial = path_ + ".partial";
   {
     std::ofstream out(partial, std::ios::binary | std::ios::trunc);
@@ -104,7 +88,7 @@ StateReader::StateReader(std::string path, const std::string& stage) : path_(std
   bytes_.resize(payload);
   in.read(reinterpret_cast<char*>(bytes_.data()), static_cast<std::streamsize>(payload));
   if (!in) throw dataError(path_, 0, "reading the state file failed");
-  if (stateChecksum(bytes_.data(), bytes_.size()) != checksum)
+  if (checksum64(bytes_.data(), bytes_.size()) != checksum)
     throw dataError(path_, 0, "corrupt state file (payload checksum differs)");
 }
 
