@@ -97,35 +97,60 @@ TEST(LoopClosingPipeline, TheRevisitIsClosedCorrectlyTheErrorThereDropsAndReruns
 TEST(LoopClosingPipeline, ThreadedModeClosesTheLoopAndVerifiesExternalLoops) {
   const LoopDrive* d = loopDrive();
   if (!d) GTEST_SKIP() << "needs the texture photos of ../shared/data";
-  auto keyframeAfter = [](const SlamPipeline& slam, const std::vector<msg::TrackedFrame>& tracked, size_t frame) {
+  auto isKeyframe = [](const SlamPipeline& slam, const msg::TrackedFrame& tf) {
+    return tf.new_keyframe != kNoId && slam.tracker().map().keyframe(tf.new_keyframe) != nullptr;
+  };
+  auto keyframeAfter = [&](const SlamPipeline& slam, const std::vector<msg::TrackedFrame>& tracked, size_t frame) {
     for (size_t i = frame; i < tracked.size(); ++i)
-      if (tracked[i].new_keyframe != kNoId && slam.tracker().map().keyframe(tracked[i].new_keyframe))
-        return tracked[i].new_keyframe;
-    return kNoId;
+      if (isKeyframe(slam, tracked[i])) return i;
+    return tracked.size();
+  };
+  // The second pass's keyframe nearest the start in the ground truth: which frames become keyframes depends on
+  // the threads' timing, and a pair 10 m apart sees too little in common to be a fair test of the API.
+  auto nearestKeyframeAfter = [&](const SlamPipeline& slam, const std::vector<msg::TrackedFrame>& tracked,
+                                  size_t from, size_t to) {
+    size_t best = tracked.size();
+    double best_d = 1e9;
+    for (size_t i = from; i < tracked.size(); ++i) {
+      const double dist = (d->route[i].translation() - d->route[to].translation()).norm();
+      if (isKeyframe(slam, tracked[i]) && dist < best_d) best = i, best_d = dist;
+    }
+    return best;
   };
   const DriveRun r = runDrive(*d, true, PipelineMode::kThreaded, [&](SlamPipeline& slam, const auto& tracked) {
-    const SlamKeyframeId start = keyframeAfter(slam, tracked, 5), again = keyframeAfter(slam, tracked, d->lap + 5),
-                         far = keyframeAfter(slam, tracked, d->lap / 2);
-    ASSERT_NE(start, kNoId);
-    ASSERT_NE(again, kNoId);
-    ASSERT_NE(far, kNoId);
+    const size_t start_frame = keyframeAfter(slam, tracked, 5), far_frame = keyframeAfter(slam, tracked, d->lap / 2);
+    ASSERT_LT(start_frame, tracked.size());
+    ASSERT_LT(far_frame, tracked.size());
+    const size_t again_frame = nearestKeyframeAfter(slam, tracked, d->lap, start_frame);
+    ASSERT_LT(again_frame, tracked.size());
+    const SlamKeyframeId start = tracked[start_frame].new_keyframe, far = tracked[far_frame].new_keyframe,
+                         again = tracked[again_frame].new_keyframe;
     slam.addExternalLoop(again, start, "operator");
     slam.addExternalLoop(again, far, "operator");
   });
   std::vector<std::string> external;
   for (const auto& e : r.log)
-    for (const auto& c : e.closures)
+    for (const auto& c : e.closures) {
+      std::cout << c->model << " " << c->query_frame << "->" << c->match_frame << " " << c->status << ": " << c->detail << "\n";
       if (c->model == "operator") external.push_back(c->status + ": " + c->detail);
+    }
   ASSERT_EQ(external.size(), 2u);
   EXPECT_EQ(external[0].rfind("accepted", 0), 0u) << external[0];
   // The far side shares textures with the start (the world repeats its photos), so a few matches are found.
   EXPECT_TRUE(external[1].rfind("too_few_matches", 0) == 0 || external[1].rfind("no_consensus", 0) == 0) << external[1];
   const auto loops = accepted(r);
-  ASSERT_FALSE(loops.empty()) << "no loop accepted";
-  for (const msg::LoopClosure* c : loops)
+  size_t detected = 0;
+  for (const msg::LoopClosure* c : loops) {
     EXPECT_LT((d->route[c->query_frame].translation() - d->route[c->match_frame].translation()).norm(), 10);
+    detected += c->model != "operator";
+  }
+  ASSERT_GT(detected, 0u) << "the detector closed no loop";
   const size_t last = d->frames.size() - 1;
-  EXPECT_LT((r.poses[last].translation() - d->route[last].translation()).norm(), 0.3);
+  const double err = (r.poses[last].translation() - d->route[last].translation()).norm();
+  std::cout << "end error: " << err << " m (" << loops.size() << " loops accepted";
+  for (const msg::LoopClosure* c : loops) std::cout << ", " << c->query_frame << "->" << c->match_frame;
+  std::cout << ")\n";
+  EXPECT_LT(err, 0.3);
 }
 
 // A model that cannot be made is refused when it is asked for, not on the loop stage's thread mid-run.
