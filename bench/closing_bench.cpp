@@ -5,6 +5,7 @@
 // Rows and their data (synthetic, so that the numbers do not depend on a run of the SLAM):
 // - verification of one candidate (loop/loop_verifier.h): two keyframes of 2000 stereo keypoints each,
 //   1000 of them the same 3-D points seen from 1.5 m to the side and 8 degrees turned, the rest clutter;
+// - its step 1 alone (place/descriptor_block.h), the AVX-512 search and the plain loop, on random descriptors;
 // - essential-graph optimisation (build + optim/pose_graph.h) of a loop of N keyframes driven round a
 //   circle, each keyframe covisible (weight >= 100) with its 8 successors, as on rendered route 00 (1395
 //   keyframes, 11138 edges), 0.5 % drift, one loop edge from the last keyframe to the first.
@@ -22,6 +23,7 @@
 
 #include "binloop/loop/essential_graph.h"
 #include "binloop/loop/loop_verifier.h"
+#include "binloop/place/descriptor_block.h"
 #include "binloop/optim/pose_graph.h"
 #include "binloop/util/hash_random.h"
 
@@ -104,6 +106,28 @@ Row verification(int runs) {
   return r;
 }
 
+// Step 1 of verification alone, both ways: the eight-wide AVX-512 search where the CPU has it, the plain
+// loop everywhere (what a CPU without AVX-512 VPOPCNTDQ runs).
+Row bruteForce(bool wide, int runs) {
+  Row r{std::string("step 1 alone: nearest + second of 2000 descriptors among 2000, ") +
+            (wide ? (DescriptorBlock::wide() ? "AVX-512" : "AVX-512 (not on this CPU: plain)") : "plain loop"),
+        "", "", {}};
+  HashRng rng(4);
+  Descriptors q(2000), c(2000);
+  for (auto* set : {&q, &c})
+    for (auto& d : *set)
+      for (auto& w : d.w) w = rng.next();
+  const DescriptorBlock block(c);
+  for (int i = 0; i < runs; ++i) {
+    const auto t0 = Clock::now();
+    int sum = 0;
+    for (const Desc256& d : q) sum += (wide ? block.nearest(d) : block.nearestPortable(d)).best;
+    r.runs.push_back(ms(t0));
+    if (sum == 0) std::fprintf(stderr, "closing_bench: no distance at all\n");  // keeps the loop
+  }
+  return r;
+}
+
 Row essentialGraph(int n, int runs) {
   Row r{"essential graph optimisation, " + std::to_string(n) + "-keyframe loop (8 covisible each)",
         n <= 300 ? "<= 100 ms" : "", n <= 300 ? "178 ms (loop of ~250 keyframes)" : "", {}};
@@ -155,6 +179,8 @@ int main(int argc, char** argv) {
     if (std::string(argv[i]) == "--runs") runs = std::max(1, std::atoi(argv[i + 1]));
   std::vector<Row> rows;
   rows.push_back(verification(runs * 3));
+  rows.push_back(bruteForce(true, runs * 3));
+  rows.push_back(bruteForce(false, runs * 3));
   rows.push_back(essentialGraph(250, runs));
   rows.push_back(essentialGraph(1400, std::max(1, runs / 2)));
   // Global BA runs inside the SLAM (mapping.global_ba_after_loop); its time is in summary.json (global_ba_ms).
@@ -173,7 +199,7 @@ int main(int argc, char** argv) {
   const char* json = std::getenv("BINLOOP_BENCH_JSON");
   std::ofstream out(json ? json : ".build/bench/closing.json");
   out << "{\n  \"cpu\": \"" << cpuModel() << "\",\n  \"verification_ms\": " << median(rows[0].runs)
-      << ",\n  \"essential_graph_250_ms\": " << median(rows[1].runs) << ",\n  \"essential_graph_1400_ms\": "
-      << median(rows[2].runs) << "\n}\n";
+      << ",\n  \"essential_graph_250_ms\": " << median(rows[3].runs) << ",\n  \"essential_graph_1400_ms\": "
+      << median(rows[4].runs) << "\n}\n";
   return 0;
 }

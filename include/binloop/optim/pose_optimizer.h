@@ -31,6 +31,10 @@ struct PoseOptimizerParams {
   double chi2_stereo = 7.815;
   double huber_delta_mono = std::sqrt(5.991);
   double huber_delta_stereo = std::sqrt(7.815);
+  /// When more observations than this are active, each round solves on an even spread of this many of them
+  /// (every k-th) and still classifies all of them at the new pose. Six unknowns are fixed long before a
+  /// thousand points; the solve's cost is linear in the count. Zero: solve on all of them.
+  int max_solve_observations = 0;
 };
 
 struct PoseOptimizationResult {

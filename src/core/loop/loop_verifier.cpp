@@ -4,6 +4,7 @@
 #include <limits>
 
 #include "binloop/optim/pose_optimizer.h"
+#include "binloop/place/descriptor_block.h"
 #include "binloop/tracking/keypoint_grid.h"
 #include "binloop/tracking/scale_pyramid.h"
 #include "binloop/util/hash_random.h"
@@ -68,24 +69,16 @@ LoopVerification verifyLoop(const msg::KeyFrame& q, const msg::KeyFrame& c, cons
 
   // 1. Descriptor matches between stereo keypoints, each candidate keypoint used once.
   std::vector<int> best_of_c(c.keypoints.size(), -1), dist_of_c(c.keypoints.size(), std::numeric_limits<int>::max());
-  // The candidate's stereo descriptors packed together: the inner loop then streams one array.
   std::vector<int> c_index;
-  Descriptors c_desc;
+  DescriptorBlock c_desc;
   for (size_t j = 0; j < c.keypoints.size(); ++j)
-    if (stereo(c.keypoints[j])) c_index.push_back(static_cast<int>(j)), c_desc.push_back(c.descriptors[j]);
+    if (stereo(c.keypoints[j])) c_index.push_back(static_cast<int>(j)), c_desc.add(c.descriptors[j]);
   for (size_t i = 0; i < q.keypoints.size(); ++i) {
     if (!stereo(q.keypoints[i])) continue;
-    int best = 256, second = 256, best_j = -1;
-    const Desc256& qd = q.descriptors[i];
-    for (size_t k = 0; k < c_desc.size(); ++k) {
-      const int d = hamming(qd, c_desc[k]);
-      if (d < second) {
-        if (d < best) second = best, best = d, best_j = c_index[k];
-        else second = d;
-      }
-    }
-    if (best_j < 0 || best > p.max_hamming || best > p.ratio * second) continue;
-    if (best < dist_of_c[best_j]) dist_of_c[best_j] = best, best_of_c[best_j] = static_cast<int>(i);
+    const DescriptorBlock::Nearest n = c_desc.nearest(q.descriptors[i]);
+    if (n.index < 0 || n.best > p.max_hamming || n.best > p.ratio * n.second) continue;
+    const int best_j = c_index[n.index];
+    if (n.best < dist_of_c[best_j]) dist_of_c[best_j] = n.best, best_of_c[best_j] = static_cast<int>(i);
   }
   std::vector<std::pair<int, int>> pairs;
   for (size_t j = 0; j < c.keypoints.size(); ++j)

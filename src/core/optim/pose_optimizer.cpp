@@ -25,6 +25,9 @@ void checkInput(const StereoCamera& camera, const Pose3& T_c_w, const std::vecto
   if (p.iterations_per_round < 1)
     fail(kWho,
          "parameter iterations_per_round must be >= 1 (got " + std::to_string(p.iterations_per_round) + ")");
+  if (p.max_solve_observations < 0 || (p.max_solve_observations > 0 && p.max_solve_observations < 3))
+    fail(kWho, "parameter max_solve_observations must be 0 (all) or >= 3 (got " +
+                   std::to_string(p.max_solve_observations) + ")");
   if (p.robust_rounds < 0)
     fail(kWho, "parameter robust_rounds must be >= 0 (got " + std::to_string(p.robust_rounds) + ")");
   checkPositive(kWho, "chi2_mono", p.chi2_mono);
@@ -96,8 +99,11 @@ PoseOptimizationResult optimizePose(const StereoCamera& camera, const Pose3& T_c
     ceres::Problem problem(po);
     problem.AddParameterBlock(xi, 6);
     const bool robust = round < params.robust_rounds;
+    const size_t cap = static_cast<size_t>(params.max_solve_observations);
+    const size_t stride = cap > 0 && active > cap ? (active + cap - 1) / cap : 1;
+    size_t seen = 0;
     for (size_t i = 0; i < n; ++i) {
-      if (excluded[i]) continue;
+      if (excluded[i] || seen++ % stride != 0) continue;
       ceres::LossFunction* loss = nullptr;
       if (robust) loss = terms[i].stereo ? static_cast<ceres::LossFunction*>(&huber_stereo) : &huber_mono;
       problem.AddResidualBlock(terms[i].cost(), loss, xi);

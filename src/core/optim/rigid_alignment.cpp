@@ -1,5 +1,8 @@
 #include "binloop/optim/rigid_alignment.h"
 
+#include <algorithm>
+#include <cmath>
+
 #include <Eigen/Eigenvalues>
 #include <Eigen/Geometry>
 
@@ -51,7 +54,9 @@ RigidRansacResult rigidRansac(const std::vector<Eigen::Vector3d>& a, const std::
     return count;
   };
   std::vector<uint8_t> in(n);
-  for (int it = 0; it < p.iterations; ++it) {
+  int needed = p.iterations;
+  for (int it = 0; it < std::min(p.iterations, needed); ++it) {
+    best.iterations = it + 1;
     const int i = rng.below(static_cast<int>(n));
     int j = rng.below(static_cast<int>(n)), k = rng.below(static_cast<int>(n));
     if (i == j || j == k || i == k) continue;
@@ -62,6 +67,9 @@ RigidRansacResult rigidRansac(const std::vector<Eigen::Vector3d>& a, const std::
       best.inliers = c;
       best.inlier = in;
       best.T_a_b = *T;
+      const double w = static_cast<double>(c) / static_cast<double>(n), miss = 1 - w * w * w;
+      if (p.confidence > 0 && p.confidence < 1 && miss < 1)
+        needed = miss <= 0 ? 0 : static_cast<int>(std::ceil(std::log(1 - p.confidence) / std::log(miss)));
     }
   }
   if (best.inliers < std::max(3, p.min_inliers)) {

@@ -80,6 +80,7 @@ std::map<std::string, std::map<std::string, Setting>> settingsOf(SlamConfig& c) 
         {"ratio", {S::kFloat, &l.verify.ratio, 0}},
         {"min_matches", {S::kInt, &l.verify.min_matches, 3}},
         {"ransac_iterations", {S::kInt, &l.verify.ransac.iterations, 1}},
+        {"ransac_confidence", {S::kDouble, &l.verify.ransac.confidence, 0}},
         {"ransac_min_inliers", {S::kInt, &l.verify.ransac.min_inliers, 3}},
         {"min_inliers", {S::kInt, &l.verify.min_inliers, 3}},
         {"covisibility_min", {S::kInt, &l.graph.min_covisibility, 1}},

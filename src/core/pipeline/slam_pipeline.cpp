@@ -93,7 +93,7 @@ void SlamPipeline::map(const MappingInput& in) {
     updates_.push(u);
     if (closer_) {
       if (mode_ == PipelineMode::kLockStep) closer_->apply(*u);
-      else loop_inbox_.push({nullptr, u});
+      else loop_inbox_.push({nullptr, u, std::nullopt});
     }
     return;
   }
@@ -105,8 +105,8 @@ void SlamPipeline::map(const MappingInput& in) {
   updates_.push(out.update);
   --pending_;
   if (!detector_) return;
-  if (mode_ == PipelineMode::kLockStep) searchLoops({out.refined, out.update});
-  else loop_inbox_.push({out.refined, out.update});
+  if (mode_ == PipelineMode::kLockStep) searchLoops({out.refined, out.update, std::nullopt});
+  else loop_inbox_.push({out.refined, out.update, std::nullopt});
 }
 
 void SlamPipeline::searchLoops(const LoopInput& in) {

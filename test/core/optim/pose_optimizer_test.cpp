@@ -85,6 +85,21 @@ TEST(PoseOptimizer, RecoversPerturbedStereoPoseAndFlagsGrossOutliers) {
   }
 }
 
+// Loop verification solves on 200 of its ~1000 pairs: the pose comes out as well and every observation,
+// those not in the solve included, is judged.
+TEST(PoseOptimizer, SolvingOnASpreadSubsetRecoversThePoseAndJudgesEveryObservation) {
+  const Frame f = makeFrame(1500, 0.2, true, 4);
+  PoseOptimizerParams p;
+  p.max_solve_observations = 200;
+  for (uint64_t trial = 0; trial < 3; ++trial) {
+    SCOPED_TRACE(trial);
+    HashRng rng(300 + trial);
+    expectRecovered(f, optimizePose(f.cam, perturb(f.T_c_w_true, 3, 0.3, rng), f.obs, p));
+  }
+  p.max_solve_observations = 2;
+  EXPECT_THROW(optimizePose(f.cam, f.T_c_w_true, f.obs, p), std::invalid_argument);
+}
+
 TEST(PoseOptimizer, MonocularOnlyObservations) {
   const Frame f = makeFrame(600, 0.2, false, 2);
   for (const auto& o : f.obs) ASSERT_LT(o.u_right, 0);

@@ -72,6 +72,27 @@ TEST(RigidAlignment, RansacFindsTheTransformAmongHalfWrongPairsAndMarksThem) {
   EXPECT_EQ(again.inlier, r.inlier);
 }
 
+// Half the pairs right: a sample of three right ones comes with probability 1/8 per draw, so 99.9 %
+// confidence needs log(0.001) / log(7/8) = 52 draws once the right model is found, not all 300.
+TEST(RigidAlignment, RansacStopsOnceConfidentAndRunsEverythingWithoutAConfidence) {
+  HashRng rng(5);
+  const Pose3 T = someMotion();
+  const auto b = cloud(400, rng);
+  std::vector<Eigen::Vector3d> a;
+  for (size_t i = 0; i < b.size(); ++i) a.push_back(T * b[i % 2 ? (i * 7 + 13) % b.size() : i]);
+  const RigidRansacResult r = rigidRansac(a, b, {}, 3);
+  ASSERT_TRUE(r.ok);
+  EXPECT_GE(r.iterations, 45);  // 52 at exactly half; a wrong pair may land near its point
+  EXPECT_LT(r.iterations, 150);
+  EXPECT_GE(r.inliers, 200);
+  EXPECT_LE(r.inliers, 205);
+  RigidRansacParams all;
+  all.confidence = 0;
+  const RigidRansacResult slow = rigidRansac(a, b, all, 3);
+  EXPECT_EQ(slow.iterations, 300);
+  EXPECT_EQ(slow.inlier, r.inlier);
+}
+
 TEST(RigidAlignment, RansacSaysNoWhenNothingAgrees) {
   HashRng rng(3);
   const auto a = cloud(100, rng), b = cloud(100, rng);

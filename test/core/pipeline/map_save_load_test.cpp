@@ -78,7 +78,9 @@ TEST(MapSaveLoad, ARoundTripChangesNoByteAndTheLoadedMapIsTrackedAndClosed) {
   for (size_t i = d->lap; i < d->frames.size(); ++i) {
     last = loaded.process(d->frames[i]);
     if (last.state == msg::TrackingState::kLost) ++lost;
-    if (last.new_keyframe != kNoId) EXPECT_GT(last.new_keyframe, max_loaded) << "an id issued twice";
+    if (last.new_keyframe != kNoId) {
+      EXPECT_GT(last.new_keyframe, max_loaded) << "an id issued twice";
+    }
   }
   loaded.finish();
   EXPECT_LE(lost, 2u) << "frames lost after the load";
