@@ -25,6 +25,7 @@ class LocalMappingNodelet : public nodelet::Nodelet {
  private:
   void onKeyframe(const binloop::KeyFrameConstPtr& m);
   void onCorrection(const binloop::CorrectionConstPtr& m);
+  void mergeGlobalBa();
   void publishMap(const ros::Time& stamp);
   void problem(const std::string& what);
   void diagnose(diagnostic_updater::DiagnosticStatusWrapper& s);
@@ -36,6 +37,7 @@ class LocalMappingNodelet : public nodelet::Nodelet {
   std::string map_frame_;
   int cloud_every_ = 5;
   ros::Subscriber keyframe_sub_, correction_sub_;
+  ros::Timer merge_timer_;
   ros::Publisher refined_pub_, update_pub_, cloud_pub_, keyframes_pub_;
   std::unique_ptr<StageDiagnostics> diag_;
   CpuMeter cpu_;
@@ -50,6 +52,7 @@ void LocalMappingNodelet::onInit() {
   try {
     requireKnownParams(pnh, {"config", "map_frame", "cloud_every"});
     params_ = slamConfigFrom(pnh).mapper;
+    params_.global_ba_in_background = true;  // mapping goes on while it runs (when global_ba_after_loop is on)
     mapper_ = std::make_unique<binloop::LocalMapper>(params_);
   } catch (const std::exception& e) {
     NODELET_FATAL("binloop/LocalMapping: %s", e.what());
@@ -64,6 +67,8 @@ void LocalMappingNodelet::onInit() {
   // Deep queues: a keyframe or a correction dropped here would be lost for good.
   keyframe_sub_ = nh.subscribe("keyframe", 1000, &LocalMappingNodelet::onKeyframe, this);
   correction_sub_ = nh.subscribe("correction", 100, &LocalMappingNodelet::onCorrection, this);
+  // A background global BA is merged when it is done, whether or not keyframes come (same queue as them).
+  merge_timer_ = nh.createTimer(ros::Duration(0.1), [this](const ros::TimerEvent&) { mergeGlobalBa(); });
   diag_ = std::make_unique<StageDiagnostics>(
       nh, pnh, "local mapping", [this](diagnostic_updater::DiagnosticStatusWrapper& s) { diagnose(s); });
   StageServiceHandlers h;
@@ -83,7 +88,8 @@ void LocalMappingNodelet::onInit() {
   h.statistics = [this] {
     return StageStatistics{{"keyframes", std::to_string(mapper_->keyframeCount())},
                            {"map_points", std::to_string(mapper_->pointCount())},
-                           {"corrections", std::to_string(mapper_->correctionsApplied())}};
+                           {"corrections", std::to_string(mapper_->correctionsApplied())},
+                           {"global_ba_merged", std::to_string(mapper_->globalBaStats().merged)}};
   };
   services_ = std::make_unique<StageServices>(pnh, "local_mapping", h);
 }
@@ -99,7 +105,22 @@ void LocalMappingNodelet::problem(const std::string& what) {
   NODELET_WARN_THROTTLE(1.0, "binloop/LocalMapping: %s", what.c_str());
 }
 
+void LocalMappingNodelet::mergeGlobalBa() {
+  CpuMeter::Scope cpu(cpu_);
+  binloop::msg::LocalMapUpdatePtr u = mapper_->mergeGlobalBa();
+  if (!u) return;
+  std_msgs::Header header;
+  header.stamp = ros::Time::now();
+  header.frame_id = map_frame_;
+  update_pub_.publish(boost::make_shared<binloop::LocalMapUpdate>(toRos(*u, header)));
+  publishMap(header.stamp);
+  NODELET_INFO("binloop/LocalMapping: global BA merged (%.0f ms over %d keyframes, %d added meanwhile)",
+               mapper_->globalBaStats().last_ms, mapper_->globalBaStats().last_keyframes,
+               mapper_->globalBaStats().last_added_meanwhile);
+}
+
 void LocalMappingNodelet::onKeyframe(const binloop::KeyFrameConstPtr& m) {
+  mergeGlobalBa();  // one that finished goes out before the keyframe's update
   CpuMeter::Scope cpu(cpu_);
   binloop::LocalMapper::Output out;
   try {

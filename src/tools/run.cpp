@@ -309,6 +309,12 @@ int main(int argc, char** argv) {
       stat("correction_apply", correction_ms, false);
       if (!switch_ms.empty()) stat("switch_rebuild", switch_ms, false);
       if (!global_ba_ms.empty()) stat("global_ba", global_ba_ms, false);
+      const LocalMapper::GlobalBaStats& g = slam.mapper().globalBaStats();
+      if (g.started > 0)  // threaded: in the background
+        js << "  \"global_ba_background\": {\"started\": " << g.started << ", \"merged\": " << g.merged
+           << ", \"stopped_by_a_loop\": " << g.aborted << ", \"last_ms\": " << g.last_ms
+           << ", \"last_keyframes\": " << g.last_keyframes << ", \"last_added_meanwhile\": "
+           << g.last_added_meanwhile << "},\n";
       std::cout << "loops_accepted: " << by_status["accepted"] << "\n";
     }
     js << "  \"settings\": {";

@@ -6,6 +6,7 @@
 #include <atomic>
 #include <deque>
 #include <map>
+#include <memory>
 #include <unordered_map>
 #include <vector>
 
@@ -41,10 +42,14 @@ struct LocalMapperParams {
   int local_ba_max_keyframes = 30; // optimised keyframes (the new one and its strongest neighbours)
   LocalBaParams ba;
   bool cull_keyframes = true;
-  // After a loop correction, a bundle adjustment of the whole map (ORB-SLAM2 runs one on its own thread).
-  // Here it runs on mapping's thread, before the corrected map goes to tracking: mapping waits for it, and
-  // tracking declines keyframes meanwhile. Off by default (README, "Running the SLAM": what it costs).
+  // After a loop correction, a bundle adjustment of the whole map. Off by default (README, "Loop closing,
+  // measured": what it costs and gives).
   bool global_ba_after_loop = false;
+  // Where it runs. False: on mapping's thread, before the corrected map goes to tracking (mapping waits;
+  // lock-step runs stay bit-identical). True (the threaded pipeline and the nodelet set it): on its own
+  // thread over a copy of the map, as ORB-SLAM2 does; mapping goes on, and mergeGlobalBa() folds the result
+  // in, moving keyframes added meanwhile with their spanning-tree ancestor. A new correction stops it.
+  bool global_ba_in_background = false;
   float redundant_ratio = 0.9f;    // a keyframe whose points are this often seen by >= 3 others goes
   float close_depth_baselines = 40;
 };
@@ -57,6 +62,9 @@ class LocalMapper {
   };
 
   explicit LocalMapper(const LocalMapperParams& p = {});
+  ~LocalMapper();
+  LocalMapper(const LocalMapper&) = delete;
+  LocalMapper& operator=(const LocalMapper&) = delete;
   /// Inserts the keyframe and runs the local-mapping steps on it. Never throws for a keyframe that names
   /// unknown points (they are dropped); throws std::invalid_argument for a malformed message (sizes differ).
   Output process(const msg::KeyFrame& kf);
@@ -65,6 +73,17 @@ class LocalMapper {
   /// sequence.
   msg::LocalMapUpdatePtr apply(const msg::Correction& c);
   uint64_t correctionsApplied() const { return history_.applied(); }
+
+  /// A background global BA's result folded into the map, or null while none is done (with `wait`, waits
+  /// for a running one). The update carries the whole map, as after a correction.
+  msg::LocalMapUpdatePtr mergeGlobalBa(bool wait = false);
+  bool globalBaRunning() const;
+  struct GlobalBaStats {
+    int started = 0, merged = 0, aborted = 0;  // aborted: stopped by a correction (or discarded at the end)
+    double last_ms = 0;                        // the last merged one's solve
+    int last_keyframes = 0, last_added_meanwhile = 0;
+  };
+  const GlobalBaStats& globalBaStats() const { return global_ba_; }
   /// Set from another thread to cut a running local BA short (a new keyframe is waiting).
   std::atomic<bool>& abortFlag() { return abort_; }
 
@@ -119,6 +138,22 @@ class LocalMapper {
   /// Bundle adjustment of the `free` keyframes and every point they see; other keyframes that see those
   /// points hold still.
   void bundleAdjust(const std::vector<SlamKeyframeId>& free, const LocalBaParams& params, msg::LocalMapUpdate& u);
+  struct BaSetup {
+    BaProblem problem;
+    size_t free = 0;  // the first `free` keyframes of the problem are optimised
+    std::vector<std::pair<MapPointId, SlamKeyframeId>> obs_of;  // per observation
+  };
+  BaSetup makeBaProblem(const std::vector<SlamKeyframeId>& free) const;
+  void removeBaOutliers(const BaSetup& b, const LocalBaResult& r, msg::LocalMapUpdate& u);
+  LocalBaParams globalBaParams() const;
+  /// Moves every keyframe by its delta (T_w_c_after T_w_c_before^-1) or its nearest ancestor's, and every
+  /// point with its reference keyframe unless `placed` gives its new position. Returns the keyframe ids.
+  std::vector<SlamKeyframeId> moveMap(const std::unordered_map<SlamKeyframeId, Pose3>& delta,
+                                      const std::unordered_map<MapPointId, Eigen::Vector3d>* placed);
+  void wholeMapInto(msg::LocalMapUpdate& u) const;
+  struct GlobalBaJob;
+  void startGlobalBa(const std::vector<SlamKeyframeId>& ids);
+  void stopGlobalBa();
   void cullKeyframes(KF& kf, msg::LocalMapUpdate& u);
   void updatePointShape(MP& mp);
   void addObservation(MP& mp, KF& kf, int idx);
@@ -142,6 +177,8 @@ class LocalMapper {
   uint64_t seq_ = 0, updates_ = 0;
   SlamKeyframeId first_kf_ = kNoId;
   CorrectionHistory history_;
+  std::unique_ptr<GlobalBaJob> gba_;
+  GlobalBaStats global_ba_;
 };
 
 }  // namespace binloop

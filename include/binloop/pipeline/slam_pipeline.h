@@ -89,7 +89,7 @@ class SlamPipeline {
     std::vector<msg::LoopCandidatesPtr> shadow;
     std::vector<msg::LoopClosurePtr> closures;
     double correction_ms = 0;  // local mapping applying an accepted loop's correction (lock-step only)
-    double global_ba_ms = 0;   // ... of which the global BA, when on (lock-step only)
+    double global_ba_ms = 0;   // ... of which the global BA, when on (lock-step only; threaded: mapper().globalBaStats())
     double switch_ms = 0;      // rebuilding a newly switched model's index before this query
     std::string problem;       // a switch that failed (the running model stayed), empty otherwise
   };
@@ -109,6 +109,9 @@ class SlamPipeline {
     std::optional<ExternalLoop> external;
   };
   void sendCorrection(const msg::CorrectionPtr& c);
+  /// A map update from mapping to tracking and loop closing (on the loop thread's queue while it runs).
+  void sendMapUpdate(const msg::LocalMapUpdatePtr& u, bool loop_thread_running);
+  void mergeGlobalBa(bool wait, bool loop_thread_running);
   void map(const MappingInput& in);
   void searchLoops(const LoopInput& in);
   void drainUpdates();

@@ -1,5 +1,7 @@
 #include "binloop/mapping/local_mapper.h"
 
+#include <thread>
+
 #include <algorithm>
 #include <chrono>
 #include <cmath>
@@ -333,63 +335,75 @@ void LocalMapper::localBundleAdjustment(KF& kf, msg::LocalMapUpdate& u) {
   bundleAdjust(free, p_.ba, u);
 }
 
-void LocalMapper::bundleAdjust(const std::vector<SlamKeyframeId>& free, const LocalBaParams& params,
-                               msg::LocalMapUpdate& u) {
-  BaProblem prob;
+LocalMapper::BaSetup LocalMapper::makeBaProblem(const std::vector<SlamKeyframeId>& free) const {
+  BaSetup b;
   std::unordered_map<SlamKeyframeId, size_t> kf_index;
   std::unordered_map<MapPointId, size_t> pt_index;
   auto addKf = [&](SlamKeyframeId id, bool fixed) {
     if (kf_index.count(id)) return;
-    kf_index[id] = prob.keyframes.size();
-    prob.keyframes.push_back({id, orthonormalized(kfs_.at(id).state.T_w_c.inverse()), fixed || id == first_kf_});
+    kf_index[id] = b.problem.keyframes.size();
+    b.problem.keyframes.push_back({id, orthonormalized(kfs_.at(id).state.T_w_c.inverse()), fixed || id == first_kf_});
   };
   for (SlamKeyframeId k : free) addKf(k, false);
-  const size_t local = prob.keyframes.size();
-  for (size_t i = 0; i < local; ++i)
-    for (MapPointId id : kfs_.at(prob.keyframes[i].id).state.point_ids)
+  b.free = b.problem.keyframes.size();
+  for (size_t i = 0; i < b.free; ++i)
+    for (MapPointId id : kfs_.at(b.problem.keyframes[i].id).state.point_ids)
       if (id != kNoId && !pt_index.count(id)) {
-        pt_index[id] = prob.points.size();
-        prob.points.push_back({id, pts_.at(id).state.p_w});
+        pt_index[id] = b.problem.points.size();
+        b.problem.points.push_back({id, pts_.at(id).state.p_w});
       }
-  std::vector<std::pair<MapPointId, SlamKeyframeId>> obs_of;
-  for (const BaPoint& bp : prob.points)
+  for (const BaPoint& bp : b.problem.points)
     for (const auto& [k, idx] : pts_.at(bp.id).obs) {
       addKf(k, true);
       const KF& o = kfs_.at(k);
       const msg::KeyPoint& kp = o.keypoints[idx];
-      prob.observations.push_back(
+      b.problem.observations.push_back(
           {kf_index.at(k), pt_index.at(bp.id), {kp.x, kp.y}, kp.right_x, scales_.inv_sigma2[kp.octave]});
-      obs_of.emplace_back(bp.id, k);
+      b.obs_of.emplace_back(bp.id, k);
     }
-  if (prob.points.empty()) return;
+  return b;
+}
+
+void LocalMapper::bundleAdjust(const std::vector<SlamKeyframeId>& free, const LocalBaParams& params,
+                               msg::LocalMapUpdate& u) {
+  const BaSetup b = makeBaProblem(free);
+  if (b.problem.points.empty()) return;
   const auto t0 = std::chrono::steady_clock::now();
-  const LocalBaResult r = binloop::localBundleAdjustment(camera_, prob, params, &abort_);
+  const LocalBaResult r = binloop::localBundleAdjustment(camera_, b.problem, params, &abort_);
   u.ba_ms = msSinceT(t0);
   u.ba_iterations = r.iterations;
   u.ba_outliers = r.num_outliers;
   for (const BaRefinedKeyframe& rk : r.keyframes) kfs_.at(rk.id).state.T_w_c = orthonormalized(rk.T_c_w.inverse());
   for (const BaPoint& bp : r.points) pts_.at(bp.id).state.p_w = bp.p_w;
-  // Observations that are still outliers are removed from both sides.
+  removeBaOutliers(b, r, u);
+  for (size_t i = 0; i < b.free; ++i) updateConnections(kfs_.at(b.problem.keyframes[i].id));
+}
+
+void LocalMapper::removeBaOutliers(const BaSetup& b, const LocalBaResult& r, msg::LocalMapUpdate& u) {
+  // Observations that are still outliers are removed from both sides (where both are still in the map:
+  // a background BA's map may have changed meanwhile).
   for (size_t i = 0; i < r.outlier.size(); ++i) {
     if (!r.outlier[i]) continue;
-    const auto& [pid, k] = obs_of[i];
-    MP& mp = pts_.at(pid);
-    auto it = mp.obs.find(k);
-    if (it == mp.obs.end()) continue;
-    kfs_.at(k).state.point_ids[it->second] = kNoId;
-    mp.obs.erase(it);
+    const auto& [pid, k] = b.obs_of[i];
+    auto p = pts_.find(pid);
+    auto kf = kfs_.find(k);
+    if (p == pts_.end() || kf == kfs_.end()) continue;
+    auto it = p->second.obs.find(k);
+    if (it == p->second.obs.end()) continue;
+    kf->second.state.point_ids[it->second] = kNoId;
+    p->second.obs.erase(it);
   }
-  for (const BaPoint& bp : prob.points) {
-    MP& mp = pts_.at(bp.id);
-    if (mp.obs.empty()) {
-      pts_.erase(bp.id);
+  for (const BaPoint& bp : b.problem.points) {
+    auto p = pts_.find(bp.id);
+    if (p == pts_.end()) continue;
+    if (p->second.obs.empty()) {
+      pts_.erase(p);
       u.culled_points.push_back(bp.id);
       continue;
     }
-    updatePointShape(mp);
+    updatePointShape(p->second);
     touched_.push_back(bp.id);
   }
-  for (size_t i = 0; i < local; ++i) updateConnections(kfs_.at(prob.keyframes[i].id));
 }
 
 void LocalMapper::removeKeyframe(SlamKeyframeId id) {
@@ -521,17 +535,76 @@ bool LocalMapper::keyframePose(SlamKeyframeId id, Pose3* T_w_c) const {
 msg::LocalMapUpdatePtr LocalMapper::apply(const msg::Correction& c) {
   const auto t0 = std::chrono::steady_clock::now();
   history_.begin(c.sequence);  // throws for a correction out of order
+  stopGlobalBa();  // its result would undo the correction (ORB-SLAM2 stops it too)
   auto u = std::make_shared<msg::LocalMapUpdate>();
   u->sequence = ++updates_;
   u->keyframe = c.query;
   u->correction = true;
   touched_.clear();
 
-  // Each keyframe moves by its own correction or, when loop closing did not know it yet, by its nearest
-  // corrected ancestor's in the spanning tree; a culled keyframe's children went to its parent, and a point
-  // whose reference keyframe was culled moves with that keyframe's parent.
   std::unordered_map<SlamKeyframeId, Pose3> delta;
   for (const msg::KeyframeCorrection& k : c.keyframes) delta[k.id] = k.T_w_c_after * k.T_w_c_before.inverse();
+  const std::vector<SlamKeyframeId> ids = moveMap(delta, nullptr);
+
+  // Merge what the loop matched, then search the match's neighbourhood for the query's (and back).
+  for (const auto& [removed, kept] : c.fused) {
+    const MapPointId a = resolve(removed), b = resolve(kept);
+    if (a != kNoId && b != kNoId) replacePoint(a, b, *u);
+  }
+  auto q = kfs_.find(c.query), m = kfs_.find(c.match);
+  if (c.fuse_by_projection && q != kfs_.end() && m != kfs_.end()) {
+    std::vector<SlamKeyframeId> near_q{c.query}, near_m{c.match};
+    for (SlamKeyframeId k : neighbors(q->second, p_.fuse_neighbors)) near_q.push_back(k);
+    for (SlamKeyframeId k : neighbors(m->second, p_.fuse_neighbors)) near_m.push_back(k);
+    const std::vector<MapPointId> from_match = pointsOf(near_m);
+    for (SlamKeyframeId k : near_q) fuseInto(kfs_.at(k), from_match, *u);
+    for (MapPointId& id : touched_) id = resolve(id);
+    std::sort(touched_.begin(), touched_.end());
+    touched_.erase(std::unique(touched_.begin(), touched_.end()), touched_.end());
+    for (MapPointId id : touched_)
+      if (id != kNoId) updatePointShape(pts_.at(id));
+    for (SlamKeyframeId k : near_q) updateConnections(kfs_.at(k));
+    u->points_fused_across_loop = static_cast<int>(u->fused.size());
+  }
+
+  // Global BA (optional): every keyframe and point, the first keyframe held. In the background it runs on
+  // a copy and is merged later (mergeGlobalBa); otherwise here, before the update, so that tracking gets its
+  // result with the correction.
+  if (p_.global_ba_after_loop && p_.global_ba_in_background) {
+    startGlobalBa(ids);
+  } else if (p_.global_ba_after_loop) {
+    std::vector<SlamKeyframeId> all;
+    for (SlamKeyframeId id : ids)
+      if (kfs_.count(id)) all.push_back(id);
+    abort_ = false;  // a keyframe that arrives meanwhile cuts it short, as a new loop stops ORB-SLAM2's
+    msg::LocalMapUpdate ba;
+    bundleAdjust(all, globalBaParams(), ba);
+    u->ba_ms = ba.ba_ms;
+    u->ba_iterations = ba.ba_iterations;
+    u->ba_outliers = ba.ba_outliers;
+    u->culled_points = ba.culled_points;
+  }
+
+  wholeMapInto(*u);
+  u->total_ms = msSinceT(t0);
+  return u;
+}
+
+void LocalMapper::wholeMapInto(msg::LocalMapUpdate& u) const {
+  std::vector<SlamKeyframeId> ids;
+  for (const auto& [id, kf] : kfs_) ids.push_back(id);
+  std::sort(ids.begin(), ids.end());
+  for (SlamKeyframeId id : ids) u.keyframes.push_back(kfs_.at(id).state);
+  for (const auto& [id, mp] : pts_) u.points.push_back(mp.state);
+  std::sort(u.points.begin(), u.points.end(), [](const auto& a, const auto& b) { return a.id < b.id; });
+  u.corrections_seen = history_.applied();
+}
+
+std::vector<SlamKeyframeId> LocalMapper::moveMap(const std::unordered_map<SlamKeyframeId, Pose3>& delta,
+                                                 const std::unordered_map<MapPointId, Eigen::Vector3d>* placed) {
+  // Each keyframe moves by its own delta or, when the mover did not know it yet, by its nearest ancestor's
+  // in the spanning tree; a culled keyframe's children went to its parent, and a point whose reference
+  // keyframe was culled moves with that keyframe's parent. A point in `placed` goes where it says.
   std::unordered_map<SlamKeyframeId, Pose3> resolved;
   auto deltaOf = [&](SlamKeyframeId id) {
     std::vector<SlamKeyframeId> path;
@@ -559,7 +632,7 @@ msg::LocalMapUpdatePtr LocalMapper::apply(const msg::Correction& c) {
   std::sort(ids.begin(), ids.end());
   for (SlamKeyframeId id : ids) {
     const Pose3 d = deltaOf(id);
-    history_.note(id, d);
+    if (!placed) history_.note(id, d);  // a correction's; a global BA's moves are not in its history
     KF& kf = kfs_.at(id);
     kf.state.T_w_c = orthonormalized(d * kf.state.T_w_c);
   }
@@ -567,56 +640,105 @@ msg::LocalMapUpdatePtr LocalMapper::apply(const msg::Correction& c) {
     SlamKeyframeId ref = mp.state.reference;
     if (!kfs_.count(ref) && !culled_.count(ref) && !mp.obs.empty()) ref = mp.obs.begin()->first;
     const Pose3 d = deltaOf(ref);
+    if (placed) {
+      if (auto it = placed->find(id); it != placed->end()) {
+        mp.state.p_w = it->second;
+        mp.state.normal = (d.linear().cast<float>() * mp.state.normal).normalized();
+        continue;
+      }
+    }
     mp.state.p_w = d * mp.state.p_w;
     mp.state.normal = (d.linear().cast<float>() * mp.state.normal).normalized();
   }
+  return ids;
+}
 
-  // Merge what the loop matched, then search the match's neighbourhood for the query's (and back).
-  for (const auto& [removed, kept] : c.fused) {
-    const MapPointId a = resolve(removed), b = resolve(kept);
-    if (a != kNoId && b != kNoId) replacePoint(a, b, *u);
-  }
-  auto q = kfs_.find(c.query), m = kfs_.find(c.match);
-  if (c.fuse_by_projection && q != kfs_.end() && m != kfs_.end()) {
-    std::vector<SlamKeyframeId> near_q{c.query}, near_m{c.match};
-    for (SlamKeyframeId k : neighbors(q->second, p_.fuse_neighbors)) near_q.push_back(k);
-    for (SlamKeyframeId k : neighbors(m->second, p_.fuse_neighbors)) near_m.push_back(k);
-    const std::vector<MapPointId> from_match = pointsOf(near_m);
-    for (SlamKeyframeId k : near_q) fuseInto(kfs_.at(k), from_match, *u);
-    for (MapPointId& id : touched_) id = resolve(id);
-    std::sort(touched_.begin(), touched_.end());
-    touched_.erase(std::unique(touched_.begin(), touched_.end()), touched_.end());
-    for (MapPointId id : touched_)
-      if (id != kNoId) updatePointShape(pts_.at(id));
-    for (SlamKeyframeId k : near_q) updateConnections(kfs_.at(k));
-    u->points_fused_across_loop = static_cast<int>(u->fused.size());
-  }
+LocalBaParams LocalMapper::globalBaParams() const {
+  LocalBaParams g = p_.ba;
+  g.linear_solver = BaLinearSolver::kSparseSchur;  // hundreds of free keyframes
+  return g;
+}
 
-  // Global BA (optional): every keyframe and point, the first keyframe held; here, before the update, so
-  // that tracking gets its result with the correction.
-  if (p_.global_ba_after_loop) {
-    std::vector<SlamKeyframeId> all;
-    for (SlamKeyframeId id : ids)
-      if (kfs_.count(id)) all.push_back(id);
-    LocalBaParams g = p_.ba;
-    g.linear_solver = BaLinearSolver::kSparseSchur;  // hundreds of free keyframes
-    abort_ = false;  // a keyframe that arrives meanwhile cuts it short, as a new loop stops ORB-SLAM2's
-    msg::LocalMapUpdate ba;
-    bundleAdjust(all, g, ba);
-    u->ba_ms = ba.ba_ms;
-    u->ba_iterations = ba.ba_iterations;
-    u->ba_outliers = ba.ba_outliers;
-    u->culled_points = ba.culled_points;
-  }
+// The job's thread sees only its own copy of the problem; mapping goes on with the map meanwhile.
+struct LocalMapper::GlobalBaJob {
+  BaSetup setup;
+  std::unordered_map<SlamKeyframeId, Pose3> before;  // T_w_c of each keyframe in the problem, at the start
+  std::unordered_map<MapPointId, Eigen::Vector3d> start_points;
+  LocalBaResult result;
+  double ms = 0;
+  std::atomic<bool> abort{false}, done{false};
+  std::thread thread;
+};
 
-  // Tracking gets the whole corrected map: every keyframe and every point moved.
+void LocalMapper::startGlobalBa(const std::vector<SlamKeyframeId>& ids) {
+  stopGlobalBa();
+  std::vector<SlamKeyframeId> all;
   for (SlamKeyframeId id : ids)
-    if (auto it = kfs_.find(id); it != kfs_.end()) u->keyframes.push_back(it->second.state);
-  for (const auto& [id, mp] : pts_) u->points.push_back(mp.state);
-  std::sort(u->points.begin(), u->points.end(), [](const auto& a, const auto& b) { return a.id < b.id; });
-  u->corrections_seen = history_.applied();
+    if (kfs_.count(id)) all.push_back(id);
+  auto job = std::make_unique<GlobalBaJob>();
+  job->setup = makeBaProblem(all);
+  if (job->setup.problem.points.empty()) return;
+  for (const BaKeyframe& k : job->setup.problem.keyframes) job->before[k.id] = kfs_.at(k.id).state.T_w_c;
+  for (const BaPoint& bp : job->setup.problem.points) job->start_points[bp.id] = bp.p_w;
+  ++global_ba_.started;
+  GlobalBaJob* j = job.get();
+  const LocalBaParams params = globalBaParams();
+  const StereoCamera cam = camera_;
+  job->thread = std::thread([j, params, cam] {
+    const auto t0 = std::chrono::steady_clock::now();
+    j->result = binloop::localBundleAdjustment(cam, j->setup.problem, params, &j->abort);
+    j->ms = msSinceT(t0);
+    j->done = true;
+  });
+  gba_ = std::move(job);
+}
+
+void LocalMapper::stopGlobalBa() {
+  if (!gba_) return;
+  gba_->abort = true;
+  gba_->thread.join();
+  gba_.reset();
+  ++global_ba_.aborted;
+}
+
+bool LocalMapper::globalBaRunning() const { return gba_ && !gba_->done; }
+
+msg::LocalMapUpdatePtr LocalMapper::mergeGlobalBa(bool wait) {
+  if (!gba_ || (!wait && !gba_->done)) return nullptr;
+  gba_->thread.join();
+  std::unique_ptr<GlobalBaJob> job = std::move(gba_);
+  const auto t0 = std::chrono::steady_clock::now();
+  auto u = std::make_shared<msg::LocalMapUpdate>();
+  u->sequence = ++updates_;
+  u->correction = true;  // tracking takes the whole map, as after a loop
+  touched_.clear();
+  // Keyframes move by what the BA did to them (applied to their pose now, which local BA may have refined
+  // since), those added meanwhile with their spanning-tree ancestor; points the BA held go where it put them
+  // unless local BA has moved them since, the others with their reference keyframe.
+  std::unordered_map<SlamKeyframeId, Pose3> delta;
+  for (const BaRefinedKeyframe& rk : job->result.keyframes)
+    delta[rk.id] = orthonormalized(rk.T_c_w.inverse()) * job->before.at(rk.id).inverse();
+  std::unordered_map<MapPointId, Eigen::Vector3d> placed;
+  for (const BaPoint& bp : job->result.points)
+    if (auto p = pts_.find(bp.id); p != pts_.end() && p->second.state.p_w == job->start_points.at(bp.id))
+      placed[bp.id] = bp.p_w;
+  size_t added = 0;
+  for (const auto& [id, kf] : kfs_) added += !job->before.count(id);
+  moveMap(delta, &placed);
+  removeBaOutliers(job->setup, job->result, *u);
+  for (const auto& [id, kf] : kfs_) updateConnections(kfs_.at(id));
+  u->ba_ms = job->ms;
+  u->ba_iterations = job->result.iterations;
+  u->ba_outliers = job->result.num_outliers;
+  wholeMapInto(*u);
   u->total_ms = msSinceT(t0);
+  ++global_ba_.merged;
+  global_ba_.last_ms = job->ms;
+  global_ba_.last_keyframes = static_cast<int>(job->before.size());
+  global_ba_.last_added_meanwhile = static_cast<int>(added);
   return u;
 }
+
+LocalMapper::~LocalMapper() { stopGlobalBa(); }
 
 }  // namespace binloop

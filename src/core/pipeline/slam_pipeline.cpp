@@ -12,7 +12,11 @@ SlamPipeline::SlamPipeline(const StereoCamera& cam, const TrackerParams& tp, con
                            PipelineMode mode, size_t queue_capacity, std::optional<LoopClosingSetup> loops)
     : mode_(mode),
       tracker_(cam, tp),
-      mapper_(mp),
+      mapper_([&] {
+        LocalMapperParams m = mp;  // threaded, a global BA runs beside mapping (lock-step: in it)
+        m.global_ba_in_background = mode == PipelineMode::kThreaded;
+        return m;
+      }()),
       mapping_inbox_(queue_capacity),
       loop_inbox_(1u << 20),
       updates_(1u << 20) {
@@ -86,17 +90,25 @@ void SlamPipeline::sendCorrection(const msg::CorrectionPtr& c) {
   }
 }
 
+void SlamPipeline::sendMapUpdate(const msg::LocalMapUpdatePtr& u, bool loop_thread_running) {
+  updates_.push(u);
+  if (!closer_) return;
+  if (mode_ == PipelineMode::kThreaded && loop_thread_running) loop_inbox_.push({nullptr, u, std::nullopt});
+  else closer_->apply(*u);
+}
+
+void SlamPipeline::mergeGlobalBa(bool wait, bool loop_thread_running) {
+  if (msg::LocalMapUpdatePtr u = mapper_.mergeGlobalBa(wait)) sendMapUpdate(u, loop_thread_running);
+}
+
 void SlamPipeline::map(const MappingInput& in) {
   if (const auto* c = std::get_if<msg::CorrectionPtr>(&in)) {
     msg::LocalMapUpdatePtr u = mapper_.apply(**c);
     last_correction_ba_ms_ = u->ba_ms;
-    updates_.push(u);
-    if (closer_) {
-      if (mode_ == PipelineMode::kLockStep) closer_->apply(*u);
-      else loop_inbox_.push({nullptr, u, std::nullopt});
-    }
+    sendMapUpdate(u, true);
     return;
   }
+  mergeGlobalBa(false, true);  // one that finished since the last input goes out first
   const msg::KeyFramePtr& kf = std::get<msg::KeyFramePtr>(in);
   LocalMapper::Output out = mapper_.process(*kf);
   mapping_times_.push_back({kf->id, kf->frame_index, out.update->total_ms, out.update->ba_ms,
@@ -185,6 +197,7 @@ void SlamPipeline::finish() {
     if (loop_thread_.joinable()) loop_thread_.join();
     mapping_inbox_.close();
     if (mapping_thread_.joinable()) mapping_thread_.join();
+    mergeGlobalBa(true, false);  // the last loop's global BA, waited for
   }
   drainUpdates();
 }
