@@ -3,23 +3,13 @@
 #include <gtest/gtest.h>
 
 #include "../optim/optim_test_scene.h"
+#include "support/random_descriptors.h"
 
 namespace binloop {
 namespace {
 
-Desc256 randomDescriptor(HashRng& rng) {
-  Desc256 d;
-  for (auto& w : d.w) w = rng.next();
-  return d;
-}
-
-Desc256 flipBits(Desc256 d, int n, HashRng& rng) {
-  for (int i = 0; i < n; ++i) {
-    const int bit = rng.below(256);
-    d.w[bit / 64] ^= uint64_t{1} << (bit % 64);
-  }
-  return d;
-}
+using test::flipBits;
+using test::randomDescriptor;
 
 struct View {
   Pose3 T_w_c;

@@ -2,25 +2,13 @@
 
 #include <gtest/gtest.h>
 
-#include "binloop/util/hash_random.h"
+#include "support/random_descriptors.h"
 
 using namespace binloop;
 
 namespace {
 
-Desc256 randomDescriptor(HashRng& rng) {
-  Desc256 d;
-  for (auto& w : d.w) w = rng.next();
-  return d;
-}
-
-Desc256 flipped(Desc256 d, int bits, HashRng& rng) {
-  for (int i = 0; i < bits; ++i) {
-    const int b = rng.below(256);
-    d.w[b / 64] ^= uint64_t{1} << (b % 64);
-  }
-  return d;
-}
+using test::randomDescriptor;
 
 // The reference: one distance at a time, first of the smallest wins.
 DescriptorBlock::Nearest byHand(const Descriptors& set, const Desc256& q) {
@@ -54,7 +42,7 @@ TEST(DescriptorBlock, FindsTheNearestAndSecondNearestAsTheByHandLoopDoes) {
     ASSERT_EQ(block.size(), n);
     for (int t = 0; t < 20; ++t) {
       // Half the queries are a set member with a few bits changed, so that a clear nearest exists.
-      const Desc256 q = t % 2 ? flipped(set[rng.below(static_cast<int>(n))], 10, rng) : randomDescriptor(rng);
+      const Desc256 q = t % 2 ? test::flipBits(set[rng.below(static_cast<int>(n))], 10, rng) : randomDescriptor(rng);
       const std::string what = "n " + std::to_string(n) + ", query " + std::to_string(t);
       expectSame(block.nearest(q), byHand(set, q), what);
       expectSame(block.nearestPortable(q), byHand(set, q), what);
@@ -67,7 +55,7 @@ TEST(DescriptorBlock, TiesGoToTheLowestIndexAndAnEmptyBlockFindsNothing) {
   Descriptors set;
   for (int k = 0; k < 20; ++k) set.push_back(randomDescriptor(rng));
   const Desc256 q = randomDescriptor(rng);
-  set[13] = set[17] = flipped(q, 3, rng);
+  set[13] = set[17] = test::flipBits(q, 3, rng);
   const DescriptorBlock block(set);
   for (const auto& n : {block.nearest(q), block.nearestPortable(q)}) {
     EXPECT_EQ(n.index, 13);

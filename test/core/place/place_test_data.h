@@ -2,14 +2,9 @@
 // Synthetic descriptor sets for place-recognition tests: random "places" and noisy revisits of them.
 #include "binloop/place/binary_descriptor.h"
 #include "binloop/util/hash_random.h"
+#include "support/random_descriptors.h"
 
 namespace binloop::test {
-
-inline Desc256 randomDescriptor(HashRng& rng) {
-  Desc256 d;
-  for (auto& w : d.w) w = rng.next();
-  return d;
-}
 
 /// `n` random descriptors of one place, a pure function of (seed, place).
 inline Descriptors randomPlace(uint64_t seed, int place, int n = 300) {
