@@ -77,7 +77,6 @@ class LocalMapper {
   /// A background global BA's result folded into the map, or null while none is done (with `wait`, waits
   /// for a running one). The update carries the whole map, as after a correction.
   msg::LocalMapUpdatePtr mergeGlobalBa(bool wait = false);
-  bool globalBaRunning() const;
   struct GlobalBaStats {
     int started = 0, merged = 0, aborted = 0;  // aborted: stopped by a correction (or discarded at the end)
     double last_ms = 0;                        // the last merged one's solve
@@ -147,12 +146,13 @@ class LocalMapper {
   void removeBaOutliers(const BaSetup& b, const LocalBaResult& r, msg::LocalMapUpdate& u);
   LocalBaParams globalBaParams() const;
   /// Moves every keyframe by its delta (T_w_c_after T_w_c_before^-1) or its nearest ancestor's, and every
-  /// point with its reference keyframe unless `placed` gives its new position. Returns the keyframe ids.
-  std::vector<SlamKeyframeId> moveMap(const std::unordered_map<SlamKeyframeId, Pose3>& delta,
-                                      const std::unordered_map<MapPointId, Eigen::Vector3d>* placed);
+  /// point with its reference keyframe unless `placed` gives its new position. Returns each keyframe's
+  /// delta, by id.
+  std::vector<std::pair<SlamKeyframeId, Pose3>> moveMap(const std::unordered_map<SlamKeyframeId, Pose3>& delta,
+                                                        const std::unordered_map<MapPointId, Eigen::Vector3d>* placed);
   void wholeMapInto(msg::LocalMapUpdate& u) const;
   struct GlobalBaJob;
-  void startGlobalBa(const std::vector<SlamKeyframeId>& ids);
+  void startGlobalBa(const std::vector<SlamKeyframeId>& keyframes);
   void stopGlobalBa();
   void cullKeyframes(KF& kf, msg::LocalMapUpdate& u);
   void updatePointShape(MP& mp);

@@ -544,7 +544,11 @@ msg::LocalMapUpdatePtr LocalMapper::apply(const msg::Correction& c) {
 
   std::unordered_map<SlamKeyframeId, Pose3> delta;
   for (const msg::KeyframeCorrection& k : c.keyframes) delta[k.id] = k.T_w_c_after * k.T_w_c_before.inverse();
-  const std::vector<SlamKeyframeId> ids = moveMap(delta, nullptr);
+  std::vector<SlamKeyframeId> ids;
+  for (const auto& [id, d] : moveMap(delta, nullptr)) {
+    history_.note(id, d);
+    ids.push_back(id);
+  }
 
   // Merge what the loop matched, then search the match's neighbourhood for the query's (and back).
   for (const auto& [removed, kept] : c.fused) {
@@ -570,19 +574,21 @@ msg::LocalMapUpdatePtr LocalMapper::apply(const msg::Correction& c) {
   // Global BA (optional): every keyframe and point, the first keyframe held. In the background it runs on
   // a copy and is merged later (mergeGlobalBa); otherwise here, before the update, so that tracking gets its
   // result with the correction.
-  if (p_.global_ba_after_loop && p_.global_ba_in_background) {
-    startGlobalBa(ids);
-  } else if (p_.global_ba_after_loop) {
+  if (p_.global_ba_after_loop) {
     std::vector<SlamKeyframeId> all;
     for (SlamKeyframeId id : ids)
       if (kfs_.count(id)) all.push_back(id);
-    abort_ = false;  // a keyframe that arrives meanwhile cuts it short, as a new loop stops ORB-SLAM2's
-    msg::LocalMapUpdate ba;
-    bundleAdjust(all, globalBaParams(), ba);
-    u->ba_ms = ba.ba_ms;
-    u->ba_iterations = ba.ba_iterations;
-    u->ba_outliers = ba.ba_outliers;
-    u->culled_points = ba.culled_points;
+    if (p_.global_ba_in_background) {
+      startGlobalBa(all);
+    } else {
+      abort_ = false;  // a keyframe that arrives meanwhile cuts it short, as a new loop stops ORB-SLAM2's
+      msg::LocalMapUpdate ba;
+      bundleAdjust(all, globalBaParams(), ba);
+      u->ba_ms = ba.ba_ms;
+      u->ba_iterations = ba.ba_iterations;
+      u->ba_outliers = ba.ba_outliers;
+      u->culled_points = ba.culled_points;
+    }
   }
 
   wholeMapInto(*u);
@@ -600,8 +606,8 @@ void LocalMapper::wholeMapInto(msg::LocalMapUpdate& u) const {
   u.corrections_seen = history_.applied();
 }
 
-std::vector<SlamKeyframeId> LocalMapper::moveMap(const std::unordered_map<SlamKeyframeId, Pose3>& delta,
-                                                 const std::unordered_map<MapPointId, Eigen::Vector3d>* placed) {
+std::vector<std::pair<SlamKeyframeId, Pose3>> LocalMapper::moveMap(
+    const std::unordered_map<SlamKeyframeId, Pose3>& delta, const std::unordered_map<MapPointId, Eigen::Vector3d>* placed) {
   // Each keyframe moves by its own delta or, when the mover did not know it yet, by its nearest ancestor's
   // in the spanning tree; a culled keyframe's children went to its parent, and a point whose reference
   // keyframe was culled moves with that keyframe's parent. A point in `placed` goes where it says.
@@ -627,12 +633,16 @@ std::vector<SlamKeyframeId> LocalMapper::moveMap(const std::unordered_map<SlamKe
     for (SlamKeyframeId p : path) resolved[p] = d;
     return d;
   };
-  std::vector<SlamKeyframeId> ids;
-  for (const auto& [id, kf] : kfs_) ids.push_back(id);
-  std::sort(ids.begin(), ids.end());
-  for (SlamKeyframeId id : ids) {
-    const Pose3 d = deltaOf(id);
-    if (!placed) history_.note(id, d);  // a correction's; a global BA's moves are not in its history
+  auto placedAt = [&](MapPointId id) -> const Eigen::Vector3d* {
+    if (!placed) return nullptr;
+    auto it = placed->find(id);
+    return it == placed->end() ? nullptr : &it->second;
+  };
+  std::vector<std::pair<SlamKeyframeId, Pose3>> moved;
+  for (const auto& [id, kf] : kfs_) moved.emplace_back(id, Pose3::Identity());
+  std::sort(moved.begin(), moved.end(), [](const auto& a, const auto& b) { return a.first < b.first; });
+  for (auto& [id, d] : moved) {
+    d = deltaOf(id);
     KF& kf = kfs_.at(id);
     kf.state.T_w_c = orthonormalized(d * kf.state.T_w_c);
   }
@@ -640,17 +650,11 @@ std::vector<SlamKeyframeId> LocalMapper::moveMap(const std::unordered_map<SlamKe
     SlamKeyframeId ref = mp.state.reference;
     if (!kfs_.count(ref) && !culled_.count(ref) && !mp.obs.empty()) ref = mp.obs.begin()->first;
     const Pose3 d = deltaOf(ref);
-    if (placed) {
-      if (auto it = placed->find(id); it != placed->end()) {
-        mp.state.p_w = it->second;
-        mp.state.normal = (d.linear().cast<float>() * mp.state.normal).normalized();
-        continue;
-      }
-    }
-    mp.state.p_w = d * mp.state.p_w;
+    const Eigen::Vector3d* at = placedAt(id);
+    mp.state.p_w = at ? *at : d * mp.state.p_w;
     mp.state.normal = (d.linear().cast<float>() * mp.state.normal).normalized();
   }
-  return ids;
+  return moved;
 }
 
 LocalBaParams LocalMapper::globalBaParams() const {
@@ -659,35 +663,26 @@ LocalBaParams LocalMapper::globalBaParams() const {
   return g;
 }
 
-// The job's thread sees only its own copy of the problem; mapping goes on with the map meanwhile.
+// The job's thread sees only its own copy of the problem (which keeps the starting poses and points);
+// mapping goes on with the map meanwhile.
 struct LocalMapper::GlobalBaJob {
   BaSetup setup;
-  std::unordered_map<SlamKeyframeId, Pose3> before;  // T_w_c of each keyframe in the problem, at the start
-  std::unordered_map<MapPointId, Eigen::Vector3d> start_points;
+  uint64_t seq_at_start = 0;  // keyframes inserted after it were added meanwhile
   LocalBaResult result;
-  double ms = 0;
   std::atomic<bool> abort{false}, done{false};
   std::thread thread;
 };
 
-void LocalMapper::startGlobalBa(const std::vector<SlamKeyframeId>& ids) {
+void LocalMapper::startGlobalBa(const std::vector<SlamKeyframeId>& keyframes) {
   stopGlobalBa();
-  std::vector<SlamKeyframeId> all;
-  for (SlamKeyframeId id : ids)
-    if (kfs_.count(id)) all.push_back(id);
   auto job = std::make_unique<GlobalBaJob>();
-  job->setup = makeBaProblem(all);
+  job->setup = makeBaProblem(keyframes);
   if (job->setup.problem.points.empty()) return;
-  for (const BaKeyframe& k : job->setup.problem.keyframes) job->before[k.id] = kfs_.at(k.id).state.T_w_c;
-  for (const BaPoint& bp : job->setup.problem.points) job->start_points[bp.id] = bp.p_w;
+  job->seq_at_start = seq_;
   ++global_ba_.started;
   GlobalBaJob* j = job.get();
-  const LocalBaParams params = globalBaParams();
-  const StereoCamera cam = camera_;
-  job->thread = std::thread([j, params, cam] {
-    const auto t0 = std::chrono::steady_clock::now();
+  job->thread = std::thread([j, params = globalBaParams(), cam = camera_] {
     j->result = binloop::localBundleAdjustment(cam, j->setup.problem, params, &j->abort);
-    j->ms = msSinceT(t0);
     j->done = true;
   });
   gba_ = std::move(job);
@@ -701,8 +696,6 @@ void LocalMapper::stopGlobalBa() {
   ++global_ba_.aborted;
 }
 
-bool LocalMapper::globalBaRunning() const { return gba_ && !gba_->done; }
-
 msg::LocalMapUpdatePtr LocalMapper::mergeGlobalBa(bool wait) {
   if (!gba_ || (!wait && !gba_->done)) return nullptr;
   gba_->thread.join();
@@ -715,26 +708,28 @@ msg::LocalMapUpdatePtr LocalMapper::mergeGlobalBa(bool wait) {
   // Keyframes move by what the BA did to them (applied to their pose now, which local BA may have refined
   // since), those added meanwhile with their spanning-tree ancestor; points the BA held go where it put them
   // unless local BA has moved them since, the others with their reference keyframe.
+  const BaProblem& start = job->setup.problem;
   std::unordered_map<SlamKeyframeId, Pose3> delta;
   for (const BaRefinedKeyframe& rk : job->result.keyframes)
-    delta[rk.id] = orthonormalized(rk.T_c_w.inverse()) * job->before.at(rk.id).inverse();
+    delta[rk.id] = rk.T_c_w.inverse() * start.keyframes[rk.index].T_c_w;
   std::unordered_map<MapPointId, Eigen::Vector3d> placed;
-  for (const BaPoint& bp : job->result.points)
-    if (auto p = pts_.find(bp.id); p != pts_.end() && p->second.state.p_w == job->start_points.at(bp.id))
-      placed[bp.id] = bp.p_w;
+  for (size_t i = 0; i < job->result.points.size(); ++i)  // in the problem's order
+    if (auto p = pts_.find(start.points[i].id); p != pts_.end() && p->second.state.p_w == start.points[i].p_w)
+      placed[start.points[i].id] = job->result.points[i].p_w;
   size_t added = 0;
-  for (const auto& [id, kf] : kfs_) added += !job->before.count(id);
+  for (const auto& [id, kf] : kfs_) added += kf.seq > job->seq_at_start;
   moveMap(delta, &placed);
   removeBaOutliers(job->setup, job->result, *u);
-  for (const auto& [id, kf] : kfs_) updateConnections(kfs_.at(id));
-  u->ba_ms = job->ms;
+  for (auto& [id, kf] : kfs_) updateConnections(kf);
+  const double ms = 1000 * job->result.time_s;
+  u->ba_ms = ms;
   u->ba_iterations = job->result.iterations;
   u->ba_outliers = job->result.num_outliers;
   wholeMapInto(*u);
   u->total_ms = msSinceT(t0);
   ++global_ba_.merged;
-  global_ba_.last_ms = job->ms;
-  global_ba_.last_keyframes = static_cast<int>(job->before.size());
+  global_ba_.last_ms = ms;
+  global_ba_.last_keyframes = static_cast<int>(start.keyframes.size());
   global_ba_.last_added_meanwhile = static_cast<int>(added);
   return u;
 }

@@ -15,6 +15,7 @@
 #include "binloop/sim/texture_bank.h"
 #include "binloop/tracking/frame.h"
 #include "support/test_support.h"
+#include "small_vocabulary.h"
 
 namespace binloop::test {
 
@@ -46,17 +47,9 @@ inline const LoopDrive* loopDrive() {
     r.render(static_cast<int>(i), f.stamp_s, d->route[i], &f.left, &f.right);
     d->frames.push_back(std::move(f));
   }
-  const OrbSlamParams orb;
-  OrbSlamExtractor ex(orb);
-  std::vector<Descriptors> images;
-  for (size_t i = 0; i < d->lap; i += 10) images.push_back(ex.extract(d->frames[i].left).descriptors);
   d->dir = std::make_unique<test::TempDir>();
   d->vocabulary = *d->dir / "hbow.bin";
-  TrainOptions o;
-  o.k = 10;
-  o.levels = 3;
-  o.extractor = extractorSettings(orb, 0);
-  trainModel(ModelType::kHbow, images, o, d->vocabulary);
+  trainSmallHbow(d->frames, 0, d->lap, 10, d->vocabulary);
   return d.get();
 }
 

@@ -11,14 +11,13 @@
 #include "binloop/io/kitti_sequence.h"
 #include "binloop/io/trajectory_io.h"
 #include "binloop/pipeline/slam_pipeline.h"
-#include "binloop/features/orb_slam_extractor.h"
 #include "binloop/place/hbow_recognizer.h"
-#include "binloop/place/model_training.h"
 #include "binloop/sim/stereo_renderer.h"
 #include "binloop/sim/texture_bank.h"
 #include <opencv2/imgproc.hpp>
 
 #include "support/test_support.h"
+#include "small_vocabulary.h"
 
 using namespace binloop;
 
@@ -225,25 +224,14 @@ TEST(SlamPipeline, DISABLED_TrackingIsFoundAgainAfterTwentyMissingFrames) {
 
 // The camera is carried back 90 frames (about 110 m) to a place the map holds: the motion model points the
 // wrong way, the recent keyframes are elsewhere, and only the vocabulary over every keyframe finds it.
-// The vocabulary is small (1000 words) and trained here, on frames 150-299, which the map never sees: the
-// shipped hbow vocabulary (vocab/kitti08/hbow.bin, 26 MB) is not in the repository, and a clean clone must
-// test relocalisation too.
+// The vocabulary is small (small_vocabulary.h) and trained on frames 150-299, which the map never sees, so
+// that a clean clone tests relocalisation too.
 TEST(SlamPipeline, KidnappedCameraIsFoundByTheVocabulary) {
   const RenderedStretch* s = renderedStretch(300);
   if (!s) GTEST_SKIP() << "needs " << test::sharedData("kitti/poses/06.txt");
   test::TempDir dir;
-  const std::string voc = dir.path() + "/hbow.bin";
-  {
-    const OrbSlamParams orb;
-    OrbSlamExtractor ex(orb);
-    std::vector<Descriptors> images;
-    for (int i = 150; i < 300; i += 5) images.push_back(ex.extract(s->frames[i].left).descriptors);
-    TrainOptions o;
-    o.k = 10;
-    o.levels = 3;
-    o.extractor = extractorSettings(orb, 0);
-    trainModel(ModelType::kHbow, images, o, voc);
-  }
+  const std::string voc = dir / "hbow.bin";
+  test::trainSmallHbow(s->frames, 150, 300, 5, voc);
   TrackerParams tp;
   tp.vocabulary = HbowRecognizer::loadVocabulary(voc);
   SlamPipeline slam(s->cam, tp, {}, PipelineMode::kLockStep);
