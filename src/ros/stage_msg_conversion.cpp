@@ -250,6 +250,8 @@ binloop::LoopCandidates toRos(const core::LoopCandidates& c, const std_msgs::Hea
   }
   m.consistency = c.consistency;
   m.accepted = c.accepted;
+  m.query_words = c.query_words;
+  m.accepted_words = c.accepted_words;
   for (const auto& t : c.timings) {
     binloop::LoopStepTime mt;
     mt.step = t.step;
@@ -272,6 +274,8 @@ core::LoopCandidates fromRos(const binloop::LoopCandidates& m) {
   for (const auto& k : m.candidates) c.candidates.push_back({k.id, k.score, k.confidence});
   c.consistency = m.consistency;
   c.accepted = m.accepted;
+  c.query_words = m.query_words;
+  c.accepted_words = m.accepted_words;
   for (const auto& t : m.timings) c.timings.push_back({t.step, t.ms});
   c.total_ms = m.total_ms;
   return c;

@@ -177,6 +177,8 @@ TEST(StageMsgConversion, LoopCandidatesRoundTrip) {
   a.candidates = {{3, 0.8, 0.9}, {4, 0.5, 0.6}};
   a.consistency = 2;
   a.accepted = 3;
+  a.query_words = {7, 8, 9};
+  a.accepted_words = {9, 10};
   a.timings = {{"signature", 1.25}, {"query", 0.5}};
   a.total_ms = 1.75;
   const core::LoopCandidates b = fromRos(toRos(a, std_msgs::Header()));
@@ -192,6 +194,8 @@ TEST(StageMsgConversion, LoopCandidatesRoundTrip) {
   EXPECT_EQ(b.candidates[1].confidence, 0.6);
   EXPECT_EQ(a.consistency, b.consistency);
   EXPECT_EQ(a.accepted, b.accepted);
+  EXPECT_EQ(a.query_words, b.query_words);
+  EXPECT_EQ(a.accepted_words, b.accepted_words);
   ASSERT_EQ(b.timings.size(), 2u);
   EXPECT_EQ(b.timings[0].step, "signature");
   EXPECT_EQ(b.timings[0].ms, 1.25);

@@ -24,7 +24,7 @@ std::string stageStatePath(const std::string& directory, const std::string& stag
 
 class StateWriter {
  public:
-  static constexpr uint32_t kVersion = 1;
+  static constexpr uint32_t kVersion = 2;  // 2: loop closing keeps its culled keyframes' parents
   /// The stage name is checked on load ("tracking", "local_mapping", ...).
   StateWriter(std::string path, std::string stage);
 

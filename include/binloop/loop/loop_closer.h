@@ -4,7 +4,9 @@
 // candidates in; per verified loop a LoopClosure out, and for an accepted one a Correction for local mapping.
 //
 // A loop is accepted in four steps:
-//   1. verification (loop/loop_verifier.h): the two keyframes see the same structure; T_query_match;
+//   1. verification (loop/loop_verifier.h): the two keyframes see the same structure; T_query_match. A pair
+//      more than reanchor_min_m apart is verified again with the match's covisible keyframe nearest to the
+//      query, which becomes the match when it verifies;
 //   2. the drift bound: the loop moves the query keyframe by `correction_m`; odometry is trusted to have
 //      drifted by at most drift_base_m + drift_per_m * (the shortest path from the match to the query
 //      through the keyframe chain and the loops closed so far). A loop beyond it, but within hold_factor
@@ -55,6 +57,11 @@ struct LoopCloserParams {
   int hold_keyframes = 40;
   double max_residual_ratio = 0.5;
   int min_keyframes_between_loops = 5;  // after a correction, the next few proposals are not verified
+  // A detector proposes the keyframe whose image looks most alike, which on a wide street can be one seen
+  // 10 m down the road (rendered 00, frame 2431 -> 396: 11 m, though frame 381 passed 5 m away). Depth
+  // error grows with distance squared, so the loop edge is measured against the match's covisible keyframe
+  // nearest to the query when the verified pair is more than this far apart (0: never).
+  double reanchor_min_m = 5;
   bool fuse = true;                      // ask local mapping to merge the points around the loop
 };
 
@@ -102,7 +109,12 @@ class LoopCloser {
     size_t held_at = 0;    // keyframes stored when it was held
     double travel_at = 0;  // path length at the query
   };
-  Output verify(SlamKeyframeId query, SlamKeyframeId match, const std::string& model);
+  Output verify(SlamKeyframeId query, SlamKeyframeId match, const std::string& model,
+                const std::vector<uint32_t>& query_words = {}, const std::vector<uint32_t>& match_words = {});
+  /// A verified loop between keyframes far apart is re-verified against the match's covisible keyframe
+  /// nearest to the query; returns the keyframe the loop is anchored at (with *v its verification).
+  SlamKeyframeId reanchor(SlamKeyframeId query, SlamKeyframeId match, LoopVerification* v, std::string* why,
+                          double* extra_ms) const;
   double travelBetween(SlamKeyframeId a, SlamKeyframeId b) const;
   bool correct(const std::vector<LoopEdge>& new_loops, const std::vector<std::pair<MapPointId, MapPointId>>& fused,
                msg::LoopClosure* c, Output* out);
@@ -112,6 +124,8 @@ class LoopCloser {
   std::unordered_map<SlamKeyframeId, msg::KeyFramePtr> frames_;
   std::unordered_map<SlamKeyframeId, msg::KeyframeState> states_;
   std::vector<SlamKeyframeId> order_;  // arrival order (culled ones removed)
+  // Culled keyframe -> its spanning-tree parent then: a proposal of a culled keyframe goes to the parent.
+  std::unordered_map<SlamKeyframeId, SlamKeyframeId> culled_;
   std::vector<LoopEdge> loops_;
   std::optional<Held> held_;
   CorrectionHistory history_;

@@ -3,7 +3,8 @@
 // and the candidate keyframe see the same 3-D structure, and where is one camera relative to the other?
 // Stereo gives both keyframes metric 3-D points of their own, so the answer is a rigid transform:
 //   1. descriptor matches between their stereo keypoints (best below max_hamming, clearly better than the
-//      second: brute force over ~2000 x 2000, place/descriptor_block.h, ~1 ms with AVX-512);
+//      second): within each coarse word when the detector's model gives words (hbow: ORB-SLAM2's
+//      SearchByBoW), else brute force over ~2000 x 2000 (place/descriptor_block.h, ~1 ms with AVX-512);
 //   2. RANSAC (seeded) over Horn's closed form on the matched 3-D points;
 //   3. refinement by pose optimisation: the candidate's points, in its camera frame, reprojected into the
 //      query's keypoints (optim/pose_optimizer.h, robust loss, outliers dropped);
@@ -28,6 +29,7 @@ struct LoopVerifierParams {
   int max_hamming = 50;     // ORB-SLAM2's TH_LOW
   float ratio = 0.75f;      // best vs second best
   int min_matches = 20;     // descriptor matches needed before RANSAC
+  bool match_by_words = true;  // match within the words given with the keyframes (none given: brute force)
   RigidRansacParams ransac;
   float search_radius = 10;  // guided search, level-0 px times the level's scale
   int min_inliers = 40;
@@ -48,6 +50,7 @@ struct LoopVerification {
   std::string detail;                 // the numbers behind the result, one line
   Pose3 T_query_candidate = Pose3::Identity();  // candidate camera -> query camera
   int matches = 0;                    // step 1
+  bool by_words = false;              // step 1 matched within words
   int ransac_inliers = 0;             // step 2
   int inliers = 0;                    // after step 4
   std::vector<std::pair<int, int>> pairs;  // final inlier (query keypoint, candidate keypoint) pairs
@@ -56,6 +59,16 @@ struct LoopVerification {
 };
 
 /// Both keyframes must carry keypoints with stereo depth; `scale_factor` and `levels` from the messages.
-LoopVerification verifyLoop(const msg::KeyFrame& query, const msg::KeyFrame& candidate, const LoopVerifierParams& p);
+/// `query_words` and `candidate_words`: a coarse word per keypoint (msg::LoopCandidates), or empty; words
+/// whose count differs from the keypoints' are not used (the detail says so).
+LoopVerification verifyLoop(const msg::KeyFrame& query, const msg::KeyFrame& candidate, const LoopVerifierParams& p,
+                            const std::vector<uint32_t>& query_words = {},
+                            const std::vector<uint32_t>& candidate_words = {});
+
+/// Steps 4 and 5 only, from a pose already known to be close (a verified loop carried to a keyframe beside
+/// its match through the map): guided search, refinement, a second guided search and refinement.
+/// `matches` counts the first search, `ransac_inliers` what the first refinement kept.
+LoopVerification verifyLoopAt(const msg::KeyFrame& query, const msg::KeyFrame& candidate, const Pose3& T_guess,
+                              const LoopVerifierParams& p);
 
 }  // namespace binloop

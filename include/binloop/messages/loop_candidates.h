@@ -31,6 +31,9 @@ struct LoopCandidates {
   std::vector<LoopCandidate> candidates;  // passed the model's bar, best first
   int consistency = 0;        // consecutive consistent queries of the strongest chain so far
   SlamKeyframeId accepted = kNoId;  // the candidate the consistency check accepted, if any
+  // With an accepted candidate and a model that has them (PlaceRecognizer::matchWords): a coarse word per
+  // keypoint of the query and of the accepted keyframe, so that verification matches within words.
+  std::vector<uint32_t> query_words, accepted_words;
   std::vector<LoopStepTime> timings;  // "signature" first (adding the keyframe), then the query's steps
   double total_ms = 0;                // signature + query
 };

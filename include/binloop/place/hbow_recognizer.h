@@ -22,6 +22,9 @@ class HbowRecognizer : public PlaceRecognizer {
   static std::shared_ptr<const VocabularyTree> loadVocabulary(const std::string& path);
   std::string name() const override { return "hbow"; }
   size_t indexBytesPerKeyframe() const override;
+  /// The tree's node 2 levels below the root (ORB-SLAM2 matches within the node 4 levels above the words
+  /// of its 6-level vocabulary, the same cells).
+  std::vector<uint32_t> matchWords(const Descriptors& d) const override;
   const BowVector& bow(KeyframeId id) const { return bows_[slotOf(id)]; }
 
  protected:

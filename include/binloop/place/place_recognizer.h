@@ -81,6 +81,9 @@ class PlaceRecognizer {
   size_t size() const { return order_.size(); }
   /// Memory of signatures and index per keyframe (the vocabulary is not counted).
   virtual size_t indexBytesPerKeyframe() const = 0;
+  /// A coarse word per descriptor, for loop verification to match descriptors only within a word
+  /// (ORB-SLAM2's SearchByBoW); empty when the model has no vocabulary fit for it (the default).
+  virtual std::vector<uint32_t> matchWords(const Descriptors& d) const { return {}; }
   /// The descriptors given to add(), kept so another model can be rebuilt from them.
   const Descriptors& descriptors(KeyframeId id) const;
   const std::vector<KeyframeId>& keyframes() const { return order_; }

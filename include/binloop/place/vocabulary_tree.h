@@ -48,6 +48,9 @@ class VocabularyTree {
 
   /// Word of one descriptor; `path_node` (optional) receives the node at depth `node_depth`.
   uint32_t wordOf(const Desc256& d, int node_depth = 0, uint32_t* path_node = nullptr) const;
+  /// The node `depth` levels below the root that a descriptor passes (a shallower leaf stands for itself):
+  /// with k = 10, depth 2 cuts descriptor space into ~100 cells, ORB-SLAM2's cells for matching by words.
+  uint32_t nodeOf(const Desc256& d, int depth) const;
   /// BoW vector of an image (L1-normalised, weighted by the vocabulary's weighting), and optionally the
   /// direct index at `fv_depth` levels below the root.
   void transform(const Descriptors& d, BowVector* bow, FeatureVector* fv = nullptr, int fv_depth = 2) const;

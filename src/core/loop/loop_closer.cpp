@@ -63,6 +63,7 @@ void LoopCloser::apply(const msg::LocalMapUpdate& u) {
   }
   for (SlamKeyframeId k : u.culled_keyframes) {
     if (k == first_) continue;
+    if (auto s = states_.find(k); s != states_.end()) culled_[k] = s->second.parent;
     states_.erase(k);
     frames_.erase(k);
     order_.erase(std::remove(order_.begin(), order_.end(), k), order_.end());
@@ -110,7 +111,7 @@ LoopCloser::Output LoopCloser::process(const msg::LoopCandidates& c) {
   if (c.shadow || c.accepted == kNoId) return out;
   if (history_.applied() > 0 && order_.size() < last_correction_at_ + static_cast<size_t>(p_.min_keyframes_between_loops))
     return out;
-  Output v = verify(c.query, c.accepted, c.model);
+  Output v = verify(c.query, c.accepted, c.model, c.query_words, c.accepted_words);
   for (auto& cl : v.closures) out.closures.push_back(cl);
   out.correction = v.correction;
   return out;
@@ -134,13 +135,66 @@ void LoopCloser::expireHeld(Output* out) {
   held_.reset();
 }
 
-LoopCloser::Output LoopCloser::verify(SlamKeyframeId query, SlamKeyframeId match, const std::string& model) {
+SlamKeyframeId LoopCloser::reanchor(SlamKeyframeId query, SlamKeyframeId match, LoopVerification* v,
+                                    std::string* why, double* extra_ms) const {
+  const double far = v->T_query_candidate.translation().norm();
+  if (p_.reanchor_min_m <= 0 || far <= p_.reanchor_min_m) return match;
+  // Where each of the match's covisible keyframes is seen from the query, through the verified pose; the
+  // nearest few are searched by projection from there (the map's relative poses are good to centimetres).
+  const Pose3 T_q_w = v->T_query_candidate * states_.at(match).T_w_c.inverse();
+  std::vector<std::pair<double, SlamKeyframeId>> nearer;
+  for (const msg::CovisibleEdge& e : states_.at(match).covisible) {
+    auto s = states_.find(e.id);
+    if (s == states_.end() || e.id == query || !frames_.count(e.id)) continue;
+    const double d = (T_q_w * s->second.T_w_c).translation().norm();
+    if (d < far - 1.0) nearer.emplace_back(d, e.id);
+  }
+  std::sort(nearer.begin(), nearer.end());
+  if (nearer.size() > 3) nearer.resize(3);
+  std::string tried;
+  for (const auto& [d, id] : nearer) {
+    LoopVerification w = verifyLoopAt(*frames_.at(query), *frames_.at(id), T_q_w * states_.at(id).T_w_c, p_.verify);
+    *extra_ms += w.ms;
+    if (!w.accepted) {
+      tried += (tried.empty() ? "" : ", ") + std::to_string(counterOf(id)) + " (" + fixed2(d) + " m, " +
+               std::to_string(w.inliers) + " inliers)";
+      continue;
+    }
+    *why = "; anchored at keyframe " + std::to_string(counterOf(id)) + " (" +
+           fixed2(w.T_query_candidate.translation().norm()) + " m from the query, " + std::to_string(w.inliers) +
+           " inliers by projection) instead of " + std::to_string(counterOf(match)) + " (" + fixed2(far) + " m, " +
+           std::to_string(v->inliers) + " inliers)";
+    w.detail = v->detail;
+    *v = std::move(w);
+    return id;
+  }
+  if (!tried.empty()) *why = "; " + fixed2(far) + " m apart, and nearer keyframes beside the match did not verify: " + tried;
+  return match;
+}
+
+LoopCloser::Output LoopCloser::verify(SlamKeyframeId query, SlamKeyframeId match, const std::string& model,
+                                      const std::vector<uint32_t>& query_words,
+                                      const std::vector<uint32_t>& match_words) {
   Output out;
   auto c = std::make_shared<msg::LoopClosure>();
   c->query = query;
-  c->match = match;
   c->model = model;
   out.closures.push_back(c);
+  // The detector still knows keyframes mapping has culled since; the place is the culled one's parent's.
+  std::string culled_note;
+  const SlamKeyframeId proposed = match;
+  for (int hops = 0; hops < 100 && !frames_.count(match); ++hops) {
+    auto cu = culled_.find(match);
+    if (cu == culled_.end()) break;
+    match = cu->second;
+  }
+  if (match != proposed && frames_.count(match)) {
+    culled_note = "; keyframe " + std::to_string(counterOf(proposed)) + " was culled, its spanning-tree parent " +
+                  std::to_string(counterOf(match)) + " stands for it";
+  } else {
+    match = proposed;
+  }
+  c->match = match;
   auto fq = frames_.find(query), fm = frames_.find(match);
   if (fq == frames_.end() || fm == frames_.end() || query == match) {
     c->status = "unknown_keyframe";
@@ -151,8 +205,22 @@ LoopCloser::Output LoopCloser::verify(SlamKeyframeId query, SlamKeyframeId match
   }
   c->query_frame = fq->second->frame_index;
   c->match_frame = fm->second->frame_index;
-  const LoopVerification v = verifyLoop(*fq->second, *fm->second, p_.verify);
+  const std::vector<uint32_t> no_words;  // a culled keyframe's words are not its stand-in's
+  LoopVerification v =
+      verifyLoop(*fq->second, *fm->second, p_.verify, query_words, match == proposed ? match_words : no_words);
+  v.detail += culled_note;
   c->verify_ms = v.ms;
+  if (v.accepted) {
+    std::string why;
+    double extra_ms = 0;
+    if (const SlamKeyframeId nearer = reanchor(query, match, &v, &why, &extra_ms); nearer != match) {
+      match = nearer;
+      c->match = match;
+      c->match_frame = frames_.at(match)->frame_index;
+    }
+    c->verify_ms += extra_ms;
+    v.detail += why;
+  }
   c->matches = v.matches;
   c->inliers = v.inliers;
   c->T_query_match = v.T_query_candidate;
@@ -189,7 +257,7 @@ LoopCloser::Output LoopCloser::verify(SlamKeyframeId query, SlamKeyframeId match
       if (disagree <= tol && apart >= p_.confirm_min_travel_m) {
         confirming = true;
         confirmed_edge = held_->edge;
-        numbers += "; confirms the loop held at keyframe " + std::to_string(held_->edge.query) + " (" + fixed2(disagree) +
+        numbers += "; confirms the loop held at keyframe " + std::to_string(counterOf(held_->edge.query)) + " (" + fixed2(disagree) +
                    " m apart in what they ask, " + fixed2(apart) + " m along the path)";
       }
     }
@@ -224,7 +292,7 @@ LoopCloser::Output LoopCloser::verify(SlamKeyframeId query, SlamKeyframeId match
     first->query = confirmed_edge.query;
     first->match = confirmed_edge.candidate;
     first->status = "accepted";
-    first->detail = "confirmed by the loop at keyframe " + std::to_string(query);
+    first->detail = "confirmed by the loop at keyframe " + std::to_string(counterOf(query));
     out.closures.push_back(first);
   }
   return out;

@@ -1,4 +1,6 @@
 // LoopCloser's save/load (the loop-closing stage's state file).
+#include <algorithm>
+
 #include "binloop/io/state_file.h"
 #include "binloop/loop/loop_closer.h"
 #include "binloop/messages/message_state.h"
@@ -20,6 +22,13 @@ void LoopCloser::save(StateWriter& w) const {
   history_.save(w);
   w.put<uint64_t>(first_);
   w.put<uint64_t>(last_correction_at_);
+  std::vector<std::pair<SlamKeyframeId, SlamKeyframeId>> culled(culled_.begin(), culled_.end());
+  std::sort(culled.begin(), culled.end());  // one state, one file
+  w.put<uint64_t>(culled.size());
+  for (const auto& [k, parent] : culled) {
+    w.put<uint64_t>(k);
+    w.put<uint64_t>(parent);
+  }
 }
 
 void LoopCloser::load(StateReader& r) {
@@ -42,6 +51,11 @@ void LoopCloser::load(StateReader& r) {
   history_.load(r);
   first_ = r.get<uint64_t>("first keyframe");
   last_correction_at_ = r.get<uint64_t>("keyframes at the last correction");
+  const uint64_t culled = r.getCount("culled keyframes", 16);
+  for (uint64_t i = 0; i < culled; ++i) {
+    const SlamKeyframeId k = r.get<uint64_t>("culled keyframe");
+    culled_[k] = r.get<uint64_t>("culled keyframe's parent");
+  }
   r.expectEnd();
 }
 

@@ -114,6 +114,10 @@ std::shared_ptr<msg::LoopCandidates> LoopDetector::query(Model& m, SlamKeyframeI
   const ConsistencyGroups::Result cr = m.consistency.update(proposals);
   out->consistency = cr.longest;
   out->accepted = cr.accepted;
+  if (!shadow && cr.accepted != kNoId) {
+    out->query_words = m.recognizer->matchWords(descriptors_[q]);
+    if (!out->query_words.empty()) out->accepted_words = m.recognizer->matchWords(descriptors_[dense_.at(cr.accepted)]);
+  }
   for (const StepTime& t : r.timings) out->timings.push_back({t.step, t.ms});
   out->total_ms = r.total_ms;
   return out;

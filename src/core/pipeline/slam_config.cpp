@@ -79,6 +79,7 @@ std::map<std::string, std::map<std::string, Setting>> settingsOf(SlamConfig& c) 
        {{"max_hamming", {S::kInt, &l.verify.max_hamming, 0}},
         {"ratio", {S::kFloat, &l.verify.ratio, 0}},
         {"min_matches", {S::kInt, &l.verify.min_matches, 3}},
+        {"match_by_words", {S::kBool, &l.verify.match_by_words, 0}},
         {"ransac_iterations", {S::kInt, &l.verify.ransac.iterations, 1}},
         {"ransac_confidence", {S::kDouble, &l.verify.ransac.confidence, 0}},
         {"ransac_min_inliers", {S::kInt, &l.verify.ransac.min_inliers, 3}},
@@ -91,6 +92,7 @@ std::map<std::string, std::map<std::string, Setting>> settingsOf(SlamConfig& c) 
         {"hold_factor", {S::kDouble, &l.hold_factor, 1}},
         {"max_residual_ratio", {S::kDouble, &l.max_residual_ratio, 0}},
         {"min_keyframes_between_loops", {S::kInt, &l.min_keyframes_between_loops, 0}},
+        {"reanchor_min_m", {S::kDouble, &l.reanchor_min_m, 0}},
         {"fuse", {S::kBool, &l.fuse, 0}}}},
   };
 }

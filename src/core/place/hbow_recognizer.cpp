@@ -30,6 +30,12 @@ void HbowRecognizer::addSignature(Slot slot, const Descriptors& d) {
   bows_.push_back(std::move(b));
 }
 
+std::vector<uint32_t> HbowRecognizer::matchWords(const Descriptors& d) const {
+  std::vector<uint32_t> w(d.size());
+  for (size_t i = 0; i < d.size(); ++i) w[i] = voc_->nodeOf(d[i], 2);
+  return w;
+}
+
 size_t HbowRecognizer::indexBytesPerKeyframe() const {
   if (bows_.empty()) return 0;
   size_t entries = 0;

@@ -169,6 +169,13 @@ uint32_t VocabularyTree::wordOf(const Desc256& d, int node_depth, uint32_t* path
   return node_word_[n];
 }
 
+uint32_t VocabularyTree::nodeOf(const Desc256& d, int depth) const {
+  uint32_t n = 0;
+  for (int level = 0; level < depth && child_count_[n] != 0; ++level)
+    n = first_child_[n] + nearestCentre(d, &desc_[first_child_[n]], child_count_[n]);
+  return n;
+}
+
 void VocabularyTree::descend(const Desc256* d, size_t n, int fv_depth, uint32_t* word, uint32_t* fv_node) const {
   // Descriptors go down the tree in lanes of kLanes, one level at a time: while a lane compares itself
   // with its children, the children blocks of the other lanes are already being fetched. Below the

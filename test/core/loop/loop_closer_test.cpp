@@ -57,7 +57,7 @@ class LoopCloserTest : public ::testing::Test {
 
   // Keyframe i at `truth`, seeing place `place` (-1: none) laid out in front of `place_pose`; stored with the
   // drifted estimate of index `i`.
-  msg::KeyFramePtr keyframe(int i, const Pose3& truth, int place, const Pose3& place_pose) {
+  std::shared_ptr<msg::KeyFrame> keyframe(int i, const Pose3& truth, int place, const Pose3& place_pose) {
     auto kf = std::make_shared<msg::KeyFrame>();
     kf->id = kf->state.id = id(i);
     kf->frame_index = static_cast<uint64_t>(3 * i);
@@ -67,33 +67,36 @@ class LoopCloserTest : public ::testing::Test {
       kf->state.parent = id(i - 1);
       kf->state.covisible.push_back({id(i - 1), 150});
     }
-    auto add = [&](const Eigen::Vector3d& p_c, const Desc256& d) {
-      if (p_c.z() < 1) return;
-      msg::KeyPoint k;
-      k.x = static_cast<float>(cam.fx * p_c.x() / p_c.z() + cam.cx);
-      k.y = static_cast<float>(cam.fy * p_c.y() / p_c.z() + cam.cy);
-      if (k.x < 0 || k.x >= cam.width || k.y < 0 || k.y >= cam.height) return;
-      k.depth = static_cast<float>(p_c.z());
-      k.right_x = static_cast<float>(k.x - cam.bf() / p_c.z());
-      kf->keypoints.push_back(k);
-      kf->descriptors.push_back(d);
-      kf->state.point_ids.push_back(kNoId);
-    };
-    if (place >= 0)
-      for (size_t n = 0; n < place_points[place].size(); ++n) {
-        Desc256 d = place_descs[place][n];
-        for (int f = 0; f < 3; ++f) {
-          const int bit = rng.below(256);
-          d.w[bit / 64] ^= uint64_t{1} << (bit % 64);
-        }
-        add(truth.inverse() * (place_pose * place_points[place][n]), d);
-      }
+    if (place >= 0) see(*kf, truth, place, place_pose);
     for (int n = 0; n < 300; ++n) {
       Desc256 d;
       for (auto& w : d.w) w = rng.next();
-      add(Eigen::Vector3d(rng.uniform(-10, 10), rng.uniform(-3, 2), rng.uniform(4, 40)), d);
+      addKeypoint(*kf, Eigen::Vector3d(rng.uniform(-10, 10), rng.uniform(-3, 2), rng.uniform(4, 40)), d);
     }
     return kf;
+  }
+  // The camera at `truth` sees place `place` laid out in front of `place_pose`.
+  void see(msg::KeyFrame& kf, const Pose3& truth, int place, const Pose3& place_pose) {
+    for (size_t n = 0; n < place_points[place].size(); ++n) {
+      Desc256 d = place_descs[place][n];
+      for (int f = 0; f < 3; ++f) {
+        const int bit = rng.below(256);
+        d.w[bit / 64] ^= uint64_t{1} << (bit % 64);
+      }
+      addKeypoint(kf, truth.inverse() * (place_pose * place_points[place][n]), d);
+    }
+  }
+  void addKeypoint(msg::KeyFrame& kf, const Eigen::Vector3d& p_c, const Desc256& d) const {
+    if (p_c.z() < 1) return;
+    msg::KeyPoint k;
+    k.x = static_cast<float>(cam.fx * p_c.x() / p_c.z() + cam.cx);
+    k.y = static_cast<float>(cam.fy * p_c.y() / p_c.z() + cam.cy);
+    if (k.x < 0 || k.x >= cam.width || k.y < 0 || k.y >= cam.height) return;
+    k.depth = static_cast<float>(p_c.z());
+    k.right_x = static_cast<float>(k.x - cam.bf() / p_c.z());
+    kf.keypoints.push_back(k);
+    kf.descriptors.push_back(d);
+    kf.state.point_ids.push_back(kNoId);
   }
 
   // The lap: keyframes 0..59, keyframes 0..5 each at its own place.
@@ -238,6 +241,58 @@ TEST_F(LoopCloserTest, AnExternalLoopIsVerifiedBeforeItIsApplied) {
   LoopCloser::Output right = lc.addExternalLoop(id(kLap), id(1), "operator");
   EXPECT_EQ(right.closures[0]->status, "accepted") << right.closures[0]->detail;
   EXPECT_TRUE(right.correction);
+}
+
+// The detector proposes keyframe 3, whose place the query sees from 8 m away; keyframe 1, which keyframe 3
+// shares points with, stood 0.5 m from the query and sees what the query sees up close. The loop edge is
+// measured there.
+TEST_F(LoopCloserTest, AFarMatchIsAnchoredAtItsCovisibleKeyframeNearestTheQuery) {
+  for (const double reanchor_min_m : {5.0, 0.0}) {
+    LoopCloserParams p;
+    p.reanchor_min_m = reanchor_min_m;
+    LoopCloser lc(p);
+    for (int i = 0; i < kLap; ++i) {
+      auto kf = keyframe(i, truthOnCircle(i), i < 6 ? i : -1, truthOnCircle(i));
+      if (i == 3) kf->state.covisible.push_back({id(1), 120});
+      lc.addKeyframe(kf);
+    }
+    Pose3 truth = truthOnCircle(1);
+    truth.translation().x() += 0.5;
+    auto q = keyframe(kLap, truth, 3, truthOnCircle(3));
+    see(*q, truth, 1, truthOnCircle(1));
+    lc.addKeyframe(q);
+    const LoopCloser::Output out = lc.process(proposal(kLap, 3));
+    ASSERT_EQ(out.closures.size(), 1u);
+    const msg::LoopClosure& c = *out.closures[0];
+    ASSERT_EQ(c.status, "accepted") << c.detail;
+    if (reanchor_min_m > 0) {
+      EXPECT_EQ(c.match, id(1)) << c.detail;
+      EXPECT_EQ(c.match_frame, 3u);
+      EXPECT_NE(c.detail.find("anchored at keyframe"), std::string::npos) << c.detail;
+      EXPECT_LT(c.T_query_match.translation().norm(), 1.0);
+    } else {
+      EXPECT_EQ(c.match, id(3)) << c.detail;
+      EXPECT_GT(c.T_query_match.translation().norm(), 7.0);
+    }
+    EXPECT_EQ(lc.loops().back().candidate, c.match);
+  }
+}
+
+// The detector still proposes keyframe 1 after mapping culled it; its parent, keyframe 0, stands for it.
+TEST_F(LoopCloserTest, AProposalOfACulledKeyframeIsVerifiedAgainstItsParent) {
+  LoopCloser lc;
+  driveLap(lc);
+  msg::LocalMapUpdate u;
+  u.culled_keyframes = {id(1)};
+  lc.apply(u);
+  lc.addKeyframe(keyframe(kLap, truthOnCircle(0), 0, truthOnCircle(0)));
+  const LoopCloser::Output out = lc.process(proposal(kLap, 1));
+  ASSERT_EQ(out.closures.size(), 1u);
+  const msg::LoopClosure& c = *out.closures[0];
+  EXPECT_EQ(c.status, "accepted") << c.detail;
+  EXPECT_EQ(c.match, id(0));
+  EXPECT_NE(c.detail.find("keyframe 2 was culled, its spanning-tree parent 1 stands for it"), std::string::npos)
+      << c.detail;
 }
 
 TEST_F(LoopCloserTest, AMalformedKeyframeIsRefused) {

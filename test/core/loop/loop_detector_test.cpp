@@ -95,6 +95,16 @@ TEST_F(LoopDetectorTest, ARevisitIsAcceptedAfterTheConsistencyCheckAndPointsAtTh
       if (out.active->accepted != kNoId && accepted_at < 0) {
         accepted_at = i;
         EXPECT_NEAR(indexOf(out.active->accepted), i - 30, 1) << "keyframe " << i;
+        // hbow's coarse words for verification: one per keypoint, the same for a place's point in both views.
+        ASSERT_EQ(out.active->query_words.size(), 450u);
+        ASSERT_EQ(out.active->accepted_words.size(), 450u);
+        if (indexOf(out.active->accepted) == i - 30) {
+          int same = 0;
+          for (size_t k = 0; k < 300; ++k) same += out.active->query_words[k] == out.active->accepted_words[k];
+          EXPECT_GT(same, 250) << "of 300 views of the same descriptors";
+        }
+      } else if (out.active->accepted == kNoId) {
+        EXPECT_TRUE(out.active->query_words.empty());
       }
     }
     EXPECT_EQ(accepted_at, 40 + consistency) << consistency << " consistent queries before it, from 40 on";

@@ -40,19 +40,26 @@ class LoopVerifierTest : public ::testing::Test {
     kf.descriptors.push_back(d);
     kf.state.point_ids.push_back(kNoId);
   }
-  msg::KeyFrame keyframe(uint64_t id, const Pose3& T_w_c, int shared_points) {
+  // `words` (optional) gets a coarse word per keypoint, as a vocabulary would give: point i's is i % 50 in
+  // every view, clutter's a word of its own.
+  msg::KeyFrame keyframe(uint64_t id, const Pose3& T_w_c, int shared_points, std::vector<uint32_t>* words = nullptr) {
     msg::KeyFrame kf;
     kf.id = kf.state.id = id;
     kf.camera = cam;
     kf.state.T_w_c = T_w_c;
+    auto add = [&](const Eigen::Vector3d& p, const Desc256& d, uint32_t word) {
+      const size_t before = kf.keypoints.size();
+      addKeypoint(kf, p, d);
+      if (words && kf.keypoints.size() > before) words->push_back(word);
+    };
     for (int i = 0; i < shared_points; ++i) {
       const Eigen::Vector3d p = T_w_c.inverse() * points[i];
-      if (p.z() > 1) addKeypoint(kf, p, view(descs[i]));
+      if (p.z() > 1) add(p, view(descs[i]), static_cast<uint32_t>(i % 50));
     }
     for (int i = 0; i < 300; ++i) {
       Desc256 d;
       for (auto& w : d.w) w = rng.next();
-      addKeypoint(kf, Eigen::Vector3d(rng.uniform(-10, 10), rng.uniform(-3, 2), rng.uniform(4, 40)), d);
+      add(Eigen::Vector3d(rng.uniform(-10, 10), rng.uniform(-3, 2), rng.uniform(4, 40)), d, 1000 + i);
     }
     return kf;
   }
@@ -101,6 +108,55 @@ TEST_F(LoopVerifierTest, AFewSharedPointsAreTooFewInliers) {
   EXPECT_FALSE(v.accepted);
   EXPECT_EQ(v.rejection, LoopRejection::kTooFewInliers) << v.detail;
   EXPECT_GT(v.inliers, 10) << "the few shared points are found: " << v.detail;
+}
+
+// Matching within words finds the revisit; words that split every true pair find nothing; words that do not
+// fit the keypoints are not used, and the detail says so.
+TEST_F(LoopVerifierTest, MatchingWithinWordsFindsTheRevisitAndOnlyWithinWords) {
+  std::vector<uint32_t> cw, qw;
+  const msg::KeyFrame c = keyframe(1, Pose3::Identity(), 600, &cw), q = keyframe(2, T_w_q, 600, &qw);
+  ASSERT_EQ(cw.size(), c.keypoints.size());
+  const LoopVerification v = verifyLoop(q, c, {}, qw, cw);
+  ASSERT_TRUE(v.accepted) << v.detail;
+  EXPECT_TRUE(v.by_words);
+  EXPECT_NE(v.detail.find("matches within words"), std::string::npos) << v.detail;
+  EXPECT_GT(v.inliers, 200) << v.detail;
+
+  std::vector<uint32_t> split = qw;
+  for (uint32_t& w : split) w += 1;  // point i is now in word i % 50 + 1 on one side only
+  const LoopVerification none = verifyLoop(q, c, {}, split, cw);
+  EXPECT_EQ(none.rejection, LoopRejection::kTooFewMatches) << none.detail;
+
+  LoopVerifierParams all;
+  all.match_by_words = false;
+  const LoopVerification brute = verifyLoop(q, c, all, split, cw);
+  EXPECT_TRUE(brute.accepted) << brute.detail;
+  EXPECT_FALSE(brute.by_words);
+
+  const LoopVerification unfit = verifyLoop(q, c, {}, std::vector<uint32_t>(qw.begin(), qw.end() - 1), cw);
+  EXPECT_TRUE(unfit.accepted) << unfit.detail;
+  EXPECT_FALSE(unfit.by_words);
+  EXPECT_NE(unfit.detail.find("words not used"), std::string::npos) << unfit.detail;
+}
+
+// From a pose 0.3 m and 0.3 degrees off (a verified loop carried to a keyframe beside its match), the search by
+// projection finds the shared points and the true pose; from a keyframe that shares nothing it finds too few.
+TEST_F(LoopVerifierTest, AVerificationFromAKnownPoseFindsTheTruePose) {
+  const msg::KeyFrame c = keyframe(1, Pose3::Identity(), 600), q = keyframe(2, T_w_q, 600);
+  const Pose3 truth = T_w_q.inverse();
+  Pose3 off = Pose3::Identity();
+  off.linear() = Eigen::AngleAxisd(0.3 * test::kPi / 180, Eigen::Vector3d::UnitY()).toRotationMatrix();
+  off.translation() = Eigen::Vector3d(0.2, 0.1, -0.2);
+  const LoopVerification v = verifyLoopAt(q, c, off * truth, {});
+  ASSERT_TRUE(v.accepted) << v.detail;
+  EXPECT_LT((v.T_query_candidate.translation() - truth.translation()).norm(), 0.05);
+  EXPECT_LT(test::rotationErrorDeg(v.T_query_candidate, truth), 0.2);
+  EXPECT_GT(v.inliers, 200) << v.detail;
+
+  const msg::KeyFrame elsewhere = keyframe(3, Pose3::Identity(), 0);
+  const LoopVerification w = verifyLoopAt(q, elsewhere, truth, {});
+  EXPECT_FALSE(w.accepted);
+  EXPECT_EQ(w.rejection, LoopRejection::kTooFewInliers) << w.detail;
 }
 
 }  // namespace
