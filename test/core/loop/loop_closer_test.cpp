@@ -5,6 +5,7 @@
 #include <cmath>
 
 #include "../optim/optim_test_scene.h"
+#include "support/stereo_keypoint.h"
 
 namespace binloop {
 namespace {
@@ -71,7 +72,7 @@ class LoopCloserTest : public ::testing::Test {
     for (int n = 0; n < 300; ++n) {
       Desc256 d;
       for (auto& w : d.w) w = rng.next();
-      addKeypoint(*kf, Eigen::Vector3d(rng.uniform(-10, 10), rng.uniform(-3, 2), rng.uniform(4, 40)), d);
+      test::addStereoKeypoint(*kf, Eigen::Vector3d(rng.uniform(-10, 10), rng.uniform(-3, 2), rng.uniform(4, 40)), d);
     }
     return kf;
   }
@@ -83,20 +84,8 @@ class LoopCloserTest : public ::testing::Test {
         const int bit = rng.below(256);
         d.w[bit / 64] ^= uint64_t{1} << (bit % 64);
       }
-      addKeypoint(kf, truth.inverse() * (place_pose * place_points[place][n]), d);
+      test::addStereoKeypoint(kf, truth.inverse() * (place_pose * place_points[place][n]), d);
     }
-  }
-  void addKeypoint(msg::KeyFrame& kf, const Eigen::Vector3d& p_c, const Desc256& d) const {
-    if (p_c.z() < 1) return;
-    msg::KeyPoint k;
-    k.x = static_cast<float>(cam.fx * p_c.x() / p_c.z() + cam.cx);
-    k.y = static_cast<float>(cam.fy * p_c.y() / p_c.z() + cam.cy);
-    if (k.x < 0 || k.x >= cam.width || k.y < 0 || k.y >= cam.height) return;
-    k.depth = static_cast<float>(p_c.z());
-    k.right_x = static_cast<float>(k.x - cam.bf() / p_c.z());
-    kf.keypoints.push_back(k);
-    kf.descriptors.push_back(d);
-    kf.state.point_ids.push_back(kNoId);
   }
 
   // The lap: keyframes 0..59, keyframes 0..5 each at its own place.

@@ -3,6 +3,7 @@
 #include <gtest/gtest.h>
 
 #include "../optim/optim_test_scene.h"
+#include "support/stereo_keypoint.h"
 
 namespace binloop {
 namespace {
@@ -29,17 +30,6 @@ class LoopVerifierTest : public ::testing::Test {
     }
     return d;
   }
-  void addKeypoint(msg::KeyFrame& kf, const Eigen::Vector3d& p_c, const Desc256& d) {
-    msg::KeyPoint k;
-    k.x = static_cast<float>(cam.fx * p_c.x() / p_c.z() + cam.cx);
-    k.y = static_cast<float>(cam.fy * p_c.y() / p_c.z() + cam.cy);
-    if (k.x < 0 || k.x >= cam.width || k.y < 0 || k.y >= cam.height) return;
-    k.depth = static_cast<float>(p_c.z());
-    k.right_x = static_cast<float>(k.x - cam.bf() / p_c.z());
-    kf.keypoints.push_back(k);
-    kf.descriptors.push_back(d);
-    kf.state.point_ids.push_back(kNoId);
-  }
   // `words` (optional) gets a coarse word per keypoint, as a vocabulary would give: point i's is i % 50 in
   // every view, clutter's a word of its own.
   msg::KeyFrame keyframe(uint64_t id, const Pose3& T_w_c, int shared_points, std::vector<uint32_t>* words = nullptr) {
@@ -48,9 +38,7 @@ class LoopVerifierTest : public ::testing::Test {
     kf.camera = cam;
     kf.state.T_w_c = T_w_c;
     auto add = [&](const Eigen::Vector3d& p, const Desc256& d, uint32_t word) {
-      const size_t before = kf.keypoints.size();
-      addKeypoint(kf, p, d);
-      if (words && kf.keypoints.size() > before) words->push_back(word);
+      if (test::addStereoKeypoint(kf, p, d) && words) words->push_back(word);
     };
     for (int i = 0; i < shared_points; ++i) {
       const Eigen::Vector3d p = T_w_c.inverse() * points[i];
