@@ -28,6 +28,7 @@
 #include "binloop/place/descriptor_block.h"
 #include "binloop/optim/pose_graph.h"
 #include "binloop/util/hash_random.h"
+#include "../test/support/random_descriptors.h"
 #include "../test/support/stereo_keypoint.h"
 
 using namespace binloop;
@@ -60,12 +61,7 @@ msg::KeyFrame keyframe(uint64_t id, const Pose3& T_w_c, const std::vector<Eigen:
     if (test::addStereoKeypoint(kf, p, d)) words->push_back(word);
   };
   for (size_t i = 0; i < pts.size(); ++i) {
-    Desc256 d = ds[i];
-    for (int f = 0; f < 3; ++f) {
-      const int bit = rng.below(256);
-      d.w[bit / 64] ^= uint64_t{1} << (bit % 64);
-    }
-    add(T_w_c.inverse() * pts[i], d, static_cast<uint32_t>(i % 100));
+    add(T_w_c.inverse() * pts[i], test::flipBits(ds[i], 3, rng), static_cast<uint32_t>(i % 100));
   }
   while (kf.keypoints.size() < 2000) {
     Desc256 d;

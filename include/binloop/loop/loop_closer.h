@@ -111,10 +111,13 @@ class LoopCloser {
   };
   Output verify(SlamKeyframeId query, SlamKeyframeId match, const std::string& model,
                 const std::vector<uint32_t>& query_words = {}, const std::vector<uint32_t>& match_words = {});
-  /// A verified loop between keyframes far apart is re-verified against the match's covisible keyframe
-  /// nearest to the query; returns the keyframe the loop is anchored at (with *v its verification).
-  SlamKeyframeId reanchor(SlamKeyframeId query, SlamKeyframeId match, LoopVerification* v, std::string* why,
-                          double* extra_ms) const;
+  /// A verified loop between keyframes far apart is re-verified against the match's covisible keyframes
+  /// nearest to the query; returns the keyframe the loop is anchored at, with *v its verification (its ms
+  /// and detail count both searches).
+  SlamKeyframeId reanchor(SlamKeyframeId query, SlamKeyframeId match, LoopVerification* v) const;
+  /// The keyframe standing for `id`: itself, or for a culled keyframe its nearest held ancestor (kNoId when
+  /// neither is held).
+  SlamKeyframeId standIn(SlamKeyframeId id) const;
   double travelBetween(SlamKeyframeId a, SlamKeyframeId b) const;
   bool correct(const std::vector<LoopEdge>& new_loops, const std::vector<std::pair<MapPointId, MapPointId>>& fused,
                msg::LoopClosure* c, Output* out);

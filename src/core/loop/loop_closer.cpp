@@ -135,8 +135,17 @@ void LoopCloser::expireHeld(Output* out) {
   held_.reset();
 }
 
-SlamKeyframeId LoopCloser::reanchor(SlamKeyframeId query, SlamKeyframeId match, LoopVerification* v,
-                                    std::string* why, double* extra_ms) const {
+SlamKeyframeId LoopCloser::standIn(SlamKeyframeId id) const {
+  for (int hops = 0; hops < 100; ++hops) {
+    if (frames_.count(id)) return id;
+    auto cu = culled_.find(id);
+    if (cu == culled_.end()) break;
+    id = cu->second;
+  }
+  return kNoId;
+}
+
+SlamKeyframeId LoopCloser::reanchor(SlamKeyframeId query, SlamKeyframeId match, LoopVerification* v) const {
   const double far = v->T_query_candidate.translation().norm();
   if (p_.reanchor_min_m <= 0 || far <= p_.reanchor_min_m) return match;
   // Where each of the match's covisible keyframes is seen from the query, through the verified pose; the
@@ -154,21 +163,21 @@ SlamKeyframeId LoopCloser::reanchor(SlamKeyframeId query, SlamKeyframeId match, 
   std::string tried;
   for (const auto& [d, id] : nearer) {
     LoopVerification w = verifyLoopAt(*frames_.at(query), *frames_.at(id), T_q_w * states_.at(id).T_w_c, p_.verify);
-    *extra_ms += w.ms;
+    v->ms += w.ms;
     if (!w.accepted) {
       tried += (tried.empty() ? "" : ", ") + std::to_string(counterOf(id)) + " (" + fixed2(d) + " m, " +
                std::to_string(w.inliers) + " inliers)";
       continue;
     }
-    *why = "; anchored at keyframe " + std::to_string(counterOf(id)) + " (" +
-           fixed2(w.T_query_candidate.translation().norm()) + " m from the query, " + std::to_string(w.inliers) +
-           " inliers by projection) instead of " + std::to_string(counterOf(match)) + " (" + fixed2(far) + " m, " +
-           std::to_string(v->inliers) + " inliers)";
-    w.detail = v->detail;
+    w.detail = v->detail + "; anchored at keyframe " + std::to_string(counterOf(id)) + " (" +
+               fixed2(w.T_query_candidate.translation().norm()) + " m from the query, " + std::to_string(w.inliers) +
+               " inliers by projection) instead of " + std::to_string(counterOf(match)) + " (" + fixed2(far) +
+               " m, " + std::to_string(v->inliers) + " inliers)";
+    w.ms = v->ms;
     *v = std::move(w);
     return id;
   }
-  if (!tried.empty()) *why = "; " + fixed2(far) + " m apart, and nearer keyframes beside the match did not verify: " + tried;
+  if (!tried.empty()) v->detail += "; " + fixed2(far) + " m apart, and nearer keyframes beside the match did not verify: " + tried;
   return match;
 }
 
@@ -183,16 +192,10 @@ LoopCloser::Output LoopCloser::verify(SlamKeyframeId query, SlamKeyframeId match
   // The detector still knows keyframes mapping has culled since; the place is the culled one's parent's.
   std::string culled_note;
   const SlamKeyframeId proposed = match;
-  for (int hops = 0; hops < 100 && !frames_.count(match); ++hops) {
-    auto cu = culled_.find(match);
-    if (cu == culled_.end()) break;
-    match = cu->second;
-  }
-  if (match != proposed && frames_.count(match)) {
+  if (const SlamKeyframeId held = standIn(match); held != kNoId && held != match) {
+    match = held;
     culled_note = "; keyframe " + std::to_string(counterOf(proposed)) + " was culled, its spanning-tree parent " +
                   std::to_string(counterOf(match)) + " stands for it";
-  } else {
-    match = proposed;
   }
   c->match = match;
   auto fq = frames_.find(query), fm = frames_.find(match);
@@ -209,18 +212,14 @@ LoopCloser::Output LoopCloser::verify(SlamKeyframeId query, SlamKeyframeId match
   LoopVerification v =
       verifyLoop(*fq->second, *fm->second, p_.verify, query_words, match == proposed ? match_words : no_words);
   v.detail += culled_note;
-  c->verify_ms = v.ms;
   if (v.accepted) {
-    std::string why;
-    double extra_ms = 0;
-    if (const SlamKeyframeId nearer = reanchor(query, match, &v, &why, &extra_ms); nearer != match) {
+    if (const SlamKeyframeId nearer = reanchor(query, match, &v); nearer != match) {
       match = nearer;
       c->match = match;
       c->match_frame = frames_.at(match)->frame_index;
     }
-    c->verify_ms += extra_ms;
-    v.detail += why;
   }
+  c->verify_ms = v.ms;
   c->matches = v.matches;
   c->inliers = v.inliers;
   c->T_query_match = v.T_query_candidate;

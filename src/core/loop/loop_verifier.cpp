@@ -180,10 +180,6 @@ LoopVerification verifyLoop(const msg::KeyFrame& q, const msg::KeyFrame& c, cons
   return done(LoopRejection::kNone, numbers);
 }
 
-}  // namespace binloop
-
-namespace binloop {
-
 LoopVerification verifyLoopAt(const msg::KeyFrame& q, const msg::KeyFrame& c, const Pose3& T_guess,
                               const LoopVerifierParams& p) {
   const auto t0 = std::chrono::steady_clock::now();

@@ -1,12 +1,11 @@
 #include "binloop/mapping/local_mapper.h"
 
-#include <thread>
-
 #include <algorithm>
 #include <chrono>
 #include <cmath>
 #include <limits>
 #include <stdexcept>
+#include <thread>
 #include <unordered_set>
 
 #include "binloop/mapping/reprojection_chi2.h"

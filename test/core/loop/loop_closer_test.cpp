@@ -5,6 +5,7 @@
 #include <cmath>
 
 #include "../optim/optim_test_scene.h"
+#include "support/random_descriptors.h"
 #include "support/stereo_keypoint.h"
 
 namespace binloop {
@@ -79,12 +80,8 @@ class LoopCloserTest : public ::testing::Test {
   // The camera at `truth` sees place `place` laid out in front of `place_pose`.
   void see(msg::KeyFrame& kf, const Pose3& truth, int place, const Pose3& place_pose) {
     for (size_t n = 0; n < place_points[place].size(); ++n) {
-      Desc256 d = place_descs[place][n];
-      for (int f = 0; f < 3; ++f) {
-        const int bit = rng.below(256);
-        d.w[bit / 64] ^= uint64_t{1} << (bit % 64);
-      }
-      test::addStereoKeypoint(kf, truth.inverse() * (place_pose * place_points[place][n]), d);
+      test::addStereoKeypoint(kf, truth.inverse() * (place_pose * place_points[place][n]),
+                              test::flipBits(place_descs[place][n], 3, rng));
     }
   }
 

@@ -3,6 +3,7 @@
 #include <gtest/gtest.h>
 
 #include "../optim/optim_test_scene.h"
+#include "support/random_descriptors.h"
 #include "support/stereo_keypoint.h"
 
 namespace binloop {
@@ -23,13 +24,7 @@ class LoopVerifierTest : public ::testing::Test {
       descs.push_back(d);
     }
   }
-  Desc256 view(Desc256 d) {
-    for (int f = 0; f < 3; ++f) {
-      const int bit = rng.below(256);
-      d.w[bit / 64] ^= uint64_t{1} << (bit % 64);
-    }
-    return d;
-  }
+  Desc256 view(const Desc256& d) { return test::flipBits(d, 3, rng); }
   // `words` (optional) gets a coarse word per keypoint, as a vocabulary would give: point i's is i % 50 in
   // every view, clutter's a word of its own.
   msg::KeyFrame keyframe(uint64_t id, const Pose3& T_w_c, int shared_points, std::vector<uint32_t>* words = nullptr) {
