@@ -59,7 +59,8 @@ void LoopDetectorNodelet::onInit() {
   ros::NodeHandle& pnh = getPrivateNodeHandle();
   try {
     requireKnownParams(pnh, {"config", "vocab_dir", "force_extractor", "method", "consistency", "max_reference",
-                             "ignore_recent", "hbow_min_bar", "fabmap_l2_offset", "shadow"});
+                             "ignore_recent", "hbow_min_bar", "fabmap_l2_offset", "vladpq_shared_slack",
+                             "shadow"});
     config_ = slamConfigFrom(pnh);
   } catch (const std::exception& e) {
     NODELET_FATAL("binloop/LoopDetector: %s", e.what());
@@ -71,6 +72,9 @@ void LoopDetectorNodelet::onInit() {
   if (!pnh.hasParam("consistency")) pnh.setParam("consistency", config_.detector.consistency);
   if (!pnh.hasParam("max_reference")) pnh.setParam("max_reference", config_.detector.max_reference);
   if (!pnh.hasParam("ignore_recent")) pnh.setParam("ignore_recent", config_.detector.ignore_recent);
+  if (!pnh.hasParam("hbow_min_bar")) pnh.setParam("hbow_min_bar", config_.models.hbow_min_bar);
+  if (!pnh.hasParam("fabmap_l2_offset")) pnh.setParam("fabmap_l2_offset", config_.models.fabmap_l2_offset);
+  if (!pnh.hasParam("vladpq_shared_slack")) pnh.setParam("vladpq_shared_slack", config_.models.vladpq_shared_slack);
   candidates_pub_ = nh.advertise<binloop::LoopCandidates>("loop_candidates", 100);
   diag_ = std::make_unique<StageDiagnostics>(
       nh, pnh, "loop detector", [this](diagnostic_updater::DiagnosticStatusWrapper& s) { diagnose(s); });
@@ -128,9 +132,10 @@ void LoopDetectorNodelet::onReconfigure(binloop::LoopDetectorConfig& c, uint32_t
   p.consistency = c.consistency;
   p.max_reference = c.max_reference;
   p.ignore_recent = c.ignore_recent;
-  binloop::RecognizerOptions options;
+  binloop::RecognizerOptions options = config_.models;
   options.hbow_min_bar = c.hbow_min_bar;
   options.fabmap_l2_offset = c.fabmap_l2_offset;
+  options.vladpq_shared_slack = c.vladpq_shared_slack;
   auto make = binloop::modelFileFactory(vocab_dir_, config_.tracker.orb, force_, options);
   std::vector<std::string> shadow;
   if (c.shadow == "all") {

@@ -58,6 +58,7 @@ int main(int argc, char** argv) {
       .option("segment-gap", "frames between ground-truth queries that start a new revisit segment", "50")
       .option("fabmap-l2-offset", "offset added to the closest reference's L2 distance in fabmap's pre-filter", "0.05")
       .option("hbow-min-bar", "hbow's bar never goes below this L1 score", "0.005")
+      .option("vladpq-slack", "vladpq's pre-filter passes keyframes sharing this many (word, code) pairs fewer than the best reference", "1")
       .option("rank-floor", "ranking: an L1-score bar (hbow) counts as at least this ", "0.02")
       .option("rank-cap", "ranking: a distance bar (vlad, hmvlad, vladpq) counts as at most this fraction of the bits", "0.35")
       .option("dump-ranked", "also write ranked_<model>.csv: each query's bar and its N best keyframes by raw score", "0")
@@ -173,6 +174,7 @@ int main(int argc, char** argv) {
       ro.extractor.warn = [](const std::string&) {};  // warned once above
       ro.fabmap_l2_offset = args.number("fabmap-l2-offset");
       ro.hbow_min_bar = args.number("hbow-min-bar");
+      ro.vladpq_shared_slack = static_cast<int>(args.integer("vladpq-slack"));
       ro.ranking.score_floor = args.number("rank-floor");
       ro.ranking.distance_cap = args.number("rank-cap");
       auto rec = makePlaceRecognizer(name, ro);

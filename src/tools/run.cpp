@@ -119,7 +119,8 @@ int main(int argc, char** argv) {
       l.detector.model = detector;
       l.closer = config.closer;
       l.closer.verify.seed = config.tracker.seed;
-      l.make_model = modelFileFactory(args.str("vocab-dir"), config.tracker.orb, args.has("force-extractor"));
+      l.make_model = modelFileFactory(args.str("vocab-dir"), config.tracker.orb, args.has("force-extractor"),
+                                      config.models);
       l.model_identity = modelFileIdentities(args.str("vocab-dir"));
       if (args.has("shadow")) {
         std::string s = args.str("shadow");

@@ -22,6 +22,9 @@ struct SlamConfig {
   LocalMapperParams mapper;
   LoopDetectorParams detector;  // its `model` comes from the runner's --detector, not from the file
   LoopCloserParams closer;
+  // The place models' thresholds (file loop_detection section); model_file and the extractor check are set
+  // where a model is loaded.
+  RecognizerOptions models;
 };
 
 /// Keys the file gives override the defaults; keys it leaves out keep them.

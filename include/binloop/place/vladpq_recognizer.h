@@ -1,9 +1,10 @@
 #pragma once
 // `vladpq` (thesis 4.3 and "Loop closure detection with VLAD+PQ"): each keyframe's VLAD is also product
 // quantized into one code per word, and (word, code) pairs go into an inverted index. Keyframes that share
-// at least as many pairs as the best reference keyframe are pre-candidates (the thesis asks for strictly
-// more; with the thesis' 4 words the best reference usually shares all 4, so strictly more would never
-// pass — see ARCHITECTURE notes); they are verified like `vlad`, by binarized-VLAD Hamming distance below
+// as many pairs as the best reference keyframe less a slack (default 1, at least one pair) are
+// pre-candidates (the thesis asks for strictly more; with the thesis' 4 words the best reference usually
+// shares all 4, so strictly more would never pass, and even "as many" keeps out revisits the VLAD ranks
+// first — see ARCHITECTURE notes); they are verified like `vlad`, by binarized-VLAD Hamming distance below
 // the closest reference, or by SDC/ADC distance when chosen.
 #include <memory>
 
@@ -24,7 +25,9 @@ struct VladPqModel {
 
 class VladPqRecognizer : public PlaceRecognizer {
  public:
-  explicit VladPqRecognizer(VladPqModel model, PqVerify verify = PqVerify::kHamming);
+  /// `shared_slack`: a pre-candidate may share this many (word, code) pairs fewer than the best reference
+  /// (never fewer than one). Throws PlaceError when it is negative.
+  explicit VladPqRecognizer(VladPqModel model, PqVerify verify = PqVerify::kHamming, int shared_slack = 0);
   std::string name() const override { return "vladpq"; }
   size_t indexBytesPerKeyframe() const override;
 
@@ -35,6 +38,7 @@ class VladPqRecognizer : public PlaceRecognizer {
  private:
   VladPqModel model_;
   PqVerify verify_;
+  uint32_t shared_slack_;
   // Per slot:
   SignatureStore sigs_;
   std::vector<PqCodes> codes_;

@@ -26,6 +26,7 @@ std::map<std::string, std::map<std::string, Setting>> settingsOf(SlamConfig& c) 
   LocalMapperParams& m = c.mapper;
   LoopDetectorParams& d = c.detector;
   LoopCloserParams& l = c.closer;
+  RecognizerOptions& r = c.models;
   using S = Setting;
   return {
       {"orb",
@@ -74,7 +75,10 @@ std::map<std::string, std::map<std::string, Setting>> settingsOf(SlamConfig& c) 
       {"loop_detection",
        {{"max_reference", {S::kInt, &d.max_reference, 1}},
         {"ignore_recent", {S::kInt, &d.ignore_recent, 0}},
-        {"consistency", {S::kInt, &d.consistency, 1}}}},
+        {"consistency", {S::kInt, &d.consistency, 1}},
+        {"hbow_min_bar", {S::kDouble, &r.hbow_min_bar, 0}},
+        {"fabmap_l2_offset", {S::kDouble, &r.fabmap_l2_offset, 0}},
+        {"vladpq_shared_slack", {S::kInt, &r.vladpq_shared_slack, 0}}}},
       {"loop_closing",
        {{"max_hamming", {S::kInt, &l.verify.max_hamming, 0}},
         {"ratio", {S::kFloat, &l.verify.ratio, 0}},

@@ -3,6 +3,7 @@
 #include <algorithm>
 #include <limits>
 #include <sstream>
+#include <string>
 
 #include "binloop/place/place_error.h"
 #include "binloop/place/slot_counter.h"
@@ -22,8 +23,10 @@ VladPqModel VladPqModel::load(const std::string& path) {
   return m;
 }
 
-VladPqRecognizer::VladPqRecognizer(VladPqModel model, PqVerify verify) : model_(std::move(model)), verify_(verify) {
+VladPqRecognizer::VladPqRecognizer(VladPqModel model, PqVerify verify, int shared_slack)
+    : model_(std::move(model)), verify_(verify), shared_slack_(static_cast<uint32_t>(std::max(0, shared_slack))) {
   if (!model_.vlad || !model_.pq) throw PlaceError("vladpq: no model");
+  if (shared_slack < 0) throw PlaceError("vladpq: shared slack " + std::to_string(shared_slack) + " < 0");
   inverted_.resize(static_cast<size_t>(model_.pq->words()) * model_.pq->m());
 }
 
@@ -85,9 +88,10 @@ QueryResult VladPqRecognizer::querySignature(const SlotScope& scope) const {
   size_t pre = 0;
   std::vector<Candidate> all;
   int most_shared = -1;  // the keyframe sharing most pairs among those the pre-filter drops
+  const uint32_t min_shared = max_ref_shared > shared_slack_ + 1 ? max_ref_shared - shared_slack_ : 1;
   for (Slot k : touched) {
     if (scope.excluded[k]) continue;
-    if (shared[k] < std::max(1u, max_ref_shared)) {
+    if (shared[k] < min_shared) {
       if (most_shared < 0 || shared[k] > shared[most_shared]) most_shared = static_cast<int>(k);
       continue;
     }

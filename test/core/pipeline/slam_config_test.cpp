@@ -90,6 +90,18 @@ TEST(SlamConfig, KeysGivenOverrideTheRestKeepDefaults) {
   EXPECT_EQ(c.mapper.local_ba_max_keyframes, 12);
 }
 
+// The place models' thresholds are loop detection's keys; the runner and the nodelet hand them to the factory.
+TEST(SlamConfig, ModelThresholdsAreLoopDetectionKeys) {
+  TempDir dir;
+  const SlamConfig c = loadSlamConfig(configFile(
+      dir, "loop_detection:\n  vladpq_shared_slack: 2\n  hbow_min_bar: 0.01\n  fabmap_l2_offset: 0.1\n"));
+  EXPECT_EQ(c.models.vladpq_shared_slack, 2);
+  EXPECT_DOUBLE_EQ(c.models.hbow_min_bar, 0.01);
+  EXPECT_DOUBLE_EQ(c.models.fabmap_l2_offset, 0.1);
+  EXPECT_EQ(c.detector.consistency, SlamConfig{}.detector.consistency);
+  EXPECT_THROW(loadSlamConfig(configFile(dir, "loop_detection:\n  vladpq_shared_slack: -1\n", "neg.yaml")), ConfigError);
+}
+
 TEST(SlamConfig, SectionsMayBeLeftOut) {
   TempDir dir;
   const SlamConfig c = loadSlamConfig(configFile(dir, "mapping:\n  cull_keyframes: 0\n"));
