@@ -6,6 +6,7 @@
 #include "binloop/io/filesystem.h"
 #include "binloop/io/trajectory_io.h"
 #include "binloop/sim/builtin_route.h"
+#include "binloop/sim/level_revisits.h"
 #include "binloop/sim/stereo_renderer.h"
 #include "binloop/util/cli_args.h"
 #include "binloop/util/progress_bar.h"
@@ -28,12 +29,19 @@ int main(int argc, char** argv) {
       .option("blur", "optical blur sigma in pixels", "0.6")
       .option("textures", "extra folder of photos for façade textures (added to the Debian photos)")
       .flag("procedural", "use procedural textures only (no photos)")
+      .flag("level-revisits", "give revisits the height of the earlier pass (ground truth that disagrees in height between passes, e.g. KITTI 02)")
       .flag("force", "write into an existing non-empty folder");
   return binloop::runTool("render", [&] {
     if (!args.parse(argc, argv)) return 0;
     if (!args.has("route") || !args.has("out")) throw binloop::CliError("--route and --out are required");
-    const auto route = args.str("route") == "loop" ? binloop::sim::loopRoute() : binloop::readKittiPoses(args.str("route"));
+    auto route = args.str("route") == "loop" ? binloop::sim::loopRoute() : binloop::readKittiPoses(args.str("route"));
     if (route.size() < 2) throw binloop::CliError("--route needs at least 2 poses");
+    if (args.has("level-revisits")) {
+      binloop::sim::LevelResult level = binloop::sim::levelRevisits(route);
+      std::cout << "render: levelled " << level.revisit_frames << " revisiting frames to the height of the earlier pass, "
+                << "heights changed by up to " << level.max_shift_m << " m (poses.txt has the levelled route)\n";
+      route = std::move(level.route);
+    }
     std::vector<double> times;
     if (args.has("times")) {
       times = binloop::readTimes(args.str("times"));
