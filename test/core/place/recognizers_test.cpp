@@ -18,6 +18,13 @@ using namespace binloop::test;
 
 namespace {
 
+/// `places` random places of `per_place` descriptors each (seed `seed`): what every model here trains on.
+std::vector<Descriptors> randomPlaces(uint64_t seed, int places, int per_place) {
+  std::vector<Descriptors> training;
+  for (int p = 0; p < places; ++p) training.push_back(randomPlace(seed, p, per_place));
+  return training;
+}
+
 class Recognizers : public ::testing::TestWithParam<std::string> {
  protected:
   static void SetUpTestSuite() { dir_ = new TempDir; }
@@ -27,8 +34,7 @@ class Recognizers : public ::testing::TestWithParam<std::string> {
   static std::string modelFile(const std::string& m) {
     const std::string f = *dir_ / (m + ".bin");
     if (std::filesystem::exists(f)) return f;
-    std::vector<Descriptors> training;
-    for (int p = 0; p < 60; ++p) training.push_back(randomPlace(100, p, 300));
+    const std::vector<Descriptors> training = randomPlaces(100, 60, 300);
     // The journey's places are drawn from the training distribution but not the training images.
     TrainOptions o;
     o.words = 400;
@@ -136,8 +142,7 @@ INSTANTIATE_TEST_SUITE_P(AllModels, Recognizers, ::testing::Values("hbow", "fabm
 
 TEST(Fabmap, FastLikelihoodEqualsTheDirectSum) {
   TempDir dir;
-  std::vector<Descriptors> training;
-  for (int p = 0; p < 40; ++p) training.push_back(randomPlace(5, p, 200));
+  const std::vector<Descriptors> training = randomPlaces(5, 40, 200);
   TrainOptions o;
   o.words = 100;
   trainModel(ModelType::kFabmap, training, o, dir / "f.bin");
@@ -158,12 +163,10 @@ TEST(Fabmap, FastLikelihoodEqualsTheDirectSum) {
 // must not pass every keyframe with a huge score/bar ratio.
 TEST(Hbow, BarNeverDropsBelowTheFloor) {
   TempDir dir;
-  std::vector<Descriptors> training;
-  for (int p = 0; p < 40; ++p) training.push_back(randomPlace(5, p, 200));
   TrainOptions o;
   o.k = 8;
   o.levels = 3;
-  trainModel(ModelType::kHbow, training, o, dir / "h.bin");
+  trainModel(ModelType::kHbow, randomPlaces(5, 40, 200), o, dir / "h.bin");
   const auto voc = HbowRecognizer::loadVocabulary(dir / "h.bin");
   for (const double floor : {0.0, 0.99}) {
     HbowRecognizer rec(voc, floor);
@@ -191,11 +194,9 @@ TEST(Hbow, BarNeverDropsBelowTheFloor) {
 // check; rendered 00 lost revisit 1557-1643 to it (config/kitti.yaml, vladpq_shared_slack).
 TEST(VladPq, SlackLetsRevisitsSharingFewerPairsThanTheReferenceThrough) {
   TempDir dir;
-  std::vector<Descriptors> training;
-  for (int p = 0; p < 60; ++p) training.push_back(randomPlace(100, p, 300));
   TrainOptions o;
   o.pq_codes = 8;
-  trainModel(ModelType::kVladPq, training, o, dir / "pq.bin");
+  trainModel(ModelType::kVladPq, randomPlaces(100, 60, 300), o, dir / "pq.bin");
   const auto model = VladPqModel::load(dir / "pq.bin");
   int found[2] = {0, 0};
   for (int slack : {0, 1}) {
