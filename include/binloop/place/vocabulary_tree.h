@@ -46,11 +46,12 @@ class VocabularyTree {
   };
   static VocabularyTree fromNodes(int k, int levels, Weighting w, const std::vector<InputNode>& nodes);
 
-  /// Word of one descriptor; `path_node` (optional) receives the node at depth `node_depth`.
+  /// Word of one descriptor; `path_node` (optional) receives nodeOf(d, node_depth).
   uint32_t wordOf(const Desc256& d, int node_depth = 0, uint32_t* path_node = nullptr) const;
-  /// The node `depth` levels below the root that a descriptor passes (a shallower leaf stands for itself):
-  /// with k = 10, depth 2 cuts descriptor space into ~100 cells, ORB-SLAM2's cells for matching by words.
-  uint32_t nodeOf(const Desc256& d, int depth) const;
+  /// The node `depth` levels below `from` (the root by default) that a descriptor passes (a shallower leaf
+  /// stands for itself): with k = 10, depth 2 cuts descriptor space into ~100 cells, ORB-SLAM2's cells for
+  /// matching by words.
+  uint32_t nodeOf(const Desc256& d, int depth, uint32_t from = 0) const;
   /// BoW vector of an image (L1-normalised, weighted by the vocabulary's weighting), and optionally the
   /// direct index at `fv_depth` levels below the root.
   void transform(const Descriptors& d, BowVector* bow, FeatureVector* fv = nullptr, int fv_depth = 2) const;

@@ -3,6 +3,7 @@
 #include <algorithm>
 #include <cmath>
 #include <deque>
+#include <limits>
 #include <string>
 
 #include "binloop/place/k_majority.h"
@@ -158,19 +159,13 @@ VocabularyTree VocabularyTree::fromNodes(int k, int levels, Weighting w, const s
 }
 
 uint32_t VocabularyTree::wordOf(const Desc256& d, int node_depth, uint32_t* path_node) const {
-  uint32_t n = 0;
-  int depth = 0;
-  while (child_count_[n] != 0) {
-    const uint32_t first = first_child_[n];
-    n = first + nearestCentre(d, &desc_[first], child_count_[n]);
-    if (++depth == node_depth && path_node) *path_node = n;
-  }
-  if (path_node && depth < node_depth) *path_node = n;  // a shallow leaf stands for its own subtree
-  return node_word_[n];
+  const uint32_t at = nodeOf(d, node_depth);
+  if (path_node) *path_node = at;
+  return node_word_[nodeOf(d, std::numeric_limits<int>::max(), at)];  // on down to the leaf
 }
 
-uint32_t VocabularyTree::nodeOf(const Desc256& d, int depth) const {
-  uint32_t n = 0;
+uint32_t VocabularyTree::nodeOf(const Desc256& d, int depth, uint32_t from) const {
+  uint32_t n = from;
   for (int level = 0; level < depth && child_count_[n] != 0; ++level)
     n = first_child_[n] + nearestCentre(d, &desc_[first_child_[n]], child_count_[n]);
   return n;

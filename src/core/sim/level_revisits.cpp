@@ -28,9 +28,7 @@ LevelResult levelRevisits(const std::vector<Pose3>& route, const LevelParams& p)
 
   // In frame order, so that a third pass takes the height the second was given (which is the first's).
   std::vector<std::optional<double>> offset(n);
-  std::vector<double> y(n);
   for (size_t i = 0; i < n; ++i) {
-    y[i] = route[i].translation().y();
     if (i < p.min_frames_apart) continue;
     double best = p.radius_m;
     std::optional<size_t> near;
@@ -39,8 +37,7 @@ LevelResult levelRevisits(const std::vector<Pose3>& route, const LevelParams& p)
       if (d < best) best = d, near = j;
     }
     if (!near) continue;
-    offset[i] = y[*near] - route[i].translation().y();
-    y[i] = y[*near];
+    offset[i] = route[*near].translation().y() + offset[*near].value_or(0) - route[i].translation().y();
     ++out.revisit_frames;
   }
 
