@@ -30,6 +30,7 @@ int main(int argc, char** argv) {
       .option("textures", "extra folder of photos for façade textures (added to the Debian photos)")
       .flag("procedural", "use procedural textures only (no photos)")
       .flag("level-revisits", "give revisits the height of the earlier pass (ground truth that disagrees in height between passes, e.g. KITTI 02)")
+      .flag("aperiodic-ground", "a road texture that never repeats (by default it repeats every 8 m, as every render measured before it)")
       .flag("force", "write into an existing non-empty folder");
   return binloop::runTool("render", [&] {
     if (!args.parse(argc, argv)) return 0;
@@ -83,7 +84,9 @@ int main(int argc, char** argv) {
     auto bank = binloop::sim::TextureBank::build(photos, seed);
     std::cout << "render: " << (bank.photos_used ? std::to_string(bank.photos_used) + " photos" : "procedural")
               << " -> " << bank.textures.size() << " textures; camera " << cam.describe() << "\n";
-    const auto world = binloop::sim::World::build(route, std::move(bank), {}, seed);
+    binloop::sim::WorldParams wp;
+    wp.aperiodic_ground = args.has("aperiodic-ground");
+    const auto world = binloop::sim::World::build(route, std::move(bank), wp, seed);
     std::cout << "render: world of " << world.quads().size() << " quads along " << route.size() << " route poses\n";
     binloop::sim::RenderOptions ropt;
     ropt.noise_sigma = args.number("noise");

@@ -18,9 +18,11 @@ class Texture {
   /// Bilinear sample at texel coordinates (u, v) of level 0, from mip `level` (clamped), wrapping.
   float sample(float u, float v, int level) const;
   const cv::Mat& level(int l) const { return mips_[l]; }
+  float mean() const { return mean_; }
 
  private:
   int w_ = 0, h_ = 0;
+  float mean_ = 0;
   std::vector<cv::Mat> mips_;
 };
 

@@ -38,6 +38,11 @@ struct WorldParams {
   double car_probability = 0.35, tree_probability = 0.3, pole_spacing_m = 30.0;
   double clearance_m = 5.0;         // nothing but ground within this distance of any route point
   bool populate = true;             // false: ground only (tests then add their own quads)
+  /// The ground texture repeats every 8 m (512 texels at 64 per metre), so a camera displaced by a multiple of
+  /// 8 m along the grid sees the same road: a relocalisation can lock on to it. True: a second, rotated layer
+  /// of incommensurate period is blended in, and the road never repeats within a route. Off by default so
+  /// that renders made before it stay as they were.
+  bool aperiodic_ground = false;
 };
 
 

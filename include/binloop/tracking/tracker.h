@@ -35,6 +35,12 @@ struct TrackerParams {
   // because a frame was black, and on repetitive facades a pose found without any prior can be off by one
   // facade (rendered 06: 874 inliers 2.3 m from the truth).
   double predict_through_loss_s = 3.0;
+  // A pose recovered while the motion model still predicts must be one the camera could have reached: within
+  // recovery_min_gate_m + 1/2 a dt^2 of the prediction (a = recovery_max_accel_mps2, dt since the last tracked
+  // frame); farther, the frame stays lost. A road whose texture repeated every 8 m let rendered 06 relocalise
+  // 24 m and 40 m behind the truth after 10 and 20 missing frames, and the next keyframes then mapped there.
+  double recovery_min_gate_m = 1.0;
+  double recovery_max_accel_mps2 = 5.0;
   int min_inliers = 30;             // a frame is tracked with at least this many inliers after the local map
   int min_inliers_after_loss = 50;
   int max_local_keyframes = 80;

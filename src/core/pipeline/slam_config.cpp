@@ -47,6 +47,8 @@ std::map<std::string, std::map<std::string, Setting>> settingsOf(SlamConfig& c) 
         {"local_map_radius", {S::kFloat, &t.local_map_radius, 0.1}},
         {"lost_radius", {S::kFloat, &t.lost_radius, 0.1}},
         {"predict_through_loss_s", {S::kDouble, &t.predict_through_loss_s, 0}},
+        {"recovery_min_gate_m", {S::kDouble, &t.recovery_min_gate_m, 0}},
+        {"recovery_max_accel_mps2", {S::kDouble, &t.recovery_max_accel_mps2, 0}},
         {"min_inliers", {S::kInt, &t.min_inliers, 3}},
         {"min_inliers_after_loss", {S::kInt, &t.min_inliers_after_loss, 3}},
         {"max_local_keyframes", {S::kInt, &t.max_local_keyframes, 1}},

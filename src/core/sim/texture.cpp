@@ -15,6 +15,7 @@ Texture::Texture(const cv::Mat& img) {
     throw std::invalid_argument("Texture: needs CV_8UC1 with power-of-two sides");
   w_ = img.cols;
   h_ = img.rows;
+  mean_ = static_cast<float>(cv::mean(img)[0]);
   mips_.push_back(img.clone());
   while (mips_.back().cols > 4 && mips_.back().rows > 4) {
     cv::Mat half;

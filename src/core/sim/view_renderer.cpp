@@ -1,6 +1,7 @@
 #include "binloop/sim/view_renderer.h"
 
 #include <Eigen/Dense>
+#include <algorithm>
 #include <cmath>
 #include <limits>
 
@@ -9,6 +10,15 @@ namespace binloop::sim {
 namespace {
 
 constexpr float kGroundTexelsPerM = 64.0f;
+
+// The texture and a second copy of it turned by 37 degrees and scaled by 1/sqrt(2), blended with the
+// contrast kept: the two periods are incommensurate, so the sum does not repeat where either layer does.
+float aperiodicSample(const Texture& tex, float u, float v, int level) {
+  constexpr float kC = 0.7986355f * 0.70710678f, kS = 0.6018150f * 0.70710678f;  // cos, sin 37 deg / sqrt 2
+  const float a = tex.sample(u, v, level);
+  const float b = tex.sample(kC * u - kS * v + 131.0f, kS * u + kC * v + 57.0f, level);
+  return std::clamp(tex.mean() + (a + b - 2 * tex.mean()) * 0.70710678f, 0.0f, 255.0f);
+}
 
 // Mip level for a surface seen with `texels_per_px` texels under one pixel: log2, rounded, >= 0.
 inline int mipLevel(float texels_per_px) {
@@ -51,6 +61,7 @@ void ViewRenderer::drawGround(const World& world, const StereoCamera& cam, const
   const Eigen::Vector3d dx = R.col(0) / cam.fx;
   const double n_dx = n.dot(dx);
   const auto& bank = world.bank();
+  const bool aperiodic = world.params().aperiodic_ground;
   for (int y = 0; y < cam.height; ++y) {
     const Eigen::Vector3d row0 = R * Eigen::Vector3d(-cam.cx / cam.fx, (y - cam.cy) / cam.fy, 1.0);
     const double n_row0 = n.dot(row0);
@@ -68,8 +79,8 @@ void ViewRenderer::drawGround(const World& world, const StereoCamera& cam, const
       const double cosang = denom / ray_len;
       const int level = mipLevel(static_cast<float>(range * kGroundTexelsPerM / (cam.fx * std::sqrt(cosang))));
       const Texture& tex = bank.textures[world.groundMaterial(p.x(), p.z())];
-      g[x] = tex.sample(static_cast<float>(p.x() * kGroundTexelsPerM), static_cast<float>(p.z() * kGroundTexelsPerM),
-                        level);
+      const float u = static_cast<float>(p.x() * kGroundTexelsPerM), v = static_cast<float>(p.z() * kGroundTexelsPerM);
+      g[x] = aperiodic ? aperiodicSample(tex, u, v, level) : tex.sample(u, v, level);
       z[x] = static_cast<float>(t);
     }
   }

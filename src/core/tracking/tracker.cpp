@@ -3,6 +3,7 @@
 #include <algorithm>
 #include <chrono>
 #include <cmath>
+#include <cstdio>
 #include <map>
 #include <unordered_map>
 #include <unordered_set>
@@ -27,6 +28,12 @@ Pose3 scaledMotion(const Pose3& T, double k) {
   out.linear() = Eigen::AngleAxisd(aa.angle() * k, aa.axis()).toRotationMatrix();
   out.translation() = T.translation() * k;
   return out;
+}
+
+std::string oneDecimal(double v) {
+  char buf[32];
+  std::snprintf(buf, sizeof buf, "%.1f", v);
+  return buf;
 }
 
 Eigen::Vector3d unproject(const msg::KeyPoint& k, const StereoCamera& cam) {
@@ -103,6 +110,8 @@ Tracker::Output Tracker::track(const StereoFrame& in, int mapping_queue) {
         predict ? orthonormalized(last_pose * scaledMotion(velocity_, dt / velocity_dt_)) : last_pose;
     f.T_w_c = predicted;
     bool ok = false;
+    std::string unreachable;  // why a recovered pose was refused
+    bool relocalized = false;  // found from scratch, not near the prediction
     if (state_ == msg::TrackingState::kOk) {
       // The motion model when there is one; without it (right after the first keyframe), when it fails, or
       // when it holds on to only a few points (in a sharp turn a wrong prediction can still collect a dozen
@@ -143,8 +152,18 @@ Tracker::Output Tracker::track(const StereoFrame& in, int mapping_queue) {
       }
       ok = trackLocalMap(f, p_.lost_radius, p_.min_inliers_after_loss);
       // Still nothing: the pose is unknown; find it from scratch against recent keyframes.
-      bool relocalized = false;
+      const SlamKeyframeId reference_before = reference_;
       if (!ok) ok = relocalized = relocalize(f);
+      if (ok && predict) {
+        const double off = (f.T_w_c.translation() - predicted.translation()).norm();
+        const double reach = p_.recovery_min_gate_m + 0.5 * p_.recovery_max_accel_mps2 * dt * dt;
+        if (off > reach) {
+          ok = false;
+          reference_ = reference_before;
+          unreachable = "; a pose " + oneDecimal(off) + " m from the motion model's prediction after " +
+                        oneDecimal(dt) + " s was rejected (at most " + oneDecimal(reach) + " m)";
+        }
+      }
       if (ok && (relocalized || state_ != msg::TrackingState::kOk)) {
         state_ = msg::TrackingState::kRelocalized;
       }
@@ -152,16 +171,19 @@ Tracker::Output Tracker::track(const StereoFrame& in, int mapping_queue) {
     if (!ok) {
       state_ = msg::TrackingState::kLost;
       tf.state = state_;
-      tf.problem = "lost: " + std::to_string(inliers_) + " inliers";
+      tf.problem = "lost: " + std::to_string(inliers_) + " inliers" + unreachable;
       tf.T_w_c = predicted;  // not what a failed attempt left in f
       tf.track_ms = msSinceT(t0);
       return out;
     }
     tf.state = state_ == msg::TrackingState::kRelocalized ? state_ : msg::TrackingState::kOk;
     state_ = msg::TrackingState::kOk;
+    // The motion from the last tracked frame is the velocity, unless the frame was found from scratch: then
+    // that "motion" is wherever the camera was carried, and the next frame is matched without a prediction
+    // (as ORB-SLAM2 drops its velocity after relocalising).
     velocity_ = last_pose.inverse() * f.T_w_c;
     velocity_dt_ = dt > 0 ? dt : 1;
-    have_velocity_ = true;
+    have_velocity_ = !relocalized;
     if (needKeyframe(f, mapping_queue)) out.keyframe = makeKeyframe(f);
   }
 
