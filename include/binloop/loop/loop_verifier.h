@@ -51,7 +51,7 @@ struct LoopVerification {
   Pose3 T_query_candidate = Pose3::Identity();  // candidate camera -> query camera
   int matches = 0;                    // step 1
   bool by_words = false;              // step 1 matched within words
-  int ransac_inliers = 0;             // step 2
+  int first_inliers = 0;             // inliers of the first pose: step 2's RANSAC (verifyLoopAt: the first refinement's)
   int inliers = 0;                    // after step 4
   std::vector<std::pair<int, int>> pairs;  // final inlier (query keypoint, candidate keypoint) pairs
   double ms = 0;
@@ -67,7 +67,7 @@ LoopVerification verifyLoop(const msg::KeyFrame& query, const msg::KeyFrame& can
 
 /// Steps 4 and 5 only, from a pose already known to be close (a verified loop carried to a keyframe beside
 /// its match through the map): guided search, refinement, a second guided search and refinement.
-/// `matches` counts the first search, `ransac_inliers` what the first refinement kept.
+/// `matches` counts the first search, `first_inliers` what the first refinement kept (there is no RANSAC).
 LoopVerification verifyLoopAt(const msg::KeyFrame& query, const msg::KeyFrame& candidate, const Pose3& T_guess,
                               const LoopVerifierParams& p);
 

@@ -154,7 +154,7 @@ LoopVerification verifyLoop(const msg::KeyFrame& q, const msg::KeyFrame& c, cons
     b.push_back(pointOf(c, c.keypoints[ci]));
   }
   const RigidRansacResult rr = rigidRansac(a, b, p.ransac, hashCombine(p.seed, hashCombine(q.id, c.id)));
-  v.ransac_inliers = rr.inliers;
+  v.first_inliers = rr.inliers;
   v.ransac_ms = lap();
   if (!rr.ok)
     return done(LoopRejection::kNoConsensus, matched + ", best consensus " +
@@ -174,7 +174,7 @@ LoopVerification verifyLoop(const msg::KeyFrame& q, const msg::KeyFrame& c, cons
   v.guided_ms = lap();
   v.T_query_candidate = T;
   v.pairs = in;
-  const std::string numbers = matched + ", " + std::to_string(v.ransac_inliers) +
+  const std::string numbers = matched + ", " + std::to_string(v.first_inliers) +
                               " RANSAC inliers, " + std::to_string(v.inliers) + " after guided search";
   if (v.inliers < p.min_inliers) return done(LoopRejection::kTooFewInliers, numbers + " < " + std::to_string(p.min_inliers));
   return done(LoopRejection::kNone, numbers);
@@ -190,14 +190,14 @@ LoopVerification verifyLoopAt(const msg::KeyFrame& q, const msg::KeyFrame& c, co
   guidedSearch(q, c, s, p, T, &in);
   v.matches = static_cast<int>(in.size());
   refine(q, c, s, p.refine, &T, &in);
-  v.ransac_inliers = static_cast<int>(in.size());
+  v.first_inliers = static_cast<int>(in.size());
   guidedSearch(q, c, s, p, T, &in);
   v.inliers = refine(q, c, s, p.refine, &T, &in);
   v.T_query_candidate = T;
   v.pairs = in;
   v.accepted = v.inliers >= p.min_inliers;
   v.rejection = v.accepted ? LoopRejection::kNone : LoopRejection::kTooFewInliers;
-  v.detail = std::to_string(v.matches) + " matches by projection, " + std::to_string(v.ransac_inliers) +
+  v.detail = std::to_string(v.matches) + " matches by projection, " + std::to_string(v.first_inliers) +
              " after refinement, " + std::to_string(v.inliers) + " after a second search" +
              (v.accepted ? "" : " < " + std::to_string(p.min_inliers));
   v.ms = v.guided_ms = std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - t0).count();

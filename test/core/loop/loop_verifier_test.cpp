@@ -62,7 +62,7 @@ TEST_F(LoopVerifierTest, ARevisitIsAcceptedWithTheTrueRelativePose) {
   EXPECT_LT((v.T_query_candidate.translation() - truth.translation()).norm(), 0.05);
   EXPECT_LT(test::rotationErrorDeg(v.T_query_candidate, truth), 0.2);
   EXPECT_GT(v.inliers, 200) << v.detail;
-  EXPECT_GE(v.inliers, v.ransac_inliers / 2);
+  EXPECT_GE(v.inliers, v.first_inliers / 2);
 }
 
 TEST_F(LoopVerifierTest, UnrelatedKeyframesAreRejectedForTooFewMatches) {
