@@ -24,6 +24,7 @@
 #include "binloop/io/trajectory_io.h"
 #include "binloop/pipeline/loop_log.h"
 #include "binloop/place/place_recognizer.h"
+#include "binloop/util/fixed_decimals.h"
 #include "binloop/util/cli_args.h"
 
 namespace fs = std::filesystem;
@@ -65,10 +66,7 @@ double jsonNumber(const std::string& text, const std::string& key) {
 }
 
 std::string fixed(double v, int decimals) {
-  if (!std::isfinite(v)) return "n/a";
-  char buf[64];
-  std::snprintf(buf, sizeof buf, "%.*f", decimals, v);
-  return buf;
+  return std::isfinite(v) ? fixedDecimals(v, decimals) : "n/a";
 }
 
 // Starts `argv` with stdin from /dev/null and stdout and stderr into `log` (after a line naming the command).

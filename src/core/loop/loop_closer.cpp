@@ -6,22 +6,11 @@
 #include <functional>
 #include <limits>
 #include <queue>
-#include <sstream>
 #include <stdexcept>
 
+#include "binloop/util/fixed_decimals.h"
+
 namespace binloop {
-
-namespace {
-
-std::string fixed2(double v) {
-  std::ostringstream s;
-  s.setf(std::ios::fixed);
-  s.precision(2);
-  s << v;
-  return s.str();
-}
-
-}  // namespace
 
 LoopCloser::LoopCloser(const LoopCloserParams& p) : p_(p) {}
 
@@ -165,19 +154,19 @@ SlamKeyframeId LoopCloser::reanchor(SlamKeyframeId query, SlamKeyframeId match, 
     LoopVerification w = verifyLoopAt(*frames_.at(query), *frames_.at(id), T_q_w * states_.at(id).T_w_c, p_.verify);
     v->ms += w.ms;
     if (!w.accepted) {
-      tried += (tried.empty() ? "" : ", ") + std::to_string(counterOf(id)) + " (" + fixed2(d) + " m, " +
+      tried += (tried.empty() ? "" : ", ") + std::to_string(counterOf(id)) + " (" + fixedDecimals(d, 2) + " m, " +
                std::to_string(w.inliers) + " inliers)";
       continue;
     }
     w.detail = v->detail + "; anchored at keyframe " + std::to_string(counterOf(id)) + " (" +
-               fixed2(w.T_query_candidate.translation().norm()) + " m from the query, " + std::to_string(w.inliers) +
-               " inliers by projection) instead of " + std::to_string(counterOf(match)) + " (" + fixed2(far) +
+               fixedDecimals(w.T_query_candidate.translation().norm(), 2) + " m from the query, " + std::to_string(w.inliers) +
+               " inliers by projection) instead of " + std::to_string(counterOf(match)) + " (" + fixedDecimals(far, 2) +
                " m, " + std::to_string(v->inliers) + " inliers)";
     w.ms = v->ms;
     *v = std::move(w);
     return id;
   }
-  if (!tried.empty()) v->detail += "; " + fixed2(far) + " m apart, and nearer keyframes beside the match did not verify: " + tried;
+  if (!tried.empty()) v->detail += "; " + fixedDecimals(far, 2) + " m apart, and nearer keyframes beside the match did not verify: " + tried;
   return match;
 }
 
@@ -236,14 +225,14 @@ LoopCloser::Output LoopCloser::verify(SlamKeyframeId query, SlamKeyframeId match
   c->correction_m = (T_w_q_loop.translation() - T_w_q.translation()).norm();
   const double travel = travelBetween(match, query);
   c->drift_bound_m = p_.drift_base_m + p_.drift_per_m * travel;
-  std::string numbers = v.detail + "; moves the query " + fixed2(c->correction_m) + " m, drift bound " +
-                        fixed2(c->drift_bound_m) + " m over " + fixed2(travel) + " m";
+  std::string numbers = v.detail + "; moves the query " + fixedDecimals(c->correction_m, 2) + " m, drift bound " +
+                        fixedDecimals(c->drift_bound_m, 2) + " m over " + fixedDecimals(travel, 2) + " m";
   std::vector<LoopEdge> edges{{query, match, v.T_query_candidate}};
   LoopEdge confirmed_edge;
   bool confirming = false;
   if (c->correction_m > p_.hold_factor * c->drift_bound_m) {
     c->status = "beyond_drift_bound";
-    c->detail = numbers + "; more than " + fixed2(p_.hold_factor) + "x the bound: not a loop drift can explain";
+    c->detail = numbers + "; more than " + fixedDecimals(p_.hold_factor, 2) + "x the bound: not a loop drift can explain";
     return out;
   }
   if (c->correction_m > c->drift_bound_m) {
@@ -256,8 +245,8 @@ LoopCloser::Output LoopCloser::verify(SlamKeyframeId query, SlamKeyframeId match
       if (disagree <= tol && apart >= p_.confirm_min_travel_m) {
         confirming = true;
         confirmed_edge = held_->edge;
-        numbers += "; confirms the loop held at keyframe " + std::to_string(counterOf(held_->edge.query)) + " (" + fixed2(disagree) +
-                   " m apart in what they ask, " + fixed2(apart) + " m along the path)";
+        numbers += "; confirms the loop held at keyframe " + std::to_string(counterOf(held_->edge.query)) + " (" + fixedDecimals(disagree, 2) +
+                   " m apart in what they ask, " + fixedDecimals(apart, 2) + " m along the path)";
       }
     }
     if (!confirming) {
@@ -324,7 +313,7 @@ bool LoopCloser::correct(const std::vector<LoopEdge>& new_loops, const std::vect
   const double before = r.initial_edge_chi2[g.new_loop_edge], after = r.edge_chi2[g.new_loop_edge];
   // A loop the graph already agrees with (chi2 below 6-dof 95 %) has nothing to absorb.
   c->residual_ratio = before > 12.59 ? std::sqrt(after / before) : 0.0;
-  c->detail += "; loop edge chi2 " + fixed2(before) + " -> " + fixed2(after) + " (ratio " + fixed2(c->residual_ratio) +
+  c->detail += "; loop edge chi2 " + fixedDecimals(before, 2) + " -> " + fixedDecimals(after, 2) + " (ratio " + fixedDecimals(c->residual_ratio, 2) +
                "), " + std::to_string(g.nodes.size()) + " keyframes, " + std::to_string(g.edges.size()) + " edges, " +
                std::to_string(r.iterations) + " iterations";
   if (c->residual_ratio > p_.max_residual_ratio) {

@@ -23,10 +23,18 @@ VladPqModel VladPqModel::load(const std::string& path) {
   return m;
 }
 
+namespace {
+
+uint32_t checkedSlack(int slack) {
+  if (slack < 0) throw PlaceError("vladpq: shared slack " + std::to_string(slack) + " < 0");
+  return static_cast<uint32_t>(slack);
+}
+
+}  // namespace
+
 VladPqRecognizer::VladPqRecognizer(VladPqModel model, PqVerify verify, int shared_slack)
-    : model_(std::move(model)), verify_(verify), shared_slack_(static_cast<uint32_t>(std::max(0, shared_slack))) {
+    : model_(std::move(model)), verify_(verify), shared_slack_(checkedSlack(shared_slack)) {
   if (!model_.vlad || !model_.pq) throw PlaceError("vladpq: no model");
-  if (shared_slack < 0) throw PlaceError("vladpq: shared slack " + std::to_string(shared_slack) + " < 0");
   inverted_.resize(static_cast<size_t>(model_.pq->words()) * model_.pq->m());
 }
 

@@ -3,12 +3,12 @@
 #include <algorithm>
 #include <chrono>
 #include <cmath>
-#include <cstdio>
 #include <map>
 #include <unordered_map>
 #include <unordered_set>
 
 #include "binloop/io/data_error.h"
+#include "binloop/util/fixed_decimals.h"
 #include "binloop/util/hash_random.h"
 
 namespace binloop {
@@ -28,12 +28,6 @@ Pose3 scaledMotion(const Pose3& T, double k) {
   out.linear() = Eigen::AngleAxisd(aa.angle() * k, aa.axis()).toRotationMatrix();
   out.translation() = T.translation() * k;
   return out;
-}
-
-std::string oneDecimal(double v) {
-  char buf[32];
-  std::snprintf(buf, sizeof buf, "%.1f", v);
-  return buf;
 }
 
 Eigen::Vector3d unproject(const msg::KeyPoint& k, const StereoCamera& cam) {
@@ -160,8 +154,8 @@ Tracker::Output Tracker::track(const StereoFrame& in, int mapping_queue) {
         if (off > reach) {
           ok = false;
           reference_ = reference_before;
-          unreachable = "; a pose " + oneDecimal(off) + " m from the motion model's prediction after " +
-                        oneDecimal(dt) + " s was rejected (at most " + oneDecimal(reach) + " m)";
+          unreachable = "; a pose " + fixedDecimals(off, 1) + " m from the motion model's prediction after " +
+                        fixedDecimals(dt, 1) + " s was rejected (at most " + fixedDecimals(reach, 1) + " m)";
         }
       }
       if (ok && (relocalized || state_ != msg::TrackingState::kOk)) {
