@@ -13,6 +13,8 @@
 #include "binloop/tracking/frame.h"
 #include "binloop/tracking/keyframe_database.h"
 #include "binloop/tracking/projection_search.h"
+#include "binloop/tracking/far_keyframe_pose.h"
+#include "binloop/tracking/rotation_search.h"
 
 namespace binloop {
 
@@ -53,6 +55,12 @@ struct TrackerParams {
   /// Which vocabulary that is (model_files.h, modelFileIdentity), checked when a saved map is loaded.
   std::string vocabulary_identity;
   int reloc_min_matches = 15;    // descriptor matches a keyframe needs before PnP is tried
+  // While the motion model predicts, recovery finds the rotation from far points first, then the pose from
+  // the frame's stereo against the keyframes' sightings (Tracker::recoverRotationFirst); off, it goes
+  // straight from the wide search to relocalisation.
+  bool recover_rotation_first = true;
+  RotationSearchParams rotation_search;
+  FarPoseParams far_pose;
   PnpRansacParams pnp;
   uint64_t seed = 1;             // for the RANSAC samples
   int covisible_per_keyframe = 10;  // neighbours each local keyframe adds to the local map
@@ -111,6 +119,13 @@ class Tracker {
   bool trackLastFrame(Frame& f);
   bool trackWithoutPrediction(Frame& f);
   bool poseFromMatches(Frame& f, int matches);
+  /// Frames were lost and the prediction is off in rotation: the rotation from far points
+  /// (rotation_search.h), then the pose from the frame's stereo and the keyframes' sightings
+  /// (far_keyframe_pose.h). Leaves f.T_w_c and its inlier matches; false when either step fails.
+  bool recoverRotationFirst(Frame& f, const Pose3& predicted);
+  std::vector<const msg::MapPoint*> pointsOf(const std::vector<SlamKeyframeId>& keyframes) const;
+  /// The frame's matched keypoints with stereo depth, each with up to three of its point's keyframes.
+  std::vector<FarMatch> farMatches(const Frame& f, std::vector<int>* keypoint_of) const;
   bool relocalize(Frame& f);
   /// PnP RANSAC on the matches in f.points, pose optimisation, a wide search for `pts`, then the local map.
   bool poseFromScratch(Frame& f, const std::vector<const msg::MapPoint*>& pts);

@@ -10,6 +10,7 @@
 #include "binloop/io/data_error.h"
 #include "binloop/util/fixed_decimals.h"
 #include "binloop/util/hash_random.h"
+#include "binloop/tracking/rotation_search.h"
 
 namespace binloop {
 
@@ -131,7 +132,8 @@ Tracker::Output Tracker::track(const StereoFrame& in, int mapping_queue) {
       }
     }
     if (!ok) {
-      // Recovery: first the local map of the reference keyframe, searched wide around the prediction; then
+      // Recovery: first the local map of the reference keyframe, searched wide around the prediction; then,
+      // while the prediction holds, its rotation mended from far points (recoverRotationFirst()); then
       // relocalisation against recent keyframes (relocalize()).
       f.T_w_c = predicted;
       std::fill(f.points.begin(), f.points.end(), kNoId);
@@ -145,8 +147,9 @@ Tracker::Output Tracker::track(const StereoFrame& in, int mapping_queue) {
         }
       }
       ok = trackLocalMap(f, p_.lost_radius, p_.min_inliers_after_loss);
-      // Still nothing: the pose is unknown; find it from scratch against recent keyframes.
       const SlamKeyframeId reference_before = reference_;
+      if (!ok && predict && p_.recover_rotation_first) ok = recoverRotationFirst(f, predicted);
+      // Still nothing: the pose is unknown; find it from scratch against recent keyframes.
       if (!ok) ok = relocalized = relocalize(f);
       if (ok && predict) {
         const double off = (f.T_w_c.translation() - predicted.translation()).norm();
@@ -308,6 +311,91 @@ bool Tracker::poseFromScratch(Frame& f, const std::vector<const msg::MapPoint*>&
   return trackLocalMap(f, p_.lost_radius, p_.min_inliers_after_loss);
 }
 
+std::vector<const msg::MapPoint*> Tracker::pointsOf(const std::vector<SlamKeyframeId>& keyframes) const {
+  std::vector<const msg::MapPoint*> pts;
+  std::unordered_set<MapPointId> seen;
+  for (SlamKeyframeId k : keyframes) {
+    const msg::KeyframeState* kf = map_.keyframe(k);
+    if (!kf) continue;
+    for (MapPointId id : kf->point_ids) {
+      const msg::MapPoint* mp = id != kNoId ? map_.point(id) : nullptr;
+      if (mp && seen.insert(mp->id).second) pts.push_back(mp);
+    }
+  }
+  return pts;
+}
+
+std::vector<FarMatch> Tracker::farMatches(const Frame& f, std::vector<int>* keypoint_of) const {
+  const ScalePyramid& s = builder_.scales();
+  std::vector<FarMatch> matches;
+  keypoint_of->clear();
+  for (size_t j = 0; j < f.size(); ++j) {
+    const msg::KeyPoint& k = f.keypoints[j];
+    const msg::MapPoint* mp = f.points[j] != kNoId ? map_.point(f.points[j]) : nullptr;
+    if (!mp || !(k.depth > 0) || k.right_x < 0) continue;
+    FarMatch m;
+    m.p_w = mp->p_w;
+    m.obs = {k.x, k.y, k.right_x};
+    m.inv_sigma2 = s.inv_sigma2[k.octave];
+    // The keyframes' observations as the map has them after local BA: where the point projects, at the
+    // level its distance predicts (the replica keeps poses and point ids, not keyframes' keypoints).
+    const auto& observers = map_.observers(mp->id);
+    for (auto it = observers.rbegin(); it != observers.rend() && m.sightings.size() < 3; ++it) {
+      const msg::KeyframeState* kf = map_.keyframe(*it);
+      if (!kf) continue;
+      KeyframeSighting ks;
+      ks.keyframe = *it;
+      ks.T_c_w = kf->T_w_c.inverse();
+      const Eigen::Vector3d q = ks.T_c_w * mp->p_w;
+      if (!(q.z() > 0)) continue;
+      const double u = cam_.fx * q.x() / q.z() + cam_.cx;
+      ks.obs = {u, cam_.fy * q.y() / q.z() + cam_.cy, u - cam_.bf() / q.z()};
+      ks.inv_sigma2 = s.inv_sigma2[s.predictLevel(mp->max_distance, static_cast<float>(q.norm()))];
+      m.sightings.push_back(ks);
+    }
+    if (m.sightings.empty()) continue;
+    matches.push_back(std::move(m));
+    keypoint_of->push_back(static_cast<int>(j));
+  }
+  return matches;
+}
+
+bool Tracker::recoverRotationFirst(Frame& f, const Pose3& predicted) {
+  const std::vector<SlamKeyframeId> recent = map_.recentKeyframes(static_cast<size_t>(p_.reloc_keyframes));
+  const std::vector<const msg::MapPoint*> pts = pointsOf(recent);
+  const ScalePyramid& s = builder_.scales();
+  const RotationSearchResult r =
+      searchRotation(f, predicted, pts, cam_, s, p_.rotation_search, hashCombine(p_.seed, ++reloc_attempts_));
+  if (!r.ok) return false;
+  std::fill(f.points.begin(), f.points.end(), kNoId);
+  std::fill(f.outlier.begin(), f.outlier.end(), 0);
+  f.T_w_c = predicted;
+  f.T_w_c.linear() = predicted.linear() * r.R_pred_c;
+  f.T_w_c = orthonormalized(f.T_w_c);
+  const Pose3 T_c_w = f.T_w_c.inverse();
+  std::vector<ProjectedPoint> visible;
+  for (const msg::MapPoint* mp : pts) {
+    ProjectedPoint pp;
+    if (projectIntoFrame(*mp, T_c_w, cam_, s, &pp)) visible.push_back(pp);
+  }
+  matchProjectedPoints(f, visible, s, p_.lost_radius, p_.projection);
+  std::vector<int> keypoint_of;
+  const std::vector<FarMatch> matches = farMatches(f, &keypoint_of);
+  const std::vector<MapPointId> matched = f.points;
+  std::fill(f.points.begin(), f.points.end(), kNoId);
+  const FarPoseResult fp =
+      farKeyframePose(cam_, matches, f.T_w_c, p_.far_pose, hashCombine(p_.seed, ++reloc_attempts_));
+  if (!fp.ok) return false;
+  // No pose optimisation against the map after this: it is the step that rests on the points' far-off
+  // depths. The next keyframe's local BA sees these points from both sides and moves them.
+  f.T_w_c = orthonormalized(fp.T_w_c);
+  for (size_t i = 0; i < matches.size(); ++i)
+    if (fp.inlier[i]) f.points[keypoint_of[i]] = matched[keypoint_of[i]];
+  inliers_ = fp.inliers;
+  updateLocalKeyframes(f);  // the reference becomes the keyframe that shares most of them
+  return true;
+}
+
 bool Tracker::relocalize(Frame& f) {
   std::unique_ptr<Frame> best;
   int best_inliers = 0;
@@ -327,14 +415,8 @@ bool Tracker::relocalize(Frame& f) {
     tries = map_.recentKeyframes(static_cast<size_t>(p_.reloc_keyframes));
   }
   for (SlamKeyframeId k : tries) {
-    const msg::KeyframeState* kf = map_.keyframe(k);
-    if (!kf) continue;
-    std::vector<const msg::MapPoint*> pts;
-    std::unordered_set<MapPointId> seen;
-    for (MapPointId id : kf->point_ids) {
-      const msg::MapPoint* mp = id != kNoId ? map_.point(id) : nullptr;
-      if (mp && seen.insert(mp->id).second) pts.push_back(mp);
-    }
+    if (!map_.keyframe(k)) continue;
+    const std::vector<const msg::MapPoint*> pts = pointsOf({k});
     std::fill(f.points.begin(), f.points.end(), kNoId);
     std::fill(f.outlier.begin(), f.outlier.end(), 0);
     f.T_w_c = start;

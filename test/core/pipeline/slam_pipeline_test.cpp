@@ -206,28 +206,59 @@ TEST(SlamPipeline, TrackingGoesOnAfterFiveMissingFrames) {
   expectTrackedAfterGap(*s, 5);
 }
 
-// The SLAM issue's case: 20 frames (24 m) missing. Fails, and already with 10 missing frames (12 m), for a
-// reason of the map rather than of the search. Measured against the renderer's depth (aperiodic road): at the
-// first frame after a 10 / 20-frame gap the motion model is 0.12 / 0.48 m off, but the map points nearer than
-// 20 m were measured from 12-24 m further back; they sit 17 / 38 px (median) from where they appear and only
-// 1 / 0 of 75 / 38 has a matching keypoint there (the camera is 2-3x closer). The far ones (49 / 23
-// matchable, 4.4 / 7.4 px off) fix rotation and lateral offset but not the distance along the road: PnP
-// RANSAC over the wide search's matches put the frame 2.4 m behind the truth. README "Relocalisation".
-// 5 missing frames work (TrackingGoesOnAfterFiveMissingFrames); relocalisation itself is tested by
-// KidnappedCameraIsFoundByTheVocabulary, and wrong recoveries by ARecoveredPoseTheCameraCouldNotHaveReachedIsRefused.
-TEST(SlamPipeline, DISABLED_TrackingIsFoundAgainAfterTwentyMissingFrames) {
-  const RenderedStretch* s = renderedStretch(300);
+// The SLAM issue's case: 10 and 20 frames (12 m, 24 m) missing, on the road that does not repeat. The
+// motion model is then 2-5 degrees off in rotation (the car leaves a bend at frame 100), and the map
+// points now near were measured from 24 m further back; Tracker::recoverRotationFirst mends the rotation
+// from far points and takes the pose from the frame's stereo against the keyframes' sightings. Errors are
+// against the ground truth carried into the map's frame at frame 99 (the map's own drift over frames 0-99,
+// 0.2-0.3 m, is not relocalisation's to mend). Measured: 20 missing, the first frame after the gap is
+// tracked, 0.31 m off; the next ten 0.19-0.38 m; 30 frames on 0.51 m (0.08 m without a gap).
+void expectFoundAfterGap(const RenderedStretch& s, int gap, double first_ten_m, double all_m) {
+  SlamPipeline slam(s.cam, {}, {}, PipelineMode::kLockStep);
+  Pose3 last;
+  for (int i = 0; i < 100; ++i) {
+    const msg::TrackedFrame tf = slam.process(s.frames[i]);
+    ASSERT_EQ(tf.state, msg::TrackingState::kOk) << i;
+    last = tf.T_w_c;
+  }
+  const Pose3 drift = last * s.route[99].inverse();
+  int lost = 0;
+  for (int i = 100 + gap; i < 130 + gap; ++i) {
+    const msg::TrackedFrame tf = slam.process(s.frames[i]);
+    if (tf.state == msg::TrackingState::kLost) {
+      ++lost;
+      EXPECT_LE(i, 101 + gap) << "lost at frame " << i << ": " << tf.problem;
+      continue;
+    }
+    const double off = ((drift * s.route[i]).translation() - tf.T_w_c.translation()).norm();
+    EXPECT_LT(off, i < 110 + gap ? first_ten_m : all_m) << "frame " << i;
+  }
+  EXPECT_LE(lost, 1);
+}
+
+TEST(SlamPipeline, TrackingIsFoundAgainAfterTenMissingFrames) {
+  const RenderedStretch* s = renderedStretch(300, true);
   if (!s) GTEST_SKIP() << "needs " << test::sharedData("kitti/poses/06.txt");
-  expectTrackedAfterGap(*s, 20);
+  expectFoundAfterGap(*s, 10, 0.3, 0.3);
+}
+
+TEST(SlamPipeline, TrackingIsFoundAgainAfterTwentyMissingFrames) {
+  const RenderedStretch* s = renderedStretch(300, true);
+  if (!s) GTEST_SKIP() << "needs " << test::sharedData("kitti/poses/06.txt");
+  expectFoundAfterGap(*s, 20, 0.45, 0.65);
 }
 
 // The road of these renders repeats every 8 m (WorldParams::aperiodic_ground), and after 10 missing frames
-// relocalisation found 58-68 inliers at poses 24-39 m behind the truth. While the motion model still
-// predicts, a pose the camera could not have reached is refused: the frame stays lost instead.
+// relocalisation from scratch found 58-68 inliers at poses 24-39 m behind the truth. While the motion model
+// still predicts, a pose the camera could not have reached is refused: the frame stays lost instead. The
+// rotation-first recovery finds these frames near the prediction before relocalisation runs, so it is
+// switched off here to reach the gate.
 TEST(SlamPipeline, ARecoveredPoseTheCameraCouldNotHaveReachedIsRefused) {
   const RenderedStretch* s = renderedStretch(300);
   if (!s) GTEST_SKIP() << "needs " << test::sharedData("kitti/poses/06.txt");
-  SlamPipeline slam(s->cam, {}, {}, PipelineMode::kLockStep);
+  TrackerParams tp;
+  tp.recover_rotation_first = false;
+  SlamPipeline slam(s->cam, tp, {}, PipelineMode::kLockStep);
   for (int i = 0; i < 100; ++i) ASSERT_EQ(slam.process(s->frames[i]).state, msg::TrackingState::kOk) << i;
   int refused = 0;
   for (int i = 110; i < 129; ++i) {  // the prediction holds for 3 s after frame 99
