@@ -13,16 +13,8 @@
 namespace binloop {
 namespace {
 
-StereoCamera camera() {
-  StereoCamera c;
-  c.fx = c.fy = 700;
-  c.cx = 620;
-  c.cy = 188;
-  c.baseline_m = 0.54;
-  c.width = 1241;
-  c.height = 376;
-  return c;
-}
+// KITTI 00-02's rectified stereo pair (1241x376, fx 718.9, baseline 0.54 m).
+StereoCamera camera() { return kitti00Camera(); }
 
 Eigen::Vector3d stereoObs(const StereoCamera& cam, const Eigen::Vector3d& p) {
   const double u = cam.fx * p.x() / p.z() + cam.cx;

@@ -13,16 +13,8 @@ namespace {
 
 constexpr double kDeg = M_PI / 180.0;
 
-StereoCamera camera() {
-  StereoCamera c;
-  c.fx = c.fy = 700;
-  c.cx = 620;
-  c.cy = 188;
-  c.baseline_m = 0.54;
-  c.width = 1241;
-  c.height = 376;
-  return c;
-}
+// KITTI 00-02's rectified stereo pair (1241x376, fx 718.9, baseline 0.54 m).
+StereoCamera camera() { return kitti00Camera(); }
 
 Eigen::Matrix3d turn(double yaw_deg, double pitch_deg, double roll_deg) {
   return (Eigen::AngleAxisd(yaw_deg * kDeg, Eigen::Vector3d::UnitY()) *
