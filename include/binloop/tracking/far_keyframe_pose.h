@@ -12,17 +12,18 @@
 #include <cstdint>
 #include <vector>
 
+#include "binloop/messages/keyframe.h"
 #include "binloop/optim/local_bundle_adjustment.h"
 #include "binloop/types/pose.h"
 #include "binloop/types/stereo_camera.h"
 
 namespace binloop {
 
-/// A keyframe's stereo observation of a point: where it saw it, how sure (by its pyramid level).
+/// A keyframe's stereo observation of a point: where it saw it (x, y, right_x), how sure (by its level).
 struct KeyframeSighting {
   uint64_t keyframe = 0;
   Pose3 T_c_w = Pose3::Identity();
-  Eigen::Vector3d obs = Eigen::Vector3d::Zero();  // u, v, u_right (px)
+  msg::KeyPoint keypoint;
   double inv_sigma2 = 1;
 };
 
@@ -30,7 +31,7 @@ struct KeyframeSighting {
 struct FarMatch {
   Eigen::Vector3d p_w = Eigen::Vector3d::Zero();  // the map point as the map has it
   std::vector<KeyframeSighting> sightings;        // at least one
-  Eigen::Vector3d obs = Eigen::Vector3d::Zero();  // the frame's u, v, u_right (px)
+  msg::KeyPoint keypoint;                         // the frame's, with right_x and depth
   double inv_sigma2 = 1;
 };
 

@@ -12,8 +12,8 @@
 #include "binloop/optim/pose_optimizer.h"
 #include "binloop/tracking/frame.h"
 #include "binloop/tracking/keyframe_database.h"
-#include "binloop/tracking/projection_search.h"
 #include "binloop/tracking/far_keyframe_pose.h"
+#include "binloop/tracking/projection_search.h"
 #include "binloop/tracking/rotation_search.h"
 
 namespace binloop {
@@ -123,7 +123,10 @@ class Tracker {
   /// (rotation_search.h), then the pose from the frame's stereo and the keyframes' sightings
   /// (far_keyframe_pose.h). Leaves f.T_w_c and its inlier matches; false when either step fails.
   bool recoverRotationFirst(Frame& f, const Pose3& predicted);
+  /// The points of these keyframes, each once.
   std::vector<const msg::MapPoint*> pointsOf(const std::vector<SlamKeyframeId>& keyframes) const;
+  /// `pts` projected at f.T_w_c and matched to f's free keypoints within `radius`; the number matched.
+  int searchByProjection(Frame& f, const std::vector<const msg::MapPoint*>& pts, float radius) const;
   /// The frame's matched keypoints with stereo depth, each with up to three of its point's keyframes.
   std::vector<FarMatch> farMatches(const Frame& f, std::vector<int>* keypoint_of) const;
   bool relocalize(Frame& f);

@@ -8,7 +8,7 @@
 #include <thread>
 #include <unordered_set>
 
-#include "binloop/mapping/reprojection_chi2.h"
+#include "binloop/map/keypoint_geometry.h"
 #include "binloop/tracking/projection_search.h"
 
 namespace binloop {

@@ -3,7 +3,7 @@
 #include <Eigen/SVD>
 #include <cmath>
 
-#include "binloop/mapping/reprojection_chi2.h"
+#include "binloop/map/keypoint_geometry.h"
 
 namespace binloop {
 

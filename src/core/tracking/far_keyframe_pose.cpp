@@ -1,8 +1,9 @@
 #include "binloop/tracking/far_keyframe_pose.h"
 
-#include <limits>
+#include <algorithm>
 #include <map>
 
+#include "binloop/map/keypoint_geometry.h"
 #include "binloop/optim/rigid_alignment.h"
 #include "binloop/util/hash_random.h"
 
@@ -10,26 +11,14 @@ namespace binloop {
 
 namespace {
 
-// chi2 of a stereo observation of camera-frame point p; infinite behind the camera.
-double stereoChi2(const StereoCamera& cam, const Eigen::Vector3d& p, const Eigen::Vector3d& obs, double inv_sigma2) {
-  if (!(p.z() > 0)) return std::numeric_limits<double>::infinity();
-  const double u = cam.fx * p.x() / p.z() + cam.cx;
-  const double v = cam.fy * p.y() / p.z() + cam.cy;
-  const Eigen::Vector3d e(obs.x() - u, obs.y() - v, obs.z() - (u - cam.bf() / p.z()));
-  return e.squaredNorm() * inv_sigma2;
-}
-
-Eigen::Vector3d frameStereoPoint(const StereoCamera& cam, const Eigen::Vector3d& obs) {
-  const double z = cam.bf() / (obs.x() - obs.z());
-  return {(obs.x() - cam.cx) * z / cam.fx, (obs.y() - cam.cy) * z / cam.fy, z};
-}
-
-bool agrees(const StereoCamera& cam, const FarMatch& m, const Pose3& T_w_c, const Eigen::Vector3d& x_c,
-            double chi2) {
-  if (stereoChi2(cam, T_w_c.inverse() * m.p_w, m.obs, m.inv_sigma2) <= chi2) return true;
+bool agrees(const StereoCamera& cam, const FarMatch& m, const Pose3& T_w_c, const Pose3& T_c_w,
+            const Eigen::Vector3d& x_c, double chi2) {
+  bool in_front = false;
+  if (reprojectionChi2(cam, T_c_w, m.p_w, m.keypoint, static_cast<float>(m.inv_sigma2), &in_front) <= chi2) return true;
   const Eigen::Vector3d x_w = T_w_c * x_c;
   for (const KeyframeSighting& s : m.sightings)
-    if (stereoChi2(cam, s.T_c_w * x_w, s.obs, s.inv_sigma2) > chi2) return false;
+    if (reprojectionChi2(cam, s.T_c_w, x_w, s.keypoint, static_cast<float>(s.inv_sigma2), &in_front) > chi2)
+      return false;
   return true;
 }
 
@@ -42,15 +31,16 @@ FarPoseResult farKeyframePose(const StereoCamera& cam, const std::vector<FarMatc
   out.inlier.assign(matches.size(), 0);
   if (n < std::max(3, p.min_inliers)) return out;
   std::vector<Eigen::Vector3d> x_c(matches.size());
-  for (int i = 0; i < n; ++i) x_c[i] = frameStereoPoint(cam, matches[i].obs);
+  for (int i = 0; i < n; ++i) x_c[i] = unprojectKeypoint(matches[i].keypoint, cam);
 
   auto near_prior = [&](const Pose3& T) {
     return (T.translation() - prior_T_w_c.translation()).norm() <= p.max_offset_m &&
            Eigen::AngleAxisd(prior_T_w_c.linear().transpose() * T.linear()).angle() <= p.max_turn_deg * M_PI / 180;
   };
   auto score = [&](const Pose3& T) {
+    const Pose3 T_c_w = T.inverse();
     int count = 0;
-    for (int i = 0; i < n; ++i) count += agrees(cam, matches[i], T, x_c[i], p.chi2);
+    for (int i = 0; i < n; ++i) count += agrees(cam, matches[i], T, T_c_w, x_c[i], p.chi2);
     return count;
   };
   HashRng rng(seed);
@@ -73,15 +63,17 @@ FarPoseResult farKeyframePose(const StereoCamera& cam, const std::vector<FarMatc
   ba.keyframes.push_back({0, best_T.inverse(), false});  // ids are positions: unique by construction
   std::vector<int> used;
   for (int i = 0; i < n; ++i) {
-    if (!agrees(cam, matches[i], best_T, x_c[i], p.chi2)) continue;
+    if (!agrees(cam, matches[i], best_T, best_T.inverse(), x_c[i], p.chi2)) continue;
     const size_t point = ba.points.size();
     // The frame's own stereo point starts the point: nearer the truth than the map's for the near ones.
     ba.points.push_back({static_cast<uint64_t>(i), best_T * x_c[i]});
-    ba.observations.push_back({0, point, matches[i].obs.head<2>(), matches[i].obs.z(), matches[i].inv_sigma2});
+    const msg::KeyPoint& k = matches[i].keypoint;
+    ba.observations.push_back({0, point, Eigen::Vector2d(k.x, k.y), k.right_x, matches[i].inv_sigma2});
     for (const KeyframeSighting& s : matches[i].sightings) {
       auto [it, fresh] = kf_index.emplace(s.keyframe, ba.keyframes.size());
       if (fresh) ba.keyframes.push_back({ba.keyframes.size(), s.T_c_w, true});
-      ba.observations.push_back({it->second, point, s.obs.head<2>(), s.obs.z(), s.inv_sigma2});
+      ba.observations.push_back(
+          {it->second, point, Eigen::Vector2d(s.keypoint.x, s.keypoint.y), s.keypoint.right_x, s.inv_sigma2});
     }
     used.push_back(i);
   }

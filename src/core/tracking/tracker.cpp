@@ -8,9 +8,9 @@
 #include <unordered_set>
 
 #include "binloop/io/data_error.h"
+#include "binloop/map/keypoint_geometry.h"
 #include "binloop/util/fixed_decimals.h"
 #include "binloop/util/hash_random.h"
-#include "binloop/tracking/rotation_search.h"
 
 namespace binloop {
 
@@ -29,11 +29,6 @@ Pose3 scaledMotion(const Pose3& T, double k) {
   out.linear() = Eigen::AngleAxisd(aa.angle() * k, aa.axis()).toRotationMatrix();
   out.translation() = T.translation() * k;
   return out;
-}
-
-Eigen::Vector3d unproject(const msg::KeyPoint& k, const StereoCamera& cam) {
-  const double z = k.depth;
-  return {(k.x - cam.cx) * z / cam.fx, (k.y - cam.cy) * z / cam.fy, z};
 }
 
 }  // namespace
@@ -300,15 +295,19 @@ bool Tracker::poseFromScratch(Frame& f, const std::vector<const msg::MapPoint*>&
   f.T_w_c = r.T_c_w.inverse();
   if (optimizePose(f) < 10) return false;
   // The other points, searched wide around the PnP pose (ORB-SLAM2's th = 10), then refined.
+  searchByProjection(f, pts, 10);
+  optimizePose(f);
+  return trackLocalMap(f, p_.lost_radius, p_.min_inliers_after_loss);
+}
+
+int Tracker::searchByProjection(Frame& f, const std::vector<const msg::MapPoint*>& pts, float radius) const {
   const Pose3 T_c_w = f.T_w_c.inverse();
   std::vector<ProjectedPoint> visible;
   for (const msg::MapPoint* mp : pts) {
     ProjectedPoint pp;
-    if (projectIntoFrame(*mp, T_c_w, cam_, s, &pp)) visible.push_back(pp);
+    if (projectIntoFrame(*mp, T_c_w, cam_, builder_.scales(), &pp)) visible.push_back(pp);
   }
-  matchProjectedPoints(f, visible, s, 10, p_.projection);
-  optimizePose(f);
-  return trackLocalMap(f, p_.lost_radius, p_.min_inliers_after_loss);
+  return matchProjectedPoints(f, visible, builder_.scales(), radius, p_.projection);
 }
 
 std::vector<const msg::MapPoint*> Tracker::pointsOf(const std::vector<SlamKeyframeId>& keyframes) const {
@@ -335,7 +334,7 @@ std::vector<FarMatch> Tracker::farMatches(const Frame& f, std::vector<int>* keyp
     if (!mp || !(k.depth > 0) || k.right_x < 0) continue;
     FarMatch m;
     m.p_w = mp->p_w;
-    m.obs = {k.x, k.y, k.right_x};
+    m.keypoint = k;
     m.inv_sigma2 = s.inv_sigma2[k.octave];
     // The keyframes' observations as the map has them after local BA: where the point projects, at the
     // level its distance predicts (the replica keeps poses and point ids, not keyframes' keypoints).
@@ -349,7 +348,9 @@ std::vector<FarMatch> Tracker::farMatches(const Frame& f, std::vector<int>* keyp
       const Eigen::Vector3d q = ks.T_c_w * mp->p_w;
       if (!(q.z() > 0)) continue;
       const double u = cam_.fx * q.x() / q.z() + cam_.cx;
-      ks.obs = {u, cam_.fy * q.y() / q.z() + cam_.cy, u - cam_.bf() / q.z()};
+      ks.keypoint.x = static_cast<float>(u);
+      ks.keypoint.y = static_cast<float>(cam_.fy * q.y() / q.z() + cam_.cy);
+      ks.keypoint.right_x = static_cast<float>(u - cam_.bf() / q.z());
       ks.inv_sigma2 = s.inv_sigma2[s.predictLevel(mp->max_distance, static_cast<float>(q.norm()))];
       m.sightings.push_back(ks);
     }
@@ -372,13 +373,7 @@ bool Tracker::recoverRotationFirst(Frame& f, const Pose3& predicted) {
   f.T_w_c = predicted;
   f.T_w_c.linear() = predicted.linear() * r.R_pred_c;
   f.T_w_c = orthonormalized(f.T_w_c);
-  const Pose3 T_c_w = f.T_w_c.inverse();
-  std::vector<ProjectedPoint> visible;
-  for (const msg::MapPoint* mp : pts) {
-    ProjectedPoint pp;
-    if (projectIntoFrame(*mp, T_c_w, cam_, s, &pp)) visible.push_back(pp);
-  }
-  matchProjectedPoints(f, visible, s, p_.lost_radius, p_.projection);
+  searchByProjection(f, pts, p_.lost_radius);
   std::vector<int> keypoint_of;
   const std::vector<FarMatch> matches = farMatches(f, &keypoint_of);
   const std::vector<MapPointId> matched = f.points;
@@ -561,7 +556,7 @@ msg::KeyFramePtr Tracker::makeKeyframe(Frame& f) {
     if (kf->state.point_ids[i] != kNoId) continue;
     msg::MapPoint mp;
     mp.id = point_ids_.next();
-    mp.p_w = f.T_w_c * unproject(f.keypoints[i], cam_);
+    mp.p_w = f.T_w_c * unprojectKeypoint(f.keypoints[i], cam_);
     mp.descriptor = f.descriptors[i];
     const Eigen::Vector3d ray = mp.p_w - o_w;
     const double dist = ray.norm();

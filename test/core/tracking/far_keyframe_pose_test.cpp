@@ -8,6 +8,7 @@
 #include <cmath>
 #include <random>
 
+#include "binloop/map/keypoint_geometry.h"
 #include "binloop/optim/pose_optimizer.h"
 
 namespace binloop {
@@ -16,14 +17,15 @@ namespace {
 // KITTI 00-02's rectified stereo pair (1241x376, fx 718.9, baseline 0.54 m).
 StereoCamera camera() { return kitti00Camera(); }
 
-Eigen::Vector3d stereoObs(const StereoCamera& cam, const Eigen::Vector3d& p) {
+// A stereo keypoint where the point appears, u, v and u_right moved by `noise_px`.
+msg::KeyPoint stereoKeypoint(const StereoCamera& cam, const Eigen::Vector3d& p, const Eigen::Vector3d& noise_px) {
   const double u = cam.fx * p.x() / p.z() + cam.cx;
-  return {u, cam.fy * p.y() / p.z() + cam.cy, u - cam.bf() / p.z()};
-}
-
-Eigen::Vector3d triangulate(const StereoCamera& cam, const Eigen::Vector3d& obs) {
-  const double z = cam.bf() / (obs.x() - obs.z());
-  return {(obs.x() - cam.cx) * z / cam.fx, (obs.y() - cam.cy) * z / cam.fy, z};
+  msg::KeyPoint k;
+  k.x = static_cast<float>(u + noise_px.x());
+  k.y = static_cast<float>(cam.fy * p.y() / p.z() + cam.cy + noise_px.y());
+  k.right_x = static_cast<float>(u - cam.bf() / p.z() + noise_px.z());
+  k.depth = static_cast<float>(cam.bf() / (k.x - k.right_x));
+  return k;
 }
 
 struct Scene {
@@ -49,20 +51,21 @@ Scene makeScene(int n, double wrong_share, uint64_t seed) {
     const Eigen::Vector3d p_f((U(g) < 0.5 ? -1 : 1) * (2 + 6 * U(g)), -1.5 + 6 * U(g), z);
     const Eigen::Vector3d p_w = sc.truth * p_f;
     FarMatch m;
-    m.obs = stereoObs(cam, p_f) + Eigen::Vector3d(N(g), N(g), N(g)) * 0.3;
-    if (m.obs.x() < 0 || m.obs.x() >= cam.width || m.obs.y() < 0 || m.obs.y() >= cam.height) continue;
+    m.keypoint = stereoKeypoint(cam, p_f, Eigen::Vector3d(N(g), N(g), N(g)) * 0.3);
+    const msg::KeyPoint& k = m.keypoint;
+    if (k.x < 0 || k.x >= cam.width || k.y < 0 || k.y >= cam.height) continue;
     m.inv_sigma2 = 1;
     for (const Pose3* k : {&k1, &k2}) {
       KeyframeSighting s;
       s.keyframe = k == &k1 ? 1 : 2;
       s.T_c_w = k->inverse();
-      s.obs = stereoObs(cam, s.T_c_w * p_w);
-      s.obs.z() += 0.4 * N(g);
+      s.keypoint = stereoKeypoint(cam, s.T_c_w * p_w, Eigen::Vector3d(0, 0, 0.4 * N(g)));
       m.sightings.push_back(s);
     }
-    m.p_w = k1 * triangulate(cam, m.sightings[0].obs);
+    m.p_w = k1 * unprojectKeypoint(m.sightings[0].keypoint, cam);
     const bool wrong = U(g) < wrong_share;
-    if (wrong) m.obs = stereoObs(cam, Eigen::Vector3d(-8 + 16 * U(g), -1.5 + 3 * U(g), 6 + 50 * U(g)));
+    if (wrong) m.keypoint = stereoKeypoint(cam, Eigen::Vector3d(-8 + 16 * U(g), -1.5 + 3 * U(g), 6 + 50 * U(g)),
+                                          Eigen::Vector3d::Zero());
     sc.matches.push_back(m);
     sc.wrong.push_back(wrong);
   }
@@ -95,8 +98,8 @@ TEST(FarKeyframePose, FindsTheFrameWhereTheMapsDepthsAreMetresOff) {
     if (sc.wrong[i]) continue;
     PoseObservation o;
     o.p_w = sc.matches[i].p_w;
-    o.uv = sc.matches[i].obs.head<2>();
-    o.u_right = sc.matches[i].obs.z();
+    o.uv = {sc.matches[i].keypoint.x, sc.matches[i].keypoint.y};
+    o.u_right = sc.matches[i].keypoint.right_x;
     obs.push_back(o);
   }
   const PoseOptimizationResult forward = optimizePose(camera(), prior.inverse(), obs);

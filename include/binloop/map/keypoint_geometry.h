@@ -1,7 +1,8 @@
 #pragma once
-// The chi2 test local mapping applies to a point and a keypoint (fusion, triangulation): the reprojection
-// error in level-0 pixels, right-image u included where the keypoint has a stereo match, over the
-// keypoint's level variance; compare with 5.991 (mono, 2 dof) or 7.815 (stereo, 3 dof).
+// A keypoint and a point, for every stage that has both: the point a stereo keypoint stands for, and the
+// chi2 test local mapping (fusion, triangulation) and tracking's recovery apply to a point and a keypoint:
+// the reprojection error in level-0 pixels, right-image u included where the keypoint has a stereo match,
+// over the keypoint's level variance; compare with 5.991 (mono, 2 dof) or 7.815 (stereo, 3 dof).
 #include <Eigen/Core>
 #include <limits>
 
@@ -10,6 +11,12 @@
 #include "binloop/types/stereo_camera.h"
 
 namespace binloop {
+
+/// The camera-frame point of a keypoint with stereo depth (k.depth > 0).
+inline Eigen::Vector3d unprojectKeypoint(const msg::KeyPoint& k, const StereoCamera& cam) {
+  const double z = k.depth;
+  return {(k.x - cam.cx) * z / cam.fx, (k.y - cam.cy) * z / cam.fy, z};
+}
 
 /// Infinite, with *in_front false, for a point at or behind the camera plane.
 inline double reprojectionChi2(const StereoCamera& cam, const Pose3& T_c_w, const Eigen::Vector3d& p_w,
