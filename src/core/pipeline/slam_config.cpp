@@ -59,6 +59,22 @@ std::map<std::string, std::map<std::string, Setting>> settingsOf(SlamConfig& c) 
         {"keyframe_close_untracked_min", {S::kInt, &t.keyframe_close_untracked_min, 0}},
         {"new_points_min", {S::kInt, &t.new_points_min, 0}},
         {"create_far_points", {S::kBool, &t.create_far_points, 0}}}},
+      {"recovery",
+       {{"rotation_first", {S::kBool, &t.recover_rotation_first, 0}},
+        {"rotation_max_angle_deg", {S::kDouble, &t.rotation_search.max_angle_deg, 0.1}},
+        {"rotation_min_distance_m", {S::kDouble, &t.rotation_search.min_distance_m, 0}},
+        {"rotation_level_slack", {S::kInt, &t.rotation_search.level_slack, 0}},
+        {"rotation_max_hamming", {S::kInt, &t.rotation_search.max_hamming, 0}},
+        {"rotation_inlier_px", {S::kDouble, &t.rotation_search.inlier_px, 0.1}},
+        {"rotation_iterations", {S::kInt, &t.rotation_search.iterations, 1}},
+        {"rotation_min_inliers", {S::kInt, &t.rotation_search.min_inliers, 2}},
+        {"pose_iterations", {S::kInt, &t.far_pose.iterations, 1}},
+        {"pose_chi2", {S::kDouble, &t.far_pose.chi2, 0.1}},
+        {"pose_min_inliers", {S::kInt, &t.far_pose.min_inliers, 3}},
+        {"pose_max_offset_m", {S::kDouble, &t.far_pose.max_offset_m, 0}},
+        {"pose_max_turn_deg", {S::kDouble, &t.far_pose.max_turn_deg, 0}},
+        {"reloc_keyframes", {S::kInt, &t.reloc_keyframes, 1}},
+        {"reloc_min_matches", {S::kInt, &t.reloc_min_matches, 4}}}},
       {"mapping",
        {{"covisibility_min", {S::kInt, &m.covisibility_min, 1}},
         {"cull_after_keyframes", {S::kInt, &m.cull_after_keyframes, 1}},
@@ -155,7 +171,7 @@ SlamConfig loadSlamConfig(const std::string& path) {
   SlamConfig c;
   auto settings = settingsOf(c);
   const cv::FileNode root = fs.root();
-  if (!root.isMap()) throw ConfigError(path + ": expected sections (orb, stereo, tracking, mapping, loop_detection, loop_closing)");
+  if (!root.isMap()) throw ConfigError(path + ": expected sections (orb, stereo, tracking, recovery, mapping, loop_detection, loop_closing)");
   for (const std::string& section : root.keys()) {
     auto sec = settings.find(section);
     if (sec == settings.end()) {

@@ -123,7 +123,22 @@ TEST(SlamConfig, UnknownSectionNamesFileAndSection) {
   TempDir dir;
   const std::string path = configFile(dir, "orb:\n  features: 1000\nmaping:\n  fuse: 0\n");
   EXPECT_THROW_WITH(loadSlamConfig(path), ConfigError, path + ": unknown section 'maping'");
-  EXPECT_THROW_WITH(loadSlamConfig(path), ConfigError, "known: loop_closing, loop_detection, mapping, orb, stereo, tracking");
+  EXPECT_THROW_WITH(loadSlamConfig(path), ConfigError, "known: loop_closing, loop_detection, mapping, orb, recovery, stereo, tracking");
+}
+
+TEST(SlamConfig, RecoveryKeysReachTheTracker) {
+  TempDir dir;
+  const std::string path = configFile(dir,
+                                      "recovery:\n  rotation_first: 0\n  rotation_min_distance_m: 30\n"
+                                      "  pose_max_turn_deg: 3.5\n  reloc_keyframes: 7\n");
+  const SlamConfig c = loadSlamConfig(path);
+  EXPECT_FALSE(c.tracker.recover_rotation_first);
+  EXPECT_EQ(c.tracker.rotation_search.min_distance_m, 30);
+  EXPECT_EQ(c.tracker.far_pose.max_turn_deg, 3.5);
+  EXPECT_EQ(c.tracker.reloc_keyframes, 7);
+  EXPECT_EQ(c.tracker.far_pose.iterations, SlamConfig{}.tracker.far_pose.iterations);
+  EXPECT_THROW_WITH(loadSlamConfig(configFile(dir, "recovery:\n  rotation_iterations: 0\n", "bad.yaml")), ConfigError,
+                    "recovery.rotation_iterations = 0.000000 is out of range (at least 1");
 }
 
 TEST(SlamConfig, UnknownKeyNamesFileAndKey) {
