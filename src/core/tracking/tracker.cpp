@@ -99,8 +99,11 @@ Tracker::Output Tracker::track(const StereoFrame& in, int mapping_queue) {
     const Pose3 predicted =
         predict ? orthonormalized(last_pose * scaledMotion(velocity_, dt / velocity_dt_)) : last_pose;
     f.T_w_c = predicted;
+    reach_ = {};
+    if (predict)
+      reach_ = {true, predicted.translation(),
+                p_.recovery_min_gate_m + 0.5 * p_.recovery_max_accel_mps2 * dt * dt, dt, -1};
     bool ok = false;
-    std::string unreachable;  // why a recovered pose was refused
     bool relocalized = false;  // found from scratch, not near the prediction
     if (state_ == msg::TrackingState::kOk) {
       // The motion model when there is one; without it (right after the first keyframe), when it fails, or
@@ -112,12 +115,14 @@ Tracker::Output Tracker::track(const StereoFrame& in, int mapping_queue) {
       const bool model_strong = model_ok && inliers_ >= p_.motion_model_min_inliers;
       model_ok = model_ok && trackLocalMap(by_model, p_.local_map_radius, p_.min_inliers);
       const int model_inliers = model_ok ? inliers_ : 0;
+      model_ok = model_ok && reachable(by_model.T_w_c);
       if (model_ok && model_strong) {
         f = std::move(by_model);
         ok = true;
       } else {
         f.T_w_c = predicted;  // matching ignores it; the pose optimisation starts there
-        ok = trackWithoutPrediction(f) && trackLocalMap(f, p_.local_map_radius, p_.min_inliers);
+        ok = trackWithoutPrediction(f) && trackLocalMap(f, p_.local_map_radius, p_.min_inliers) &&
+             reachable(f.T_w_c);
         if (model_ok && (!ok || model_inliers >= inliers_)) {
           f = std::move(by_model);
           inliers_ = model_inliers;
@@ -141,21 +146,14 @@ Tracker::Output Tracker::track(const StereoFrame& in, int mapping_queue) {
           local_keyframes_.push_back(e.id);
         }
       }
-      ok = trackLocalMap(f, p_.lost_radius, p_.min_inliers_after_loss);
+      // Each step's pose must be one the camera could have reached (reachable()): a road whose texture
+      // repeats lets a wrong pose gather dozens of inliers.
       const SlamKeyframeId reference_before = reference_;
-      if (!ok && predict && p_.recover_rotation_first) ok = recoverRotationFirst(f, predicted);
+      ok = trackLocalMap(f, p_.lost_radius, p_.min_inliers_after_loss) && reachable(f.T_w_c);
+      if (!ok && predict && p_.recover_rotation_first) ok = recoverRotationFirst(f, predicted) && reachable(f.T_w_c);
       // Still nothing: the pose is unknown; find it from scratch against recent keyframes.
       if (!ok) ok = relocalized = relocalize(f);
-      if (ok && predict) {
-        const double off = (f.T_w_c.translation() - predicted.translation()).norm();
-        const double reach = p_.recovery_min_gate_m + 0.5 * p_.recovery_max_accel_mps2 * dt * dt;
-        if (off > reach) {
-          ok = false;
-          reference_ = reference_before;
-          unreachable = "; a pose " + fixedDecimals(off, 1) + " m from the motion model's prediction after " +
-                        fixedDecimals(dt, 1) + " s was rejected (at most " + fixedDecimals(reach, 1) + " m)";
-        }
-      }
+      if (!ok) reference_ = reference_before;
       if (ok && (relocalized || state_ != msg::TrackingState::kOk)) {
         state_ = msg::TrackingState::kRelocalized;
       }
@@ -163,7 +161,11 @@ Tracker::Output Tracker::track(const StereoFrame& in, int mapping_queue) {
     if (!ok) {
       state_ = msg::TrackingState::kLost;
       tf.state = state_;
-      tf.problem = "lost: " + std::to_string(inliers_) + " inliers" + unreachable;
+      tf.problem = "lost: " + std::to_string(inliers_) + " inliers";
+      if (reach_.nearest_refused_m >= 0)
+        tf.problem += "; a pose " + fixedDecimals(reach_.nearest_refused_m, 1) +
+                      " m from the motion model's prediction after " + fixedDecimals(reach_.dt_s, 1) +
+                      " s was rejected (at most " + fixedDecimals(reach_.radius_m, 1) + " m)";
       tf.T_w_c = predicted;  // not what a failed attempt left in f
       tf.track_ms = msSinceT(t0);
       return out;
@@ -300,6 +302,14 @@ bool Tracker::poseFromScratch(Frame& f, const std::vector<const msg::MapPoint*>&
   return trackLocalMap(f, p_.lost_radius, p_.min_inliers_after_loss);
 }
 
+bool Tracker::reachable(const Pose3& T_w_c) {
+  if (!reach_.active) return true;
+  const double off = (T_w_c.translation() - reach_.predicted).norm();
+  if (off <= reach_.radius_m) return true;
+  if (reach_.nearest_refused_m < 0 || off < reach_.nearest_refused_m) reach_.nearest_refused_m = off;
+  return false;
+}
+
 int Tracker::searchByProjection(Frame& f, const std::vector<const msg::MapPoint*>& pts, float radius) const {
   const Pose3 T_c_w = f.T_w_c.inverse();
   std::vector<ProjectedPoint> visible;
@@ -416,7 +426,7 @@ bool Tracker::relocalize(Frame& f) {
     std::fill(f.outlier.begin(), f.outlier.end(), 0);
     f.T_w_c = start;
     matchPointsByDescriptor(f, pts);
-    const bool tracked = poseFromScratch(f, pts);
+    const bool tracked = poseFromScratch(f, pts) && reachable(f.T_w_c);
     // Every candidate is tried and the one that explains most of the local map wins: with repeated
     // structure a wrong pose can still gather a few dozen inliers.
     if (tracked && (!best || inliers_ > best_inliers)) {

@@ -213,39 +213,50 @@ TEST(SlamPipeline, TrackingGoesOnAfterFiveMissingFrames) {
 // against the ground truth carried into the map's frame at frame 99 (the map's own drift over frames 0-99,
 // 0.2-0.3 m, is not relocalisation's to mend). Measured: 20 missing, the first frame after the gap is
 // tracked, 0.31 m off; the next ten 0.19-0.38 m; 30 frames on 0.51 m (0.08 m without a gap).
-void expectFoundAfterGap(const RenderedStretch& s, int gap, double first_ten_m, double all_m) {
+void expectFoundAfterGap(const RenderedStretch& s, int start, int gap, double first_ten_m, double all_m) {
+  ASSERT_LE(start + gap + 30, static_cast<int>(s.frames.size()));
   SlamPipeline slam(s.cam, {}, {}, PipelineMode::kLockStep);
   Pose3 last;
-  for (int i = 0; i < 100; ++i) {
+  for (int i = 0; i < start; ++i) {
     const msg::TrackedFrame tf = slam.process(s.frames[i]);
     ASSERT_EQ(tf.state, msg::TrackingState::kOk) << i;
     last = tf.T_w_c;
   }
-  const Pose3 drift = last * s.route[99].inverse();
+  const Pose3 drift = last * s.route[start - 1].inverse();
   int lost = 0;
-  for (int i = 100 + gap; i < 130 + gap; ++i) {
+  for (int i = start + gap; i < start + gap + 30; ++i) {
     const msg::TrackedFrame tf = slam.process(s.frames[i]);
     if (tf.state == msg::TrackingState::kLost) {
       ++lost;
-      EXPECT_LE(i, 101 + gap) << "lost at frame " << i << ": " << tf.problem;
+      EXPECT_LE(i, start + gap + 1) << "lost at frame " << i << ": " << tf.problem;
       continue;
     }
     const double off = ((drift * s.route[i]).translation() - tf.T_w_c.translation()).norm();
-    EXPECT_LT(off, i < 110 + gap ? first_ten_m : all_m) << "frame " << i;
+    EXPECT_LT(off, i < start + gap + 10 ? first_ten_m : all_m) << "frame " << i;
   }
   EXPECT_LE(lost, 1);
 }
 
 TEST(SlamPipeline, TrackingIsFoundAgainAfterTenMissingFrames) {
-  const RenderedStretch* s = renderedStretch(300, true);
+  const RenderedStretch* s = renderedStretch(340, true);
   if (!s) GTEST_SKIP() << "needs " << test::sharedData("kitti/poses/06.txt");
-  expectFoundAfterGap(*s, 10, 0.3, 0.3);
+  expectFoundAfterGap(*s, 100, 10, 0.3, 0.3);
 }
 
 TEST(SlamPipeline, TrackingIsFoundAgainAfterTwentyMissingFrames) {
-  const RenderedStretch* s = renderedStretch(300, true);
+  const RenderedStretch* s = renderedStretch(340, true);
   if (!s) GTEST_SKIP() << "needs " << test::sharedData("kitti/poses/06.txt");
-  expectFoundAfterGap(*s, 20, 0.45, 0.65);
+  expectFoundAfterGap(*s, 100, 20, 0.45, 0.65);
+}
+
+// Frame 309 of route 06 comes out of a bend: after 10 missing frames the ordinary tracking (the motion
+// model, then matching without a prediction) put the frame 8 m behind the truth and 7 degrees off, with
+// enough inliers to call it tracked. A pose the camera could not have reached since the last tracked
+// frame is refused on every path, not only in recovery; here relocalisation then finds it.
+TEST(SlamPipeline, FramesAfterAGapAreNotTrackedWhereTheCameraCouldNotBe) {
+  const RenderedStretch* s = renderedStretch(340, true);
+  if (!s) GTEST_SKIP() << "needs " << test::sharedData("kitti/poses/06.txt");
+  expectFoundAfterGap(*s, 300, 10, 0.3, 0.3);
 }
 
 // The road of these renders repeats every 8 m (WorldParams::aperiodic_ground), and after 10 missing frames
@@ -277,7 +288,7 @@ TEST(SlamPipeline, ARecoveredPoseTheCameraCouldNotHaveReachedIsRefused) {
 // The vocabulary is small (small_vocabulary.h) and trained on frames 150-299, which the map never sees, so
 // that a clean clone tests relocalisation too.
 TEST(SlamPipeline, KidnappedCameraIsFoundByTheVocabulary) {
-  const RenderedStretch* s = renderedStretch(300, true);
+  const RenderedStretch* s = renderedStretch(340, true);
   if (!s) GTEST_SKIP() << "needs " << test::sharedData("kitti/poses/06.txt");
   test::TempDir dir;
   const std::string voc = dir / "hbow.bin";
