@@ -1,6 +1,7 @@
 // The pose of a frame 24 m past the keyframes that measured its points
 // (include/binloop/tracking/far_keyframe_pose.h): the map's depths of those points are off by metres, the
 // frame's own stereo is good, and a third of the matches are wrong.
+#include <algorithm>
 #include "binloop/tracking/far_keyframe_pose.h"
 
 #include <gtest/gtest.h>
@@ -90,22 +91,38 @@ TEST(FarKeyframePose, FindsTheFrameWhereTheMapsDepthsAreMetresOff) {
   for (size_t i = 0; i < sc.matches.size(); ++i) wrong_kept += sc.wrong[i] && r.inlier[i];
   EXPECT_LE(wrong_kept, 1);
   EXPECT_GE(r.inliers, 30);
+}
 
-  // Why the frame's side matters: the ordinary pose optimisation against the map's points, from the same
-  // prior and on the right matches only, lands farther off.
-  std::vector<PoseObservation> obs;
-  for (size_t i = 0; i < sc.matches.size(); ++i) {
-    if (sc.wrong[i]) continue;
-    PoseObservation o;
-    o.p_w = sc.matches[i].p_w;
-    o.uv = {sc.matches[i].keypoint.x, sc.matches[i].keypoint.y};
-    o.u_right = sc.matches[i].keypoint.right_x;
-    obs.push_back(o);
+// Why the frame's side matters: the ordinary pose optimisation against the map's points, from the same
+// prior and on the right matches only, lands farther off. Over many scenes, not one: on a single scene
+// either can win (the last session measured 15 of 20 for the two-sided pose).
+TEST(FarKeyframePose, BeatsTheOrdinaryPoseOptimisationOverTwentyScenes) {
+  std::vector<double> two_sided, ordinary;
+  int better = 0;
+  for (uint64_t seed = 1; seed <= 20; ++seed) {
+    const Scene sc = makeScene(60, 0.3, seed);
+    const Pose3 prior = offBy(sc.truth, {0.1, 0.1, -0.6}, 0.3);
+    const FarPoseResult r = farKeyframePose(camera(), sc.matches, prior, {}, 9);
+    std::vector<PoseObservation> obs;
+    for (size_t i = 0; i < sc.matches.size(); ++i) {
+      if (sc.wrong[i]) continue;
+      PoseObservation o;
+      o.p_w = sc.matches[i].p_w;
+      o.uv = {sc.matches[i].keypoint.x, sc.matches[i].keypoint.y};
+      o.u_right = sc.matches[i].keypoint.right_x;
+      obs.push_back(o);
+    }
+    const PoseOptimizationResult forward = optimizePose(camera(), prior.inverse(), obs);
+    const double mine = r.ok ? (r.T_w_c.translation() - sc.truth.translation()).norm() : 1e9;
+    const double theirs = (forward.T_c_w.inverse().translation() - sc.truth.translation()).norm();
+    two_sided.push_back(mine);
+    ordinary.push_back(theirs);
+    better += mine < theirs;
   }
-  const PoseOptimizationResult forward = optimizePose(camera(), prior.inverse(), obs);
-  const double forward_off = (forward.T_c_w.inverse().translation() - sc.truth.translation()).norm();
-  EXPECT_GT(forward_off, 2 * (r.T_w_c.translation() - sc.truth.translation()).norm())
-      << "forward " << forward_off << " m";
+  std::sort(two_sided.begin(), two_sided.end());
+  std::sort(ordinary.begin(), ordinary.end());
+  EXPECT_LT(two_sided[10], 0.6 * ordinary[10]) << "medians " << two_sided[10] << " vs " << ordinary[10] << " m";
+  EXPECT_GE(better, 13) << "better on " << better << " of 20";
 }
 
 TEST(FarKeyframePose, APriorFarFromTheTruthIsNotPassedOff) {
