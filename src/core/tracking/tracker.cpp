@@ -357,10 +357,10 @@ std::vector<FarMatch> Tracker::farMatches(const Frame& f, std::vector<int>* keyp
       ks.T_c_w = kf->T_w_c.inverse();
       const Eigen::Vector3d q = ks.T_c_w * mp->p_w;
       if (!(q.z() > 0)) continue;
-      const double u = cam_.fx * q.x() / q.z() + cam_.cx;
-      ks.keypoint.x = static_cast<float>(u);
-      ks.keypoint.y = static_cast<float>(cam_.fy * q.y() / q.z() + cam_.cy);
-      ks.keypoint.right_x = static_cast<float>(u - cam_.bf() / q.z());
+      const Eigen::Vector3d uvr = projectStereo(q, cam_);
+      ks.keypoint.x = static_cast<float>(uvr.x());
+      ks.keypoint.y = static_cast<float>(uvr.y());
+      ks.keypoint.right_x = static_cast<float>(uvr.z());
       ks.inv_sigma2 = s.inv_sigma2[s.predictLevel(mp->max_distance, static_cast<float>(q.norm()))];
       m.sightings.push_back(ks);
     }
