@@ -70,12 +70,7 @@ int main(int argc, char** argv) {
   const auto world = sim::World::build(route, sim::TextureBank::build(sim::defaultTexturePhotos(), 1), wp, 1);
   sim::StereoRenderer renderer(world, cam, {}, 1);
   const int n = starts.back() + *std::max_element(gaps.begin(), gaps.end()) + kAfter;
-  std::vector<StereoFrame> frames(n);
-  for (int i = 0; i < n; ++i) {
-    frames[i].index = i;
-    frames[i].stamp_s = 0.1 * i;
-    renderer.render(i, frames[i].stamp_s, route[i], &frames[i].left, &frames[i].right);
-  }
+  const std::vector<StereoFrame> frames = sim::renderFrames(renderer, route, 0, static_cast<size_t>(n));
   std::printf("Rendered 06 (aperiodic ground): frames 0..start-1 mapped, then `gap` frames missing; errors of "
               "the %d frames after the gap, lost frames left out of the worst.\n\n",
               kAfter);

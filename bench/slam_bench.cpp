@@ -159,15 +159,7 @@ Stretch renderStretch(const std::string& shared, size_t start, size_t n) {
     sim::StereoRenderer renderer(world, s.cam, {}, 1);
     std::fprintf(stderr, "rendering KITTI 06 frames %zu-%zu (%dx%d, %s)...\n", start, end - 1, s.cam.width,
                  s.cam.height, photos ? (std::to_string(photos) + " photo textures").c_str() : "procedural textures");
-    for (size_t i = start; i < end; ++i) {
-      StereoFrame f;
-      f.index = static_cast<int>(i - start);
-      f.stamp_s = 0.1 * static_cast<double>(i - start);
-      renderer.render(static_cast<int>(i), 0.1 * static_cast<double>(i), route[i], &f.left, &f.right);
-      f.left = f.left.clone();
-      f.right = f.right.clone();
-      s.frames.push_back(std::move(f));
-    }
+    s.frames = sim::renderFrames(renderer, route, start, end - start);
     std::fprintf(stderr, "rendered %zu frames in %.0f s\n", s.frames.size(), ms(t0) / 1000);
     s.source = "KITTI 06 route rendered here, frames " + std::to_string(start) + "-" + std::to_string(end - 1) +
                (photos ? "" : ", procedural textures");

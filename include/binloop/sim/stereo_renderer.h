@@ -4,6 +4,7 @@
 #include <string>
 #include <vector>
 
+#include "binloop/io/kitti_sequence.h"
 #include "binloop/sim/view_renderer.h"
 #include "binloop/sim/world.h"
 
@@ -34,6 +35,12 @@ class StereoRenderer {
   ViewRenderer view_;
   cv::Mat gray_, depth_;
 };
+
+/// Route poses first .. first+count-1 as in-memory frames for the SLAM: numbered from 0 at 10 Hz (index k,
+/// stamp 0.1 k s), each rendered as route frame first+k (its noise seeded by that number), so they are the
+/// images `render` writes for those frames. Stops early at the route's end.
+std::vector<StereoFrame> renderFrames(StereoRenderer& renderer, const std::vector<Pose3>& route, size_t first,
+                                      size_t count);
 
 struct SequenceJob {
   std::vector<Pose3> route;    // ground truth of the whole route (the world is built around all of it)

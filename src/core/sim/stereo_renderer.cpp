@@ -66,6 +66,20 @@ void StereoRenderer::render(int frame, double stamp_s, const Pose3& T_w_c, cv::M
   *right = finish(gray_, frame, 1, stamp_s);
 }
 
+std::vector<StereoFrame> renderFrames(StereoRenderer& renderer, const std::vector<Pose3>& route, size_t first,
+                                      size_t count) {
+  std::vector<StereoFrame> frames;
+  for (size_t k = 0; k < count && first + k < route.size(); ++k) {
+    const size_t i = first + k;
+    StereoFrame f;
+    f.index = static_cast<int>(k);
+    f.stamp_s = 0.1 * static_cast<double>(k);
+    renderer.render(static_cast<int>(i), 0.1 * static_cast<double>(i), route[i], &f.left, &f.right);
+    frames.push_back(std::move(f));
+  }
+  return frames;
+}
+
 void renderSequence(StereoRenderer& renderer, const SequenceJob& job,
                     const std::function<void(size_t, size_t)>& progress) {
   if (job.route.empty()) throw std::invalid_argument("renderSequence: empty route");

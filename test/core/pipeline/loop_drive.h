@@ -40,13 +40,7 @@ inline const LoopDrive* loopDrive() {
   d->lap = static_cast<size_t>(d->route.size() / 1.25);
   const auto world = sim::World::build(d->route, sim::TextureBank::build(photos, 1), {}, 1);
   sim::StereoRenderer r(world, d->cam, {}, 1);
-  for (size_t i = 0; i < d->route.size(); ++i) {
-    StereoFrame f;
-    f.index = i;
-    f.stamp_s = 0.1 * static_cast<double>(i);
-    r.render(static_cast<int>(i), f.stamp_s, d->route[i], &f.left, &f.right);
-    d->frames.push_back(std::move(f));
-  }
+  d->frames = sim::renderFrames(r, d->route, 0, d->route.size());
   d->dir = std::make_unique<test::TempDir>();
   d->vocabulary = *d->dir / "hbow.bin";
   trainSmallHbow(d->frames, 0, d->lap, 10, d->vocabulary);

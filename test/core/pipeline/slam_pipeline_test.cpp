@@ -47,13 +47,7 @@ const RenderedStretch* renderedStretch(int n, bool aperiodic_ground = false) {
   wp.aperiodic_ground = aperiodic_ground;
   const auto world = sim::World::build(s.route, sim::TextureBank::build(sim::defaultTexturePhotos(), 1), wp, 1);
   sim::StereoRenderer r(world, s.cam, {}, 1);
-  for (int i = 0; i < n; ++i) {
-    StereoFrame f;
-    f.index = i;
-    f.stamp_s = 0.1 * i;
-    r.render(i, f.stamp_s, s.route[i], &f.left, &f.right);
-    s.frames.push_back(std::move(f));
-  }
+  s.frames = sim::renderFrames(r, s.route, 0, static_cast<size_t>(n));
   return &s;
 }
 
@@ -275,8 +269,9 @@ TEST(SlamPipeline, ARecoveredPoseTheCameraCouldNotHaveReachedIsRefused) {
   for (int i = 110; i < 129; ++i) {  // the prediction holds for 3 s after frame 99
     const msg::TrackedFrame tf = slam.process(s->frames[i]);
     refused += tf.problem.find("from the motion model's prediction after") != std::string::npos;
-    if (tf.state != msg::TrackingState::kLost)
+    if (tf.state != msg::TrackingState::kLost) {
       EXPECT_LT((s->route[i].translation() - tf.T_w_c.translation()).norm(), 1.0) << "frame " << i;
+    }
   }
   EXPECT_GE(refused, 1);
 }

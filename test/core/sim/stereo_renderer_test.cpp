@@ -256,3 +256,22 @@ TEST(StereoRenderer, TheAperiodicGroundDoesNotRepeatEveryEightMetres) {
   EXPECT_LT(roadDifference(false), 0.5);
   EXPECT_GT(roadDifference(true), 5.0);
 }
+
+TEST(StereoRenderer, RenderFramesNumbersFromZeroAndRendersTheRouteFrames) {
+  EmptyStreet s;
+  StereoRenderer r(s.world, s.cam, {}, 1);
+  const auto frames = renderFrames(r, s.route, 97, 10);
+  ASSERT_EQ(frames.size(), 4u) << "route frames 97..100: the route ends at 100";
+  for (size_t k = 0; k < frames.size(); ++k) {
+    EXPECT_EQ(frames[k].index, static_cast<int>(k));
+    EXPECT_DOUBLE_EQ(frames[k].stamp_s, 0.1 * static_cast<double>(k));
+    // The same images as route frame 97+k rendered alone: the noise follows the route frame, not k.
+    cv::Mat left, right;
+    r.render(static_cast<int>(97 + k), 0.1 * static_cast<double>(97 + k), s.route[97 + k], &left, &right);
+    EXPECT_EQ(cv::norm(left, frames[k].left, cv::NORM_INF), 0) << "frame " << k;
+    EXPECT_EQ(cv::norm(right, frames[k].right, cv::NORM_INF), 0) << "frame " << k;
+  }
+  cv::Mat other, unused;
+  r.render(0, 0, s.route[97], &other, &unused);
+  EXPECT_GT(cv::norm(other, frames[0].left, cv::NORM_INF), 0) << "frame numbers seed the noise";
+}
