@@ -22,8 +22,8 @@ inline Eigen::Vector3d unprojectKeypoint(const msg::KeyPoint& k, const StereoCam
 /// Where a camera-frame point in front of the camera (p.z() > 0) appears: u, v in the left image and u in
 /// the right one, level-0 pixels. The inverse of unprojectKeypoint.
 inline Eigen::Vector3d projectStereo(const Eigen::Vector3d& p, const StereoCamera& cam) {
-  const double u = cam.fx * p.x() / p.z() + cam.cx;
-  return {u, cam.fy * p.y() / p.z() + cam.cy, u - cam.bf() / p.z()};
+  const Eigen::Vector2d uv = cam.project(p);
+  return {uv.x(), uv.y(), uv.x() - cam.bf() / p.z()};
 }
 
 /// Infinite, with *in_front false, for a point at or behind the camera plane.

@@ -13,6 +13,7 @@
 #include "binloop/tracking/frame.h"
 #include "binloop/tracking/keyframe_database.h"
 #include "binloop/tracking/far_keyframe_pose.h"
+#include "binloop/tracking/motion_reach.h"
 #include "binloop/tracking/projection_search.h"
 #include "binloop/tracking/rotation_search.h"
 
@@ -130,11 +131,8 @@ class Tracker {
   /// The frame's matched keypoints with stereo depth, each with up to three of its point's keyframes.
   std::vector<FarMatch> farMatches(const Frame& f, std::vector<int>* keypoint_of) const;
   /// Relocalisation from scratch against the vocabulary's (or the most recent) keyframes: the candidate
-  /// that explains most of the local map among those the camera could have reached.
-  bool relocalize(Frame& f);
-  /// Whether the camera could be at T_w_c: within reach of the motion model's prediction, when there is
-  /// one (TrackerParams::recovery_min_gate_m). A refused pose is remembered for the frame's report.
-  bool reachable(const Pose3& T_w_c);
+  /// that explains most of the local map among those the camera could have reached (`reach`).
+  bool relocalize(Frame& f, MotionReach& reach);
   /// PnP RANSAC on the matches in f.points, pose optimisation, a wide search for `pts`, then the local map.
   bool poseFromScratch(Frame& f, const std::vector<const msg::MapPoint*>& pts);
   bool trackLocalMap(Frame& f, float radius, int min_inliers);
@@ -163,14 +161,6 @@ class Tracker {
   uint64_t last_keyframe_frame_ = 0;
   std::vector<SlamKeyframeId> local_keyframes_;
   int inliers_ = 0;
-  // This frame's reach: the motion model's predicted position, how far from it the camera can be, and the
-  // nearest pose refused for lying farther.
-  struct Reach {
-    bool active = false;
-    Eigen::Vector3d predicted = Eigen::Vector3d::Zero();
-    double radius_m = 0, dt_s = 0;
-    double nearest_refused_m = -1;
-  } reach_;
   uint64_t reloc_attempts_ = 0;
   uint64_t corrections_seen_ = 0;  // loop corrections applied (through local mapping's updates)
   std::unique_ptr<KeyframeDatabase> keyframe_db_;  // with a vocabulary only

@@ -69,8 +69,8 @@ void guidedSearch(const msg::KeyFrame& q, const msg::KeyFrame& c, const ScalePyr
     const Eigen::Vector3d pc = pointOf(c, c.keypoints[j]);
     const Eigen::Vector3d pq = T * pc;
     if (pq.z() <= 0) continue;
-    const float u = static_cast<float>(q.camera.fx * pq.x() / pq.z() + q.camera.cx);
-    const float w = static_cast<float>(q.camera.fy * pq.y() / pq.z() + q.camera.cy);
+    const Eigen::Vector2d uv = q.camera.project(pq);
+    const float u = static_cast<float>(uv.x()), w = static_cast<float>(uv.y());
     // Seen from nearer, the same patch is found on a coarser level (ORB-SLAM2's PredictScale).
     const int shift = static_cast<int>(std::lround(std::log(pc.norm() / pq.norm()) / log_scale));
     const int level = std::clamp(c.keypoints[j].octave + shift, 0, q.levels - 1);

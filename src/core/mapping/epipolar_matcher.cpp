@@ -34,8 +34,8 @@ std::vector<std::pair<int, int>> matchAlongEpipolarLines(const EpipolarView& a, 
   // Where a's camera centre appears in b.
   const Eigen::Vector3d c_b = b.T_w_c->inverse() * a.T_w_c->translation();
   const bool epipole_in_front = c_b.z() > 0;
-  const double ex = b.camera->fx * c_b.x() / c_b.z() + b.camera->cx;
-  const double ey = b.camera->fy * c_b.y() / c_b.z() + b.camera->cy;
+  const Eigen::Vector2d e = b.camera->project(c_b);
+  const double ex = e.x(), ey = e.y();
 
   const auto& ka = *a.keypoints;
   const auto& kb = *b.keypoints;

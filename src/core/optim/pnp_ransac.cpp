@@ -47,8 +47,8 @@ PnpRansacResult solvePnpRansac(const std::vector<Eigen::Vector3d>& p_w, const st
     for (int i = 0; i < n; ++i) {
       const Eigen::Vector3d c = T * p_w[i];
       if (c.z() <= 0) continue;
-      const double du = cam.fx * c.x() / c.z() + cam.cx - uv[i].x();
-      const double dv = cam.fy * c.y() / c.z() + cam.cy - uv[i].y();
+      const Eigen::Vector2d d = cam.project(c) - uv[i];
+      const double du = d.x(), dv = d.y();
       const double w = inv_sigma2.empty() ? 1.0 : inv_sigma2[i];
       if ((du * du + dv * dv) * w <= params.chi2) (*in)[i] = 1, ++count;
     }

@@ -102,8 +102,8 @@ int matchFromLastFrame(Frame& cur, const Frame& last, const std::function<const 
     if (!mp) continue;
     const Eigen::Vector3d p_c = T_c_w * mp->p_w;
     if (p_c.z() <= 0) continue;
-    const float u = static_cast<float>(cam.fx * p_c.x() / p_c.z() + cam.cx);
-    const float v = static_cast<float>(cam.fy * p_c.y() / p_c.z() + cam.cy);
+    const Eigen::Vector2d uv = cam.project(p_c);
+    const float u = static_cast<float>(uv.x()), v = static_cast<float>(uv.y());
     if (u < 0 || u >= cam.width || v < 0 || v >= cam.height) continue;
     const int oct = last.keypoints[i].octave;
     const float r = th * s.scale[oct];

@@ -99,10 +99,8 @@ Tracker::Output Tracker::track(const StereoFrame& in, int mapping_queue) {
     const Pose3 predicted =
         predict ? orthonormalized(last_pose * scaledMotion(velocity_, dt / velocity_dt_)) : last_pose;
     f.T_w_c = predicted;
-    reach_ = {};
-    if (predict)
-      reach_ = {true, predicted.translation(),
-                p_.recovery_min_gate_m + 0.5 * p_.recovery_max_accel_mps2 * dt * dt, dt, -1};
+    MotionReach reach;
+    if (predict) reach = MotionReach(predicted.translation(), p_.recovery_min_gate_m, p_.recovery_max_accel_mps2, dt);
     bool ok = false;
     bool relocalized = false;  // found from scratch, not near the prediction
     if (state_ == msg::TrackingState::kOk) {
@@ -115,14 +113,14 @@ Tracker::Output Tracker::track(const StereoFrame& in, int mapping_queue) {
       const bool model_strong = model_ok && inliers_ >= p_.motion_model_min_inliers;
       model_ok = model_ok && trackLocalMap(by_model, p_.local_map_radius, p_.min_inliers);
       const int model_inliers = model_ok ? inliers_ : 0;
-      model_ok = model_ok && reachable(by_model.T_w_c);
+      model_ok = model_ok && reach.admits(by_model.T_w_c);
       if (model_ok && model_strong) {
         f = std::move(by_model);
         ok = true;
       } else {
         f.T_w_c = predicted;  // matching ignores it; the pose optimisation starts there
         ok = trackWithoutPrediction(f) && trackLocalMap(f, p_.local_map_radius, p_.min_inliers) &&
-             reachable(f.T_w_c);
+             reach.admits(f.T_w_c);
         if (model_ok && (!ok || model_inliers >= inliers_)) {
           f = std::move(by_model);
           inliers_ = model_inliers;
@@ -146,13 +144,13 @@ Tracker::Output Tracker::track(const StereoFrame& in, int mapping_queue) {
           local_keyframes_.push_back(e.id);
         }
       }
-      // Each step's pose must be one the camera could have reached (reachable()): a road whose texture
+      // Each step's pose must be one the camera could have reached (MotionReach): a road whose texture
       // repeats lets a wrong pose gather dozens of inliers.
       const SlamKeyframeId reference_before = reference_;
-      ok = trackLocalMap(f, p_.lost_radius, p_.min_inliers_after_loss) && reachable(f.T_w_c);
-      if (!ok && predict && p_.recover_rotation_first) ok = recoverRotationFirst(f, predicted) && reachable(f.T_w_c);
+      ok = trackLocalMap(f, p_.lost_radius, p_.min_inliers_after_loss) && reach.admits(f.T_w_c);
+      if (!ok && predict && p_.recover_rotation_first) ok = recoverRotationFirst(f, predicted) && reach.admits(f.T_w_c);
       // Still nothing: the pose is unknown; find it from scratch against recent keyframes.
-      if (!ok) ok = relocalized = relocalize(f);
+      if (!ok) ok = relocalized = relocalize(f, reach);
       if (!ok) reference_ = reference_before;
       if (ok && (relocalized || state_ != msg::TrackingState::kOk)) {
         state_ = msg::TrackingState::kRelocalized;
@@ -162,10 +160,10 @@ Tracker::Output Tracker::track(const StereoFrame& in, int mapping_queue) {
       state_ = msg::TrackingState::kLost;
       tf.state = state_;
       tf.problem = "lost: " + std::to_string(inliers_) + " inliers";
-      if (reach_.nearest_refused_m >= 0)
-        tf.problem += "; a pose " + fixedDecimals(reach_.nearest_refused_m, 1) +
-                      " m from the motion model's prediction after " + fixedDecimals(reach_.dt_s, 1) +
-                      " s was rejected (at most " + fixedDecimals(reach_.radius_m, 1) + " m)";
+      if (reach.nearestRefusedM() >= 0)
+        tf.problem += "; a pose " + fixedDecimals(reach.nearestRefusedM(), 1) +
+                      " m from the motion model's prediction after " + fixedDecimals(reach.dtS(), 1) +
+                      " s was rejected (at most " + fixedDecimals(reach.radiusM(), 1) + " m)";
       tf.T_w_c = predicted;  // not what a failed attempt left in f
       tf.track_ms = msSinceT(t0);
       return out;
@@ -302,14 +300,6 @@ bool Tracker::poseFromScratch(Frame& f, const std::vector<const msg::MapPoint*>&
   return trackLocalMap(f, p_.lost_radius, p_.min_inliers_after_loss);
 }
 
-bool Tracker::reachable(const Pose3& T_w_c) {
-  if (!reach_.active) return true;
-  const double off = (T_w_c.translation() - reach_.predicted).norm();
-  if (off <= reach_.radius_m) return true;
-  if (reach_.nearest_refused_m < 0 || off < reach_.nearest_refused_m) reach_.nearest_refused_m = off;
-  return false;
-}
-
 int Tracker::searchByProjection(Frame& f, const std::vector<const msg::MapPoint*>& pts, float radius) const {
   const Pose3 T_c_w = f.T_w_c.inverse();
   std::vector<ProjectedPoint> visible;
@@ -401,7 +391,7 @@ bool Tracker::recoverRotationFirst(Frame& f, const Pose3& predicted) {
   return true;
 }
 
-bool Tracker::relocalize(Frame& f) {
+bool Tracker::relocalize(Frame& f, MotionReach& reach) {
   std::unique_ptr<Frame> best;
   int best_inliers = 0;
   std::vector<SlamKeyframeId> best_local;
@@ -426,7 +416,7 @@ bool Tracker::relocalize(Frame& f) {
     std::fill(f.outlier.begin(), f.outlier.end(), 0);
     f.T_w_c = start;
     matchPointsByDescriptor(f, pts);
-    const bool tracked = poseFromScratch(f, pts) && reachable(f.T_w_c);
+    const bool tracked = poseFromScratch(f, pts) && reach.admits(f.T_w_c);
     // Every candidate is tried and the one that explains most of the local map wins: with repeated
     // structure a wrong pose can still gather a few dozen inliers.
     if (tracked && (!best || inliers_ > best_inliers)) {
@@ -491,20 +481,17 @@ bool Tracker::trackLocalMap(Frame& f, float radius, int min_inliers) {
   std::unordered_set<MapPointId> have;
   for (size_t i = 0; i < f.size(); ++i)
     if (f.points[i] != kNoId) have.insert(map_.resolve(f.points[i]));
-  const Pose3 T_c_w = f.T_w_c.inverse();
-  std::vector<ProjectedPoint> visible;
+  std::vector<const msg::MapPoint*> pts;
   std::unordered_set<MapPointId> seen;
   for (SlamKeyframeId k : local_keyframes_) {
     const msg::KeyframeState* kf = map_.keyframe(k);
     if (!kf) continue;
     for (MapPointId id : kf->point_ids) {
       if (id == kNoId || have.count(id) || !seen.insert(id).second) continue;
-      const msg::MapPoint* mp = map_.point(id);
-      ProjectedPoint pp;
-      if (mp && projectIntoFrame(*mp, T_c_w, cam_, builder_.scales(), &pp)) visible.push_back(pp);
+      if (const msg::MapPoint* mp = map_.point(id)) pts.push_back(mp);
     }
   }
-  matchProjectedPoints(f, visible, builder_.scales(), radius, p_.projection);
+  searchByProjection(f, pts, radius);
   inliers_ = optimizePose(f);
   return inliers_ >= min_inliers;
 }
