@@ -2,29 +2,21 @@
 
 #include <stdexcept>
 
+#include "support/pose_at.h"
 #include "support/test_support.h"
 
 using binloop::Pose3;
 using namespace binloop::sim;
-
-namespace {
-
-Pose3 at(double x, double y, double z) {
-  Pose3 T = Pose3::Identity();
-  T.translation() = Eigen::Vector3d(x, y, z);
-  return T;
-}
-
-}  // namespace
+using binloop::test::poseAt;
 
 // A street driven twice, the second time 4 m higher in the ground truth (y is down), with a detour between
 // the passes that climbs the same 4 m: the second pass must come down onto the first, and the detour must
 // fade into it without a step.
 TEST(LevelRevisits, ARevisitTakesTheEarlierPassHeightAndTheChangeFadesAlongThePath) {
   std::vector<Pose3> route;
-  for (int i = 0; i < 400; ++i) route.push_back(at(0, 0, i));           // first pass, 1 m steps
-  for (int i = 0; i < 400; ++i) route.push_back(at(100, -4, 399 - i));  // detour, 100 m away, back down the z
-  for (int i = 0; i < 400; ++i) route.push_back(at(1, -4, i));          // second pass, 1 m beside the first
+  for (int i = 0; i < 400; ++i) route.push_back(poseAt(0, 0, i));           // first pass, 1 m steps
+  for (int i = 0; i < 400; ++i) route.push_back(poseAt(100, -4, 399 - i));  // detour, 100 m away, back down the z
+  for (int i = 0; i < 400; ++i) route.push_back(poseAt(1, -4, i));          // second pass, 1 m beside the first
   const LevelResult r = levelRevisits(route);
   ASSERT_EQ(r.route.size(), route.size());
   EXPECT_EQ(r.revisit_frames, 400u);
@@ -51,7 +43,7 @@ TEST(LevelRevisits, ARevisitTakesTheEarlierPassHeightAndTheChangeFadesAlongThePa
 
 TEST(LevelRevisits, ARouteThatNeverComesBackIsUnchanged) {
   std::vector<Pose3> route;
-  for (int i = 0; i < 1000; ++i) route.push_back(at(0, -0.01 * i, i));  // a steady climb
+  for (int i = 0; i < 1000; ++i) route.push_back(poseAt(0, -0.01 * i, i));  // a steady climb
   const LevelResult r = levelRevisits(route);
   EXPECT_EQ(r.revisit_frames, 0u);
   EXPECT_EQ(r.max_shift_m, 0.0);

@@ -2,20 +2,15 @@
 
 #include <gtest/gtest.h>
 
-using namespace binloop;
+#include "support/pose_at.h"
 
-namespace {
-Pose3 at(double x, double y, double z) {
-  Pose3 T = Pose3::Identity();
-  T.translation() = Eigen::Vector3d(x, y, z);
-  return T;
-}
-}  // namespace
+using namespace binloop;
+using binloop::test::poseAt;
 
 TEST(MotionReach, WithoutAPredictionEveryPoseIsAdmitted) {
   MotionReach reach;
   EXPECT_FALSE(reach.active());
-  EXPECT_TRUE(reach.admits(at(1e6, 0, 0)));
+  EXPECT_TRUE(reach.admits(poseAt(1e6, 0, 0)));
   EXPECT_LT(reach.nearestRefusedM(), 0);
 }
 
@@ -24,11 +19,11 @@ TEST(MotionReach, TheRadiusGrowsWithTheSquareOfTheTimeAndTheNearestRefusalIsKept
   MotionReach reach(Eigen::Vector3d(0, 0, 10), 1.0, 5.0, 2.0);
   EXPECT_DOUBLE_EQ(reach.radiusM(), 11.0);
   EXPECT_DOUBLE_EQ(reach.dtS(), 2.0);
-  EXPECT_TRUE(reach.admits(at(0, 0, 20.9)));
-  EXPECT_TRUE(reach.admits(at(11, 0, 10)));
+  EXPECT_TRUE(reach.admits(poseAt(0, 0, 20.9)));
+  EXPECT_TRUE(reach.admits(poseAt(11, 0, 10)));
   EXPECT_LT(reach.nearestRefusedM(), 0) << "nothing refused yet";
-  EXPECT_FALSE(reach.admits(at(0, 0, 40)));  // 30 m off
-  EXPECT_FALSE(reach.admits(at(0, 15, 10)));  // 15 m off
-  EXPECT_FALSE(reach.admits(at(0, 0, -20)));  // 30 m off again
+  EXPECT_FALSE(reach.admits(poseAt(0, 0, 40)));  // 30 m off
+  EXPECT_FALSE(reach.admits(poseAt(0, 15, 10)));  // 15 m off
+  EXPECT_FALSE(reach.admits(poseAt(0, 0, -20)));  // 30 m off again
   EXPECT_DOUBLE_EQ(reach.nearestRefusedM(), 15.0);
 }
