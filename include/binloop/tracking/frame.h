@@ -28,6 +28,8 @@ struct Frame {
 
   size_t size() const { return keypoints.size(); }
   int matchedInliers() const;
+  /// Every keypoint unmatched and no outlier: the state a pose search from scratch starts in.
+  void clearMatches();
 };
 
 /// Extraction (left and right on two threads) and stereo matching with one set of parameters.

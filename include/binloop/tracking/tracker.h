@@ -5,6 +5,7 @@
 // pipeline can run it in lock-step or on its own thread.
 #include <memory>
 #include <string>
+#include <unordered_set>
 
 #include "binloop/map/map_replica.h"
 #include "binloop/messages/tracked_frame.h"
@@ -124,8 +125,9 @@ class Tracker {
   /// (rotation_search.h), then the pose from the frame's stereo and the keyframes' sightings
   /// (far_keyframe_pose.h). Leaves f.T_w_c and its inlier matches; false when either step fails.
   bool recoverRotationFirst(Frame& f, const Pose3& predicted);
-  /// The points of these keyframes, each once.
-  std::vector<const msg::MapPoint*> pointsOf(const std::vector<SlamKeyframeId>& keyframes) const;
+  /// The points of these keyframes, each once, leaving out those in `skip` (ids as resolved).
+  std::vector<const msg::MapPoint*> pointsOf(const std::vector<SlamKeyframeId>& keyframes,
+                                             const std::unordered_set<MapPointId>& skip = {}) const;
   /// `pts` projected at f.T_w_c and matched to f's free keypoints within `radius`; the number matched.
   int searchByProjection(Frame& f, const std::vector<const msg::MapPoint*>& pts, float radius) const;
   /// The frame's matched keypoints with stereo depth, each with up to three of its point's keyframes.

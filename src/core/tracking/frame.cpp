@@ -1,5 +1,6 @@
 #include "binloop/tracking/frame.h"
 
+#include <algorithm>
 #include <chrono>
 #include <cmath>
 #include <future>
@@ -20,6 +21,11 @@ int Frame::matchedInliers() const {
   int n = 0;
   for (size_t i = 0; i < points.size(); ++i) n += points[i] != kNoId && !outlier[i];
   return n;
+}
+
+void Frame::clearMatches() {
+  std::fill(points.begin(), points.end(), kNoId);
+  std::fill(outlier.begin(), outlier.end(), 0);
 }
 
 FrameBuilder::FrameBuilder(const StereoCamera& cam, const OrbSlamParams& orb, const StereoMatchParams& stereo)

@@ -4,7 +4,6 @@
 #include <algorithm>
 #include <cmath>
 
-#include "binloop/map/keypoint_geometry.h"
 #include "binloop/util/hash_random.h"
 
 namespace binloop {
@@ -56,8 +55,8 @@ RotationSearchResult searchRotation(const Frame& f, const Pose3& predicted_T_w_c
     const double dist = c.norm();
     // In front of the camera by more than the rotation's doubt allows to swing behind it.
     if (dist < p.min_distance_m || c.z() < dist * std::cos((90.0 - p.max_angle_deg) * M_PI / 180.0)) continue;
-    const Eigen::Vector3d uvr = projectStereo(c, cam);
-    const double u = uvr.x(), v = uvr.y();
+    const Eigen::Vector2d uv = cam.project(c);
+    const double u = uv.x(), v = uv.y();
     if (u < -window || v < -window || u > cam.width + window || v > cam.height + window) continue;
     const int level = s.predictLevel(mp->max_distance, static_cast<float>(dist));
     int best = p.max_hamming + 1, best_j = -1;

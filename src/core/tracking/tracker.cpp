@@ -134,8 +134,7 @@ Tracker::Output Tracker::track(const StereoFrame& in, int mapping_queue) {
       // while the prediction holds, its rotation mended from far points (recoverRotationFirst()); then
       // relocalisation against recent keyframes (relocalize()).
       f.T_w_c = predicted;
-      std::fill(f.points.begin(), f.points.end(), kNoId);
-      std::fill(f.outlier.begin(), f.outlier.end(), 0);
+      f.clearMatches();
       local_keyframes_.clear();
       if (const msg::KeyframeState* ref = map_.keyframe(reference_)) {
         local_keyframes_.push_back(ref->id);
@@ -310,7 +309,8 @@ int Tracker::searchByProjection(Frame& f, const std::vector<const msg::MapPoint*
   return matchProjectedPoints(f, visible, builder_.scales(), radius, p_.projection);
 }
 
-std::vector<const msg::MapPoint*> Tracker::pointsOf(const std::vector<SlamKeyframeId>& keyframes) const {
+std::vector<const msg::MapPoint*> Tracker::pointsOf(const std::vector<SlamKeyframeId>& keyframes,
+                                                    const std::unordered_set<MapPointId>& skip) const {
   std::vector<const msg::MapPoint*> pts;
   std::unordered_set<MapPointId> seen;
   for (SlamKeyframeId k : keyframes) {
@@ -318,7 +318,7 @@ std::vector<const msg::MapPoint*> Tracker::pointsOf(const std::vector<SlamKeyfra
     if (!kf) continue;
     for (MapPointId id : kf->point_ids) {
       const msg::MapPoint* mp = id != kNoId ? map_.point(id) : nullptr;
-      if (mp && seen.insert(mp->id).second) pts.push_back(mp);
+      if (mp && !skip.count(mp->id) && seen.insert(mp->id).second) pts.push_back(mp);
     }
   }
   return pts;
@@ -368,8 +368,7 @@ bool Tracker::recoverRotationFirst(Frame& f, const Pose3& predicted) {
   const RotationSearchResult r =
       searchRotation(f, predicted, pts, cam_, s, p_.rotation_search, hashCombine(p_.seed, ++reloc_attempts_));
   if (!r.ok) return false;
-  std::fill(f.points.begin(), f.points.end(), kNoId);
-  std::fill(f.outlier.begin(), f.outlier.end(), 0);
+  f.clearMatches();
   f.T_w_c = predicted;
   f.T_w_c.linear() = predicted.linear() * r.R_pred_c;
   f.T_w_c = orthonormalized(f.T_w_c);
@@ -412,8 +411,7 @@ bool Tracker::relocalize(Frame& f, MotionReach& reach) {
   for (SlamKeyframeId k : tries) {
     if (!map_.keyframe(k)) continue;
     const std::vector<const msg::MapPoint*> pts = pointsOf({k});
-    std::fill(f.points.begin(), f.points.end(), kNoId);
-    std::fill(f.outlier.begin(), f.outlier.end(), 0);
+    f.clearMatches();
     f.T_w_c = start;
     matchPointsByDescriptor(f, pts);
     const bool tracked = poseFromScratch(f, pts) && reach.admits(f.T_w_c);
@@ -433,8 +431,7 @@ bool Tracker::relocalize(Frame& f, MotionReach& reach) {
     reference_ = best_reference;
     return true;
   }
-  std::fill(f.points.begin(), f.points.end(), kNoId);
-  std::fill(f.outlier.begin(), f.outlier.end(), 0);
+  f.clearMatches();
   return false;
 }
 
@@ -481,17 +478,7 @@ bool Tracker::trackLocalMap(Frame& f, float radius, int min_inliers) {
   std::unordered_set<MapPointId> have;
   for (size_t i = 0; i < f.size(); ++i)
     if (f.points[i] != kNoId) have.insert(map_.resolve(f.points[i]));
-  std::vector<const msg::MapPoint*> pts;
-  std::unordered_set<MapPointId> seen;
-  for (SlamKeyframeId k : local_keyframes_) {
-    const msg::KeyframeState* kf = map_.keyframe(k);
-    if (!kf) continue;
-    for (MapPointId id : kf->point_ids) {
-      if (id == kNoId || have.count(id) || !seen.insert(id).second) continue;
-      if (const msg::MapPoint* mp = map_.point(id)) pts.push_back(mp);
-    }
-  }
-  searchByProjection(f, pts, radius);
+  searchByProjection(f, pointsOf(local_keyframes_, have), radius);
   inliers_ = optimizePose(f);
   return inliers_ >= min_inliers;
 }
