@@ -307,16 +307,29 @@ TEST_F(LoopGraph, MalformedPairsAreReportedAndTrackingGoesOn) {
   ASSERT_TRUE(d.problem.empty()) << d.problem;
   const std::vector<Pair> pairs = readPairs(d.bag);
   ASSERT_TRUE(graphConnected());
-  // After the first test's drive, or from the start when run alone: start the map with two good pairs.
+  // After the other tests, or from the start when run alone: a good pair first, then the bad ones.
   Pair base = pairs.back();
   ros::Time t = base.left.header.stamp + ros::Duration(100);
   auto stamped = [&](Pair p, ros::Time s) {
     p.left.header.stamp = p.right.header.stamp = p.left_info.header.stamp = p.right_info.header.stamp = s;
     return p;
   };
-  Pair good = stamped(base, t);
-  publishPair(good.left, good.right, good.left_info, good.right_info);
-  ASSERT_TRUE(waitFor(5, [&] { return seen_.poses.count(t.toSec()) > 0; })) << "a good pair was not tracked";
+  // The graph may be anywhere after the first test (the load test ends relocalised eleven pairs back), so the first good
+  // pair may have to be found from scratch; in the threaded graph one try in about fifty was lost, so it gets
+  // three, and a failure says why tracking refused it.
+  bool tracked = false;
+  for (int tries = 0; tries < 3 && !tracked; ++tries) {
+    t = base.left.header.stamp + ros::Duration(100 + tries);
+    Pair good = stamped(base, t);
+    publishPair(good.left, good.right, good.left_info, good.right_info);
+    tracked = waitFor(5, [&] { return seen_.poses.count(t.toSec()) > 0; });
+  }
+  ASSERT_TRUE(tracked) << "a good pair was not tracked in three tries; tracking's last problem: "
+                       << [&] {
+                            std::lock_guard<std::mutex> lk(seen_.m);
+                            auto it = seen_.tracking_diag.find("last problem");
+                            return it == seen_.tracking_diag.end() ? std::string("none reported") : it->second;
+                          }();
 
   std::vector<Pair> bad;
   Pair p = stamped(base, t + ros::Duration(0.1));
@@ -337,7 +350,7 @@ TEST_F(LoopGraph, MalformedPairsAreReportedAndTrackingGoesOn) {
   }
   // The graph still tracks the next good pair, and its diagnostics count what was dropped.
   const ros::Time t2 = t + ros::Duration(0.5);
-  good = stamped(base, t2);
+  const Pair good = stamped(base, t2);
   publishPair(good.left, good.right, good.left_info, good.right_info);
   EXPECT_TRUE(waitFor(5, [&] { return seen_.poses.count(t2.toSec()) > 0; })) << "tracking stopped after bad pairs";
   EXPECT_TRUE(waitFor(5, [&] {
