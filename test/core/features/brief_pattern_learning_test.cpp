@@ -15,11 +15,13 @@ using namespace binloop;
 
 namespace {
 
-cv::Mat kittiLeft(int i) {
+std::string kittiLeftPath(int i) {
   char name[32];
   std::snprintf(name, sizeof name, "%06d.png", i);
-  return readGrayImage(test::sharedData("kitti/sample_00/image_0/") + name);
+  return test::sharedData("kitti/sample_00/image_0/") + name;
 }
+
+cv::Mat kittiLeft(int i) { return readGrayImage(kittiLeftPath(i)); }
 
 bool bit(const Desc256& d, int i) { return (d.w[i / 64] >> (i % 64)) & 1; }
 
@@ -40,6 +42,7 @@ TEST(BriefPattern, TestsStayInsideTheDiscAndAreDistinct) {
 // Tests learned on some real KITTI frames are balanced on others, unlike the extractor's Gaussian pattern
 // (mean |P(1) - 0.5| about 0.2 on such frames).
 TEST(BriefPatternLearning, LearnedTestsAreBalancedOnHeldOutFrames) {
+  BINLOOP_REQUIRE_DATA(kittiLeftPath(10));  // frames 0-10 of the real sample
   const OrbSlamExtractor ex;
   PatchSamples train, held_out;
   for (int i : {0, 2, 4, 6}) train.append(samplePatches(kittiLeft(i), ex, 1000, i));
@@ -67,6 +70,7 @@ TEST(BriefPatternLearning, LearnedTestsAreBalancedOnHeldOutFrames) {
 
 // samplePatches reads what the extractor reads: the pattern's tests on the samples are the descriptors' bits.
 TEST(BriefPatternLearning, SamplesGiveTheExtractorsBits) {
+  BINLOOP_REQUIRE_DATA(kittiLeftPath(10));  // frames 0-10 of the real sample
   const OrbSlamExtractor ex;
   const cv::Mat img = kittiLeft(0);
   const OrbFeatures f = ex.extract(img);
@@ -86,6 +90,7 @@ TEST(BriefPatternLearning, SamplesGiveTheExtractorsBits) {
 }
 
 TEST(BriefPatternLearning, DeterministicBalancedAndDecorrelatedOnATinyInput) {
+  BINLOOP_REQUIRE_DATA(kittiLeftPath(10));  // frames 0-10 of the real sample
   const OrbSlamExtractor ex;
   PatchSamples s;
   for (int i : {0, 10}) s.append(samplePatches(kittiLeft(i)(cv::Rect(300, 0, 500, 376)).clone(), ex, 400, i));
