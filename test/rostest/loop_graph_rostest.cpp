@@ -324,12 +324,12 @@ TEST_F(LoopGraph, MalformedPairsAreReportedAndTrackingGoesOn) {
     publishPair(good.left, good.right, good.left_info, good.right_info);
     tracked = waitFor(5, [&] { return seen_.poses.count(t.toSec()) > 0; });
   }
-  ASSERT_TRUE(tracked) << "a good pair was not tracked in three tries; tracking's last problem: "
-                       << [&] {
-                            std::lock_guard<std::mutex> lk(seen_.m);
-                            auto it = seen_.tracking_diag.find("last problem");
-                            return it == seen_.tracking_diag.end() ? std::string("none reported") : it->second;
-                          }();
+  std::string why = "none reported";
+  {
+    std::lock_guard<std::mutex> lk(seen_.m);
+    if (auto it = seen_.tracking_diag.find("last problem"); it != seen_.tracking_diag.end()) why = it->second;
+  }
+  ASSERT_TRUE(tracked) << "a good pair was not tracked in three tries; tracking's last problem: " << why;
 
   std::vector<Pair> bad;
   Pair p = stamped(base, t + ros::Duration(0.1));

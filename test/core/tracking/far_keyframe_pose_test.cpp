@@ -1,11 +1,11 @@
 // The pose of a frame 24 m past the keyframes that measured its points
 // (include/binloop/tracking/far_keyframe_pose.h): the map's depths of those points are off by metres, the
 // frame's own stereo is good, and a third of the matches are wrong.
-#include <algorithm>
 #include "binloop/tracking/far_keyframe_pose.h"
 
 #include <gtest/gtest.h>
 
+#include <algorithm>
 #include <cmath>
 #include <random>
 
