@@ -3,16 +3,18 @@
 // frames are dropped, and the 30 frames after the gap are scored against the ground truth carried into
 // the map's frame at frame start-1 (the map's own drift before the gap is not recovery's). Prints a table;
 // never pass/fail. Takes about 2 minutes on 2 cores. A lost first frame shows the motion model's error.
-//   bench_recovery [gap ...]     default: 10 20
+//   bench_recovery [--config file.yaml] [gap ...]     default: config/kitti.yaml's defaults, gaps 10 20
 #include <algorithm>
 #include <cstdio>
 #include <cstdlib>
+#include <exception>
 #include <filesystem>
 #include <string>
 #include <vector>
 
 #include "binloop/io/kitti_sequence.h"
 #include "binloop/io/trajectory_io.h"
+#include "binloop/pipeline/slam_config.h"
 #include "binloop/pipeline/slam_pipeline.h"
 #include "binloop/sim/stereo_renderer.h"
 #include "binloop/sim/texture_bank.h"
@@ -30,8 +32,8 @@ struct Outcome {
 };
 
 Outcome runGap(const std::vector<StereoFrame>& frames, const std::vector<Pose3>& route, const StereoCamera& cam,
-               int start, int gap) {
-  SlamPipeline slam(cam, {}, {}, PipelineMode::kLockStep);
+               const SlamConfig& config, int start, int gap) {
+  SlamPipeline slam(cam, config.tracker, config.mapper, PipelineMode::kLockStep);
   Pose3 last;
   for (int i = 0; i < start; ++i) last = slam.process(frames[i]).T_w_c;
   const Pose3 drift = last * route[start - 1].inverse();
@@ -55,7 +57,19 @@ Outcome runGap(const std::vector<StereoFrame>& frames, const std::vector<Pose3>&
 
 int main(int argc, char** argv) {
   std::vector<int> gaps;
-  for (int i = 1; i < argc; ++i) gaps.push_back(std::atoi(argv[i]));
+  SlamConfig config;
+  for (int i = 1; i < argc; ++i) {
+    if (std::string(argv[i]) == "--config" && i + 1 < argc) {
+      try {
+        config = loadSlamConfig(argv[++i]);
+      } catch (const std::exception& e) {
+        std::fprintf(stderr, "%s\n", e.what());
+        return 1;
+      }
+      continue;
+    }
+    gaps.push_back(std::atoi(argv[i]));
+  }
   if (gaps.empty()) gaps = {10, 20};
   const std::vector<int> starts = {100, 150, 200, 250, 300, 350};
   const std::string poses = std::string(BINLOOP_SHARED_DATA_DIR) + "/kitti/poses/06.txt";
@@ -78,7 +92,7 @@ int main(int argc, char** argv) {
   std::printf("|---|---|---|---|---|---|---|\n");
   for (int gap : gaps)
     for (int start : starts) {
-      const Outcome o = runGap(frames, route, cam, start, gap);
+      const Outcome o = runGap(frames, route, cam, config, start, gap);
       std::printf("| %d | %d | %s | %.2f m | %.2f m | %.2f m | %d |\n", start, gap, o.first_state.c_str(), o.first_m,
                   o.worst10_m, o.worst30_m, o.lost);
       std::fflush(stdout);
