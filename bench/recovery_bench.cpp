@@ -3,11 +3,9 @@
 // frames are dropped, and the 30 frames after the gap are scored against the ground truth carried into
 // the map's frame at frame start-1 (the map's own drift before the gap is not recovery's). Prints a table;
 // never pass/fail. Takes about 2 minutes on 2 cores. A lost first frame shows the motion model's error.
-//   bench_recovery [--config file.yaml] [gap ...]     default: config/kitti.yaml's defaults, gaps 10 20
+//   bench_recovery [--config file.yaml] [--gap N ...]     default: the built-in settings, gaps 10 and 20
 #include <algorithm>
 #include <cstdio>
-#include <cstdlib>
-#include <exception>
 #include <filesystem>
 #include <string>
 #include <vector>
@@ -18,6 +16,7 @@
 #include "binloop/pipeline/slam_pipeline.h"
 #include "binloop/sim/stereo_renderer.h"
 #include "binloop/sim/texture_bank.h"
+#include "binloop/util/cli_args.h"
 
 using namespace binloop;
 
@@ -53,24 +52,7 @@ Outcome runGap(const std::vector<StereoFrame>& frames, const std::vector<Pose3>&
   return o;
 }
 
-}  // namespace
-
-int main(int argc, char** argv) {
-  std::vector<int> gaps;
-  SlamConfig config;
-  for (int i = 1; i < argc; ++i) {
-    if (std::string(argv[i]) == "--config" && i + 1 < argc) {
-      try {
-        config = loadSlamConfig(argv[++i]);
-      } catch (const std::exception& e) {
-        std::fprintf(stderr, "%s\n", e.what());
-        return 1;
-      }
-      continue;
-    }
-    gaps.push_back(std::atoi(argv[i]));
-  }
-  if (gaps.empty()) gaps = {10, 20};
+int runBench(const SlamConfig& config, const std::vector<int>& gaps) {
   const std::vector<int> starts = {100, 150, 200, 250, 300, 350};
   const std::string poses = std::string(BINLOOP_SHARED_DATA_DIR) + "/kitti/poses/06.txt";
   if (!std::filesystem::exists(poses)) {
@@ -98,4 +80,24 @@ int main(int argc, char** argv) {
       std::fflush(stdout);
     }
   return 0;
+}
+
+}  // namespace
+
+int main(int argc, char** argv) {
+  CliArgs args("bench_recovery", "bench_recovery [--config file.yaml] [--gap N ...]");
+  args.option("config", "SLAM settings (config/kitti.yaml's keys); default: the built-in ones")
+      .option("gap", "frames dropped; repeat for several (default: 10 and 20)");
+  return runTool("bench_recovery", [&] {
+    if (!args.parse(argc, argv)) return 0;
+    const SlamConfig config = args.has("config") ? loadSlamConfig(args.str("config")) : SlamConfig{};
+    std::vector<int> gaps;
+    for (const std::string& g : args.all("gap")) {
+      if (g.empty() || g.find_first_not_of("0123456789") != std::string::npos || std::stoi(g) < 1)
+        throw CliError("--gap '" + g + "': a whole number of frames, at least 1");
+      gaps.push_back(std::stoi(g));
+    }
+    if (gaps.empty()) gaps = {10, 20};
+    return runBench(config, gaps);
+  });
 }
