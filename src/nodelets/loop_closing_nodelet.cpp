@@ -234,7 +234,7 @@ void LoopClosingNodelet::publishPathAndEdges(const ros::Time& stamp) {
     if (q == where.end() || m == where.end()) continue;
     std_msgs::ColorRGBA c;
     c.a = 1;
-    if (e.status == "accepted") c.g = 1;          // green
+    if (e.status == "accepted" || e.status == "agreed") c.g = 1;  // green
     else if (e.status == "held") c.r = c.g = 1;   // yellow
     else c.r = 1;                                  // red: rejected, whatever the reason
     for (const auto* p : {&q->second, &m->second}) {

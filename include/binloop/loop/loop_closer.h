@@ -12,8 +12,10 @@
 //      through the keyframe chain and the loops closed so far). A loop beyond it, but within hold_factor
 //      times it, is held until a second loop, at least confirm_min_travel_m further on, asks for the same
 //      correction (within confirm_tolerance_m plus confirm_tolerance_per_m of the path between the two
-//      queries); a held loop that nothing confirms within hold_keyframes is rejected, and so is at once a
-//      loop beyond hold_factor times the bound (beyond_drift_bound).
+//      queries); a loop that agrees with the held one but comes less than confirm_min_travel_m after it
+//      waits with it (agreed, once confirmed); a held loop that nothing confirms within hold_keyframes is
+//      rejected with those that agreed, and so is at once a loop beyond hold_factor times the bound
+//      (beyond_drift_bound).
 //      Repeated facades pass step 1 between places hundreds of metres apart; they do not pass this. Nor
 //      does a facade repeated a few metres along the street, which shifts a true revisit by that much
 //      (rendered 00, frame 1571: 7.2 m along the road, accepted under a 2 % bound, then every correct loop
@@ -108,6 +110,7 @@ class LoopCloser {
     Pose3 delta;           // the world-frame correction it asks for
     size_t held_at = 0;    // keyframes stored when it was held
     double travel_at = 0;  // path length at the query
+    std::vector<msg::LoopClosure> agreeing;  // later loops that agree but came too soon to confirm it
   };
   Output verify(SlamKeyframeId query, SlamKeyframeId match, const std::string& model,
                 const std::vector<uint32_t>& query_words = {}, const std::vector<uint32_t>& match_words = {});
@@ -122,6 +125,8 @@ class LoopCloser {
   bool correct(const std::vector<LoopEdge>& new_loops, const std::vector<std::pair<MapPointId, MapPointId>>& fused,
                msg::LoopClosure* c, Output* out);
   void expireHeld(Output* out);
+  /// Rejects the held loop and those that agreed with it (beyond_drift_bound, `why` added to each detail).
+  void rejectHeld(const std::string& why, Output* out);
 
   LoopCloserParams p_;
   std::unordered_map<SlamKeyframeId, msg::KeyFramePtr> frames_;

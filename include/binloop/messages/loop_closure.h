@@ -13,8 +13,9 @@ struct LoopClosure {
   SlamKeyframeId query = kNoId, match = kNoId;
   uint64_t query_frame = 0, match_frame = 0;
   std::string model;   // which detector proposed it, or "external"
-  // accepted, held (waiting for a second loop), or the reason it was rejected: too_few_matches,
-  // no_consensus, too_few_inliers, beyond_drift_bound, large_residual, unknown_keyframe
+  // accepted, held (waiting for a second loop), agreed (with a held loop that a later one confirmed), or
+  // the reason it was rejected: too_few_matches, no_consensus, too_few_inliers, beyond_drift_bound,
+  // large_residual, unknown_keyframe
   std::string status;
   std::string detail;  // the numbers behind the status, one line
   Pose3 T_query_match = Pose3::Identity();

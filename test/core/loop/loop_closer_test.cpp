@@ -213,6 +213,47 @@ TEST_F(LoopCloserTest, ASecondConsistentLoopConfirmsAHeldOne) {
   EXPECT_LT((q->T_w_c_after.translation() - truthOnCircle(kLap + 3).translation()).norm(), 1.0);
 }
 
+// A revisit verified at every keyframe (4.2 m apart), each beyond the bound: the loops that agree with the
+// held one but come too soon wait with it instead of replacing it, and the first one 10 m on confirms it.
+TEST_F(LoopCloserTest, LoopsTooNearToConfirmAHeldOneWaitWithIt) {
+  drift = 0.3;
+  LoopCloser lc;
+  driveLap(lc);
+  std::vector<std::string> seen;  // "status@keyframe" in order
+  for (int k = 0; k <= 3; ++k) {
+    lc.addKeyframe(keyframe(kLap + k, truthOnCircle(kLap + k), k, truthOnCircle(k)));
+    const LoopCloser::Output out = lc.process(proposal(kLap + k, k));
+    for (const auto& c : out.closures) {
+      for (int i = 0; i <= 3; ++i)
+        if (c->query == id(kLap + i)) seen.push_back(c->status + "@" + std::to_string(i));
+      if (k < 3) {
+        EXPECT_EQ(c->status, "held") << c->detail;
+      }
+    }
+    EXPECT_EQ(static_cast<bool>(out.correction), k == 3);
+  }
+  const std::vector<std::string> expected{"held@0",     "held@1",     "held@2",
+                                          "accepted@3", "accepted@0", "agreed@1", "agreed@2"};
+  EXPECT_EQ(seen, expected);
+  EXPECT_EQ(lc.loops().size(), 2u);
+
+  // Nothing confirms them: the held loop and the one that agreed with it are rejected together.
+  LoopCloserParams p;
+  p.hold_keyframes = 4;
+  LoopCloser alone(p);
+  driveLap(alone);
+  seen.clear();
+  for (int k = 0; k < 6; ++k) {
+    const int place = k < 2 ? k : -1;
+    alone.addKeyframe(keyframe(kLap + k, truthOnCircle(kLap + k), place, truthOnCircle(k)));
+    for (const auto& c : alone.process(proposal(kLap + k, place)).closures)
+      seen.push_back(c->status + "@" + std::to_string(c->query == id(kLap) ? 0 : 1));
+  }
+  const std::vector<std::string> rejected{"held@0", "held@1", "beyond_drift_bound@0", "beyond_drift_bound@1"};
+  EXPECT_EQ(seen, rejected);
+  EXPECT_TRUE(alone.loops().empty());
+}
+
 TEST_F(LoopCloserTest, AnExternalLoopIsVerifiedBeforeItIsApplied) {
   LoopCloser lc;
   driveLap(lc);
