@@ -26,7 +26,12 @@ class MapReplica {
   void fuse(MapPointId removed, MapPointId kept);
   /// A keyframe as its creator sent it: its state and the points made with it.
   void add(const msg::KeyFrame& kf);
-  void apply(const msg::LocalMapUpdate& u);
+  /// `carry_unsent`: `u` is the whole map after a loop correction. Keyframes this replica holds that `u`
+  /// does not name were made here and are still on their way to the sender; each moves as its nearest
+  /// ancestor in `u` moved, with the points it made, which is what the sender does to them when they
+  /// arrive (LocalMapper::insert). Left behind, they would keep the live pose, which rides on the newest
+  /// of them, where the loop found the map to be wrong, and every keyframe after would bring that back.
+  void apply(const msg::LocalMapUpdate& u, bool carry_unsent = false);
 
   /// The point an id now stands for (following fusions), or kNoId when it was culled or never known.
   MapPointId resolve(MapPointId id) const;
@@ -49,6 +54,8 @@ class MapReplica {
  private:
   void unlinkKeyframe(const msg::KeyframeState& kf);
   void linkKeyframe(const msg::KeyframeState& kf);
+  /// For apply(u, true): each held keyframe that `u` neither names nor culls -> how it moves.
+  std::unordered_map<SlamKeyframeId, Pose3> unsentMoves(const msg::LocalMapUpdate& u) const;
 
   std::unordered_map<MapPointId, msg::MapPoint> points_;
   std::unordered_map<SlamKeyframeId, msg::KeyframeState> keyframes_;

@@ -1,6 +1,7 @@
 #include "binloop/map/map_replica.h"
 
 #include <algorithm>
+#include <unordered_set>
 
 namespace binloop {
 
@@ -102,12 +103,54 @@ void MapReplica::add(const msg::KeyFrame& kf) {
   upsertKeyframe(kf.state);
 }
 
-void MapReplica::apply(const msg::LocalMapUpdate& u) {
+void MapReplica::apply(const msg::LocalMapUpdate& u, bool carry_unsent) {
+  const std::unordered_map<SlamKeyframeId, Pose3> moves =
+      carry_unsent ? unsentMoves(u) : std::unordered_map<SlamKeyframeId, Pose3>{};
   for (const auto& [removed, kept] : u.fused) fuse(removed, kept);
   for (MapPointId id : u.culled_points) removePoint(id);
   for (SlamKeyframeId id : u.culled_keyframes) removeKeyframe(id);
   for (const auto& p : u.points) upsertPoint(p);
   for (const auto& k : u.keyframes) upsertKeyframe(k);
+  if (moves.empty()) return;
+  for (const auto& [id, d] : moves) {
+    auto it = keyframes_.find(id);
+    if (it != keyframes_.end()) it->second.T_w_c = orthonormalized(d * it->second.T_w_c);
+  }
+  std::unordered_set<MapPointId> sent;
+  for (const auto& p : u.points) sent.insert(p.id);
+  for (auto& [id, p] : points_) {
+    auto m = moves.find(p.reference);
+    if (m == moves.end() || sent.count(id)) continue;
+    p.p_w = m->second * p.p_w;
+    p.normal = (m->second.linear().cast<float>() * p.normal).normalized();
+  }
+}
+
+std::unordered_map<SlamKeyframeId, Pose3> MapReplica::unsentMoves(const msg::LocalMapUpdate& u) const {
+  std::unordered_map<SlamKeyframeId, Pose3> sent;  // keyframes in `u` -> how they moved here
+  for (const auto& k : u.keyframes) {
+    auto it = keyframes_.find(k.id);
+    sent[k.id] = it == keyframes_.end() ? Pose3::Identity() : Pose3(k.T_w_c * it->second.T_w_c.inverse());
+  }
+  const std::unordered_set<SlamKeyframeId> culled(u.culled_keyframes.begin(), u.culled_keyframes.end());
+  std::unordered_map<SlamKeyframeId, Pose3> moves;
+  for (const auto& [id, kf] : keyframes_) {
+    if (sent.count(id) || culled.count(id)) continue;
+    // Up the parents (unsent ones were made here one on another) to the first the update names.
+    Pose3 d = Pose3::Identity();
+    SlamKeyframeId a = kf.parent;
+    for (int hops = 0; hops < 1000 && a != kNoId; ++hops) {
+      if (auto s = sent.find(a); s != sent.end()) {
+        d = s->second;
+        break;
+      }
+      auto held = keyframes_.find(a);
+      if (held == keyframes_.end()) break;  // an ancestor neither side holds: it stays
+      a = held->second.parent;
+    }
+    moves.emplace(id, d);
+  }
+  return moves;
 }
 
 MapPointId MapReplica::resolve(MapPointId id) const {

@@ -563,7 +563,8 @@ msg::KeyFramePtr Tracker::makeKeyframe(Frame& f) {
 }
 
 void Tracker::apply(const msg::LocalMapUpdate& u) {
-  map_.apply(u);
+  // Keyframes made since mapping sent its corrected map are carried along, as mapping will carry them.
+  map_.apply(u, u.correction && u.corrections_seen > corrections_seen_);
   corrections_seen_ = std::max(corrections_seen_, u.corrections_seen);
   if (keyframe_db_)
     for (SlamKeyframeId k : u.culled_keyframes) keyframe_db_->remove(k);

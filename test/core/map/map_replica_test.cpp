@@ -343,4 +343,51 @@ TEST(MapReplica, KeyframeUpsertedWithAFusedIdGetsTheKeptId) {
 }
 
 }  // namespace
+// A loop correction reaches tracking while K2 and K3 (K3 made on K2) are still on their way to mapping:
+// the corrected map names K1 only. Carried, K2, K3 and the points they made move as K1 moved, and a point
+// the update sends is not moved twice; not carried, they stay.
+TEST(MapReplica, KeyframesNotYetSentMoveWithTheirAncestorAfterACorrection) {
+  auto build = [] {
+    MapReplica m;
+    m.add(keyframeMessage(K1, {P1}, {P1}));
+    msg::KeyFrame k2 = keyframeMessage(K2, {P1, P2}, {P2});
+    k2.state.parent = K1;
+    k2.new_points[0].reference = K2;
+    m.add(k2);
+    msg::KeyFrame k3 = keyframeMessage(K3, {P2, P3}, {P3});
+    k3.state.parent = K2;
+    k3.state.T_w_c.translation() = Eigen::Vector3d(1, 0, 0);
+    k3.new_points[0].reference = K3;
+    m.add(k3);
+    return m;
+  };
+  msg::LocalMapUpdate u;
+  u.correction = true;
+  u.corrections_seen = 1;
+  KeyframeState k1 = keyframe(K1, {P1});
+  k1.T_w_c.linear() = Eigen::AngleAxisd(0.1, Eigen::Vector3d::UnitY()).toRotationMatrix();
+  k1.T_w_c.translation() = Eigen::Vector3d(0, 0, 5);
+  u.keyframes.push_back(k1);
+  MapPoint p1 = point(P1, 3);
+  p1.reference = K1;
+  u.points.push_back(p1);
+
+  MapReplica carried = build();
+  carried.apply(u, true);
+  const Pose3 d = k1.T_w_c;  // K1 was at the identity
+  EXPECT_TRUE(carried.keyframe(K1)->T_w_c.isApprox(d));
+  EXPECT_TRUE(carried.keyframe(K2)->T_w_c.isApprox(d));
+  Pose3 k3_before = Pose3::Identity();
+  k3_before.translation() = Eigen::Vector3d(1, 0, 0);
+  EXPECT_TRUE(carried.keyframe(K3)->T_w_c.isApprox(d * k3_before));
+  EXPECT_TRUE(carried.point(P2)->p_w.isApprox(d * point(P2).p_w));
+  EXPECT_TRUE(carried.point(P3)->p_w.isApprox(d * point(P3).p_w));
+  EXPECT_TRUE(carried.point(P1)->p_w.isApprox(p1.p_w));  // as sent
+
+  MapReplica plain = build();
+  plain.apply(u);
+  EXPECT_TRUE(plain.keyframe(K2)->T_w_c.isApprox(Pose3::Identity()));
+  EXPECT_TRUE(plain.point(P3)->p_w.isApprox(point(P3).p_w));
+}
+
 }  // namespace binloop
