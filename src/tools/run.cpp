@@ -7,6 +7,7 @@
 #include <iomanip>
 #include <iostream>
 #include <sstream>
+#include <thread>
 
 #include "binloop/io/data_error.h"
 #include "binloop/io/kitti_sequence.h"
@@ -45,7 +46,7 @@ int main(int argc, char** argv) {
   CliArgs args("run",
                "scripts/binloop run <sequence_dir> --out <dir> [--config config/kitti.yaml]\n"
                "    [--detector hbow|fabmap|vlad|hmvlad|vladpq|none] [--shadow all|M,M] [--switch-detector-at KF:M]\n"
-               "    [--lockstep] [--seed N] [--start N] [--end N] [--reloc-vocab vocab/kitti08/hbow.bin|none]\n"
+               "    [--lockstep | --rate R] [--seed N] [--start N] [--end N] [--reloc-vocab vocab/kitti08/hbow.bin|none]\n"
                "    [--load-map <dir>] [--save-map <dir>]\n"
                "Tracks and maps a KITTI-layout stereo sequence (image_0/, image_1/, calib.txt, times.txt), closes loops,\n"
                "and writes trajectory.kitti.txt / .tum.txt (every frame, loop-corrected), keyframes.kitti.txt / .tum.txt,\n"
@@ -58,6 +59,9 @@ int main(int argc, char** argv) {
       .option("shadow", "models run beside the active one and only logged: 'all' or a comma list")
       .option("switch-detector-at", "KF:model[,KF:model...]: switch the active detector when it has seen KF keyframes")
       .flag("lockstep", "map every keyframe before the next frame (bit-identical reruns); default: mapping on its own thread")
+      .option("rate",
+              "threaded: frames go in no faster than R times the sequence's clock (times.txt), as from a camera or "
+              "a bag played at R x; 0: as fast as tracking takes them", "0")
       .option("seed", "seed for every random choice (recorded in summary.json)", "1")
       .option("start", "first frame", "0")
       .option("end", "one past the last frame (default: all)", "-1")
@@ -108,6 +112,9 @@ int main(int argc, char** argv) {
     const fs::path out = args.str("out");
     fs::create_directories(out);
     const bool lockstep = args.has("lockstep");
+    const double rate = args.number("rate");
+    if (!(rate >= 0) || rate > 1000) throw CliError("--rate " + args.str("rate") + ": 0 (flat out) or a factor up to 1000");
+    if (rate > 0 && lockstep) throw CliError("--rate paces a threaded run; --lockstep waits for mapping at every keyframe");
     std::cerr << "run: " << seq.directory() << ", frames " << start << "-" << end - 1 << ", "
               << (lockstep ? "lock-step" : "threaded") << "\n"
               << seq.camera().describe();
@@ -160,7 +167,15 @@ int main(int argc, char** argv) {
     ProgressBar bar("run", static_cast<size_t>(end - start));
     const auto t0 = std::chrono::steady_clock::now();
     int problems = 0;
+    double max_lag_s = 0;  // with --rate: how far behind the sequence's clock a frame went in
     for (long i = start; i < end; ++i) {
+      if (rate > 0) {
+        const auto due = t0 + std::chrono::duration_cast<std::chrono::steady_clock::duration>(
+                                  std::chrono::duration<double>((seq.times()[i] - seq.times()[start]) / rate));
+        const auto now = std::chrono::steady_clock::now();
+        if (now < due) std::this_thread::sleep_until(due);
+        else max_lag_s = std::max(max_lag_s, std::chrono::duration<double>(now - due).count());
+      }
       msg::TrackedFrame tf;
       try {
         tf = slam.process(seq.load(static_cast<size_t>(i)));
@@ -243,7 +258,8 @@ int main(int argc, char** argv) {
        << ",\n  \"map_points\": " << mapper.pointCount() << ",\n  \"lost_frames\": " << lost
        << ",\n  \"relocalizations\": " << relocalized << ",\n  \"problems\": " << problems
        << ",\n  \"wall_s\": " << wall_s << ",\n  \"frames_per_s\": " << frames.size() / std::max(wall_s, 1e-9)
-       << ",\n  \"mode\": \"" << (lockstep ? "lockstep" : "threaded") << "\",\n  \"seed\": " << args.integer("seed")
+       << ",\n  \"mode\": \"" << (lockstep ? "lockstep" : "threaded") << "\",\n  \"rate\": " << rate
+       << ",\n  \"max_lag_s\": " << max_lag_s << ",\n  \"seed\": " << args.integer("seed")
        << ",\n  \"detector\": \"" << detector << "\",\n  \"reloc_vocab\": \""
        << (config.tracker.vocabulary ? reloc_vocab : std::string("none")) << "\",\n";
     auto stat = [&](const char* name, const std::vector<double>& v, bool last) {

@@ -87,3 +87,32 @@ TEST(SlamTools, EvalSlamScoresEveryDetectorInOneTable) {
                                                          << table;
   EXPECT_TRUE(binloop::test::exists(tmp / "out/trajectories.png"));
 }
+
+// --rate paces a threaded run by the sequence's clock (sample_00: 11 frames, 1.04 s), so the run cannot take
+// less than the sequence lasts; a bad factor, or one with --lockstep, is one clear line.
+TEST(SlamTools, RunAtARatePacesFramesByTheSequenceClock) {
+  const std::string seq = binloop::test::sharedData("kitti/sample_00");
+  BINLOOP_REQUIRE_DATA(seq);
+  binloop::test::TempDir tmp;
+  const auto r = tool("run", seq + " --out " + (tmp / "out") + " --detector none --rate 1 --reloc-vocab none");
+  ASSERT_EQ(r.code, 0) << r.out;
+  const std::string summary = readAll(tmp / "out/summary.json");
+  EXPECT_NE(summary.find("\"rate\": 1,"), std::string::npos) << summary;
+  EXPECT_NE(summary.find("\"max_lag_s\": "), std::string::npos) << summary;
+  const auto wall = summary.find("\"wall_s\": ");
+  ASSERT_NE(wall, std::string::npos) << summary;
+  std::ifstream times(seq + "/times.txt");
+  double t, first = -1, last = 0;
+  while (times >> t) {
+    if (first < 0) first = t;
+    last = t;
+  }
+  EXPECT_GE(std::stod(summary.substr(wall + 10)), 0.95 * (last - first)) << summary;
+
+  const auto both = tool("run", seq + " --out " + (tmp / "b") + " --rate 1 --lockstep");
+  EXPECT_NE(both.code, 0);
+  EXPECT_NE(both.out.find("--rate paces a threaded run"), std::string::npos) << both.out;
+  const auto bad = tool("run", seq + " --out " + (tmp / "c") + " --rate -2");
+  EXPECT_NE(bad.code, 0);
+  EXPECT_NE(bad.out.find("--rate -2: 0 (flat out) or a factor up to 1000"), std::string::npos) << bad.out;
+}
