@@ -6,6 +6,7 @@
 // came back within 0.3 m (the SLAM issue's goal); never pass/fail. The default takes about 2 minutes on
 // 2 cores. A lost first frame shows the motion model's error.
 //   bench_recovery [--config file.yaml] [--gap N ...] [--route NN] [--start N ...] [--every N] [--lead N]
+//                  [--reloc-vocab vocab/kitti08/hbow.bin] [--frames]
 #include <algorithm>
 #include <cstdio>
 #include <map>
@@ -15,6 +16,7 @@
 
 #include "binloop/io/kitti_sequence.h"
 #include "binloop/io/trajectory_io.h"
+#include "binloop/pipeline/model_files.h"
 #include "binloop/pipeline/slam_config.h"
 #include "binloop/pipeline/slam_pipeline.h"
 #include "binloop/sim/stereo_renderer.h"
@@ -32,6 +34,7 @@ struct Setup {
   std::string route = "06";
   std::vector<int> gaps{10, 20}, starts{100, 150, 200, 250, 300, 350};
   int lead = 0;  // frames mapped before the gap; 0: all from frame 0
+  bool frames = false;  // print each scored frame too
 };
 
 struct Outcome {
@@ -47,16 +50,37 @@ StereoCamera cameraOfRoute(const std::string& route) {
 }
 
 Outcome runGap(const std::map<int, StereoFrame>& frames, const std::vector<Pose3>& route, const StereoCamera& cam,
-               const SlamConfig& config, int first, int start, int gap) {
+               const SlamConfig& config, int first, int start, int gap, bool print_frames) {
   SlamPipeline slam(cam, config.tracker, config.mapper, PipelineMode::kLockStep);
-  Pose3 last;
-  for (int i = first; i < start; ++i) last = slam.process(frames.at(i)).T_w_c;
+  Pose3 last, before_last;
+  for (int i = first; i < start; ++i) {
+    before_last = last;
+    last = slam.process(frames.at(i)).T_w_c;
+  }
   const Pose3 drift = last * route[start - 1].inverse();
+  const Pose3 step = before_last.inverse() * last;  // the constant-velocity model's motion per frame
   Outcome o;
   for (int i = start + gap; i < start + gap + kAfter; ++i) {
     const msg::TrackedFrame tf = slam.process(frames.at(i));
     const double off = ((drift * route[i]).translation() - tf.T_w_c.translation()).norm();
     const bool lost = tf.state == msg::TrackingState::kLost;
+    if (print_frames && i == start + gap) {
+      Pose3 predicted = last;
+      for (int k = start; k <= i; ++k) predicted = predicted * step;
+      const Eigen::Vector3d e_p =
+          predicted.linear().transpose() * (predicted.translation() - (drift * route[i]).translation());
+      std::printf("    constant velocity from frame %d predicts frame %d %.2f m off (right %.2f, ahead %.2f)\n",
+                  start - 1, i, e_p.norm(), e_p.x(), e_p.z());
+    }
+    if (print_frames) {
+      // Where the error lies in the camera's own frame (x right, z ahead) tells a slide along the road
+      // from a wrong turn.
+      const Eigen::Vector3d e_c = tf.T_w_c.linear().transpose() * (tf.T_w_c.translation() - (drift * route[i]).translation());
+      const double turn = Eigen::AngleAxisd((drift * route[i]).linear().transpose() * tf.T_w_c.linear()).angle();
+      std::printf("    frame %d: %s, %d tracked, error %.2f m (right %.2f, ahead %.2f), turned %.2f deg%s%s\n", i,
+                  msg::toString(tf.state), tf.tracked_points, off, e_c.x(), e_c.z(), turn * 180 / 3.14159265358979,
+                  tf.problem.empty() ? "" : ": ", tf.problem.c_str());
+    }
     if (i == start + gap) o.first_state = msg::toString(tf.state), o.first_m = off;
     if (lost) {
       ++o.lost;
@@ -103,11 +127,16 @@ int runBench(const SlamConfig& config, const Setup& setup) {
       std::map<int, StereoFrame> frames;
       auto add = [&](int from, int to) {
         const auto rendered = sim::renderFrames(renderer, route, static_cast<size_t>(from), static_cast<size_t>(to - from));
-        for (int i = from; i < to; ++i) frames.emplace(i, rendered[static_cast<size_t>(i - from)]);
+        for (int i = from; i < to; ++i) {
+          StereoFrame f = rendered[static_cast<size_t>(i - from)];
+          f.index = i;  // renderFrames counts from its first frame; the tracker needs the route's clock
+          f.stamp_s = 0.1 * i;
+          frames.emplace(i, std::move(f));
+        }
       };
       add(first, start);
       add(start + gap, start + gap + kAfter);
-      const Outcome o = runGap(frames, route, cam, config, first, start, gap);
+      const Outcome o = runGap(frames, route, cam, config, first, start, gap, setup.frames);
       const double skipped = (route[start + gap].translation() - route[start - 1].translation()).norm();
       std::printf("| %d | %d | %.1f m | %s | %.2f m | %.2f m | %.2f m | %d |\n", start, gap, skipped,
                   o.first_state.c_str(), o.first_m, o.worst10_m, o.worst30_m, o.lost);
@@ -141,10 +170,15 @@ int main(int argc, char** argv) {
       .option("route", "KITTI route whose ground truth is rendered (default: 06)")
       .option("start", "first missing frame; repeat for several (default: 100, 150, ..., 350)")
       .option("every", "starts every N frames along the whole route instead (needs --lead)")
-      .option("lead", "frames mapped before each gap (default: all from frame 0)");
+      .option("lead", "frames mapped before each gap (default: all from frame 0)")
+      .option("reloc-vocab", "hbow vocabulary for relocalisation anywhere in the map, as `run` loads by default "
+                             "(vocab/kitti08/hbow.bin); default: none, only the most recent keyframes")
+      .flag("frames", "also print each scored frame: state, error along and across the view, rotation error, problem");
   return runTool("bench_recovery", [&] {
     if (!args.parse(argc, argv)) return 0;
-    const SlamConfig config = args.has("config") ? loadSlamConfig(args.str("config")) : SlamConfig{};
+    SlamConfig config = args.has("config") ? loadSlamConfig(args.str("config")) : SlamConfig{};
+    if (args.has("reloc-vocab"))
+      config.tracker.vocabulary = loadRelocalisationVocabulary(args.str("reloc-vocab"), config.tracker.orb, false);
     auto count = [](const std::string& option, const std::string& v) {
       if (v.empty() || v.size() > 6 || v.find_first_not_of("0123456789") != std::string::npos || std::stoi(v) < 1)
         throw CliError("--" + option + " '" + v + "': a whole number, at least 1");
@@ -158,6 +192,7 @@ int main(int argc, char** argv) {
       if (setup.route.size() != 2 || setup.route.find_first_not_of("0123456789") != std::string::npos)
         throw CliError("--route '" + setup.route + "': a KITTI route number, two digits (00-10)");
     }
+    setup.frames = args.has("frames");
     if (args.has("lead")) setup.lead = count("lead", args.str("lead"));
     if (args.has("start") && args.has("every")) throw CliError("--start and --every: give one of them");
     if (!args.all("start").empty()) setup.starts.clear();

@@ -109,7 +109,6 @@ class LoopCloser {
     msg::LoopClosure closure;
     Pose3 delta;           // the world-frame correction it asks for
     size_t held_at = 0;    // keyframes stored when it was held
-    double travel_at = 0;  // path length at the query
     std::vector<msg::LoopClosure> agreeing;  // later loops that agree but came too soon to confirm it
   };
   Output verify(SlamKeyframeId query, SlamKeyframeId match, const std::string& model,

@@ -272,7 +272,7 @@ LoopCloser::Output LoopCloser::verify(SlamKeyframeId query, SlamKeyframeId match
       c->status = "held";
       c->detail = numbers + "; held until a second loop confirms it";
       if (held_) rejectHeld("replaced by a newer held loop that does not agree with it", &out);
-      held_ = Held{edges.front(), *c, delta, order_.size(), 0, {}};
+      held_ = Held{edges.front(), *c, delta, order_.size(), {}};
       return out;
     }
   }
