@@ -3,6 +3,7 @@
 // edges (markers coloured by status) out; the add_external_loop service. A short onInit() over
 // binloop::LoopCloser. Across processes the candidates for a keyframe may overtake the keyframe or its
 // update, so they wait here until both have arrived.
+#include <algorithm>
 #include <binloop/AddExternalLoop.h>
 #include <nav_msgs/Path.h>
 #include <nodelet/nodelet.h>
@@ -180,7 +181,11 @@ void LoopClosingNodelet::handle(const binloop::LoopCloser::Output& out, const st
   for (const auto& c : out.closures) {
     ++verified_;
     ++by_status_[c->status];
-    edges_.push_back({c->query, c->match, c->status});
+    // A held loop comes again with its final status: its edge changes colour instead of being drawn twice.
+    auto same = std::find_if(edges_.begin(), edges_.end(),
+                             [&](const auto& e) { return e.query == c->query && e.match == c->match; });
+    if (same != edges_.end()) same->status = c->status;
+    else edges_.push_back({c->query, c->match, c->status});
     last_loop_ = c->model + " " + std::to_string(c->query_frame) + " -> " + std::to_string(c->match_frame) + ": " +
                  c->status + " (" + c->detail + ")";
     NODELET_INFO("binloop/LoopClosing: loop %s", last_loop_.c_str());

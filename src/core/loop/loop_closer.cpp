@@ -276,10 +276,11 @@ LoopCloser::Output LoopCloser::verify(SlamKeyframeId query, SlamKeyframeId match
       return out;
     }
   }
-  std::vector<msg::LoopClosure> agreed;
+  std::vector<msg::LoopClosure> waited;  // the held loop first, then those that agreed with it
   if (confirming) {
     edges.push_back(confirmed_edge);
-    agreed = std::move(held_->agreeing);
+    waited.push_back(held_->closure);
+    waited.insert(waited.end(), held_->agreeing.begin(), held_->agreeing.end());
     held_.reset();
   }
   c->detail = numbers;
@@ -290,20 +291,22 @@ LoopCloser::Output LoopCloser::verify(SlamKeyframeId query, SlamKeyframeId match
     const MapPointId a = sq.point_ids[qi], b = sm.point_ids[mi];
     if (a != kNoId && b != kNoId && a != b) fused.emplace_back(a, b);
   }
-  if (!correct(edges, fused, c.get(), &out)) return out;
-  if (confirming) {
-    auto first = std::make_shared<msg::LoopClosure>(*c);
-    first->query = confirmed_edge.query;
-    first->match = confirmed_edge.candidate;
-    first->status = "accepted";
-    first->detail = "confirmed by the loop at keyframe " + std::to_string(counterOf(query));
-    out.closures.push_back(first);
-    for (msg::LoopClosure& a : agreed) {
-      a.status = "agreed";
-      a.detail += "; the held loop was confirmed by the loop at keyframe " + std::to_string(counterOf(query)) +
-                  ", whose two edges carry the correction";
-      out.closures.push_back(std::make_shared<msg::LoopClosure>(std::move(a)));
+  const bool applied = correct(edges, fused, c.get(), &out);
+  // Each loop that waited ends with its own numbers (frames, inliers, correction) and a final status.
+  const std::string by = std::to_string(counterOf(query));
+  for (size_t k = 0; k < waited.size(); ++k) {
+    msg::LoopClosure& w = waited[k];
+    if (!applied) {
+      w.status = c->status;  // large_residual: nothing moved
+      w.detail += "; the loop at keyframe " + by + " that confirmed it was rejected (" + c->status + ")";
+    } else if (k == 0) {
+      w.status = "accepted";
+      w.detail += "; confirmed by the loop at keyframe " + by;
+    } else {
+      w.status = "agreed";
+      w.detail += "; the held loop was confirmed by the loop at keyframe " + by + ", whose two edges carry the correction";
     }
+    out.closures.push_back(std::make_shared<msg::LoopClosure>(std::move(w)));
   }
   return out;
 }

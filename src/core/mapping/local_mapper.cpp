@@ -497,6 +497,7 @@ LocalMapper::Output LocalMapper::process(const msg::KeyFrame& in) {
   auto refined = std::make_shared<msg::KeyFrame>(in);
   refined->revision = in.revision + 1;
   refined->state = kf.state;
+  refined->corrections_seen = history_.applied();  // its pose is already in the corrected map's frame
   refined->new_points.clear();
   return {u, refined};
 }

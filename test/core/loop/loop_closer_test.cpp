@@ -204,6 +204,8 @@ TEST_F(LoopCloserTest, ASecondConsistentLoopConfirmsAHeldOne) {
   EXPECT_EQ(out.closures[0]->status, "accepted") << out.closures[0]->detail;
   EXPECT_EQ(out.closures[1]->status, "accepted") << out.closures[1]->detail;
   EXPECT_EQ(out.closures[1]->query, id(kLap));
+  EXPECT_EQ(out.closures[1]->query_frame, 3u * kLap);  // the held loop's own numbers, not the confirming one's
+  EXPECT_EQ(out.closures[0]->query_frame, 3u * (kLap + 3));
   ASSERT_TRUE(out.correction);
   EXPECT_EQ(lc.loops().size(), 2u);
   // The odometry edges themselves carry the drift (0.3 m per 4.2 m), so the graph settles between them and
