@@ -44,7 +44,7 @@ struct LocalMapperParams {
   bool cull_keyframes = true;
   // After a loop correction, a bundle adjustment of the whole map. Off by default (README, "Loop closing,
   // measured": what it costs and gives).
-  bool global_ba_after_loop = false;
+  bool global_ba_after_loop = true;
   // Where it runs. False: on mapping's thread, before the corrected map goes to tracking (mapping waits;
   // lock-step runs stay bit-identical). True (the threaded pipeline and the nodelet set it): on its own
   // thread over a copy of the map, as ORB-SLAM2 does; mapping goes on, and mergeGlobalBa() folds the result
