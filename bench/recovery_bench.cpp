@@ -33,7 +33,8 @@ constexpr double kGoalM = 0.3;   // the SLAM issue's bound on the poses after a 
 struct Setup {
   std::string route = "06";
   std::vector<int> gaps{10, 20}, starts{100, 150, 200, 250, 300, 350};
-  int lead = 0;  // frames mapped before the gap; 0: all from frame 0
+  int every = 0;  // > 0: starts every this many frames along the whole route instead of `starts`
+  int lead = 0;   // frames mapped before the gap; 0: all from frame 0
   bool frames = false;  // print each scored frame too
 };
 
@@ -42,12 +43,6 @@ struct Outcome {
   double first_m = 0, worst10_m = 0, worst30_m = 0;
   int lost = 0;
 };
-
-// The camera of a KITTI odometry route (its calib.txt's P0/P1 differ by recording day).
-StereoCamera cameraOfRoute(const std::string& route) {
-  const int n = std::stoi(route);
-  return kittiCameraByName(n <= 2 ? "kitti00" : n == 3 ? "kitti03" : "kitti04");
-}
 
 Outcome runGap(const std::map<int, StereoFrame>& frames, const std::vector<Pose3>& route, const StereoCamera& cam,
                const SlamConfig& config, int first, int start, int gap, bool print_frames) {
@@ -92,7 +87,7 @@ Outcome runGap(const std::map<int, StereoFrame>& frames, const std::vector<Pose3
   return o;
 }
 
-int runBench(const SlamConfig& config, const Setup& setup) {
+int runBench(const SlamConfig& config, Setup setup) {
   const std::string poses = std::string(BINLOOP_SHARED_DATA_DIR) + "/kitti/poses/" + setup.route + ".txt";
   if (!std::filesystem::exists(poses)) {
     std::fprintf(stderr, "bench_recovery: needs %s\n", poses.c_str());
@@ -100,12 +95,17 @@ int runBench(const SlamConfig& config, const Setup& setup) {
   }
   const std::vector<Pose3> route = readKittiPoses(poses);
   const int max_gap = *std::max_element(setup.gaps.begin(), setup.gaps.end());
+  if (setup.every > 0) {
+    setup.starts.clear();
+    for (int s = std::max(setup.every, setup.lead); s + max_gap + kAfter <= static_cast<int>(route.size()); s += setup.every)
+      setup.starts.push_back(s);
+  }
   for (int start : setup.starts)
     if (start < 1 || start - setup.lead < 0 || start + max_gap + kAfter > static_cast<int>(route.size()))
       throw CliError("--start " + std::to_string(start) + ": route " + setup.route + " has " +
                      std::to_string(route.size()) + " frames; a start needs " + std::to_string(setup.lead) +
                      " before it and the gap plus " + std::to_string(kAfter) + " after it");
-  const StereoCamera cam = cameraOfRoute(setup.route);
+  const StereoCamera cam = kittiCameraByName("kitti" + setup.route);
   sim::WorldParams wp;
   wp.aperiodic_ground = true;
   const auto world = sim::World::build(route, sim::TextureBank::build(sim::defaultTexturePhotos(), 1), wp, 1);
@@ -189,8 +189,9 @@ int main(int argc, char** argv) {
     for (const std::string& g : args.all("gap")) setup.gaps.push_back(count("gap", g));
     if (args.has("route")) {
       setup.route = args.str("route");
-      if (setup.route.size() != 2 || setup.route.find_first_not_of("0123456789") != std::string::npos)
-        throw CliError("--route '" + setup.route + "': a KITTI route number, two digits (00-10)");
+      if (setup.route.size() != 2 || setup.route.find_first_not_of("0123456789") != std::string::npos ||
+          setup.route > "10")
+        throw CliError("--route '" + setup.route + "': a KITTI route with ground truth, two digits (00-10)");
     }
     setup.frames = args.has("frames");
     if (args.has("lead")) setup.lead = count("lead", args.str("lead"));
@@ -199,13 +200,7 @@ int main(int argc, char** argv) {
     for (const std::string& s : args.all("start")) setup.starts.push_back(count("start", s));
     if (args.has("every")) {
       if (setup.lead == 0) throw CliError("--every needs --lead (mapping from frame 0 for every start would take hours)");
-      const int every = count("every", args.str("every"));
-      const std::string poses = std::string(BINLOOP_SHARED_DATA_DIR) + "/kitti/poses/" + setup.route + ".txt";
-      if (!std::filesystem::exists(poses)) throw CliError("needs " + poses);
-      const int n = static_cast<int>(readKittiPoses(poses).size());
-      const int max_gap = *std::max_element(setup.gaps.begin(), setup.gaps.end());
-      setup.starts.clear();
-      for (int s = std::max(every, setup.lead); s + max_gap + kAfter <= n; s += every) setup.starts.push_back(s);
+      setup.every = count("every", args.str("every"));
     }
     return runBench(config, setup);
   });

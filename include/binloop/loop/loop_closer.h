@@ -124,6 +124,8 @@ class LoopCloser {
   bool correct(const std::vector<LoopEdge>& new_loops, const std::vector<std::pair<MapPointId, MapPointId>>& fused,
                msg::LoopClosure* c, Output* out);
   void expireHeld(Output* out);
+  /// The held loop, then those that agreed with it; nothing is held after.
+  std::vector<msg::LoopClosure> takeHeld();
   /// Rejects the held loop and those that agreed with it (beyond_drift_bound, `why` added to each detail).
   void rejectHeld(const std::string& why, Output* out);
 

@@ -26,7 +26,8 @@ struct StereoCamera {
 
 /// KITTI 00–02 rectified camera 0/1 (fx=718.856, baseline 0.537 m, 1241x376).
 StereoCamera kitti00Camera();
-/// A named KITTI camera: "kitti00" (00–02), "kitti03", "kitti04" (04–12). Throws std::invalid_argument.
+/// The camera of a KITTI odometry route, "kitti00" to "kitti12": 00–02 share one calibration, 03 has its
+/// own, 04–12 share 04's. Throws std::invalid_argument.
 StereoCamera kittiCameraByName(const std::string& name);
 
 }  // namespace binloop

@@ -120,15 +120,19 @@ void LoopCloser::expireHeld(Output* out) {
   rejectHeld("no second loop confirmed it within " + std::to_string(p_.hold_keyframes) + " keyframes", out);
 }
 
+std::vector<msg::LoopClosure> LoopCloser::takeHeld() {
+  std::vector<msg::LoopClosure> all{std::move(held_->closure)};
+  for (msg::LoopClosure& a : held_->agreeing) all.push_back(std::move(a));
+  held_.reset();
+  return all;
+}
+
 void LoopCloser::rejectHeld(const std::string& why, Output* out) {
-  std::vector<msg::LoopClosure> all{held_->closure};
-  all.insert(all.end(), held_->agreeing.begin(), held_->agreeing.end());
-  for (msg::LoopClosure& c : all) {
+  for (msg::LoopClosure& c : takeHeld()) {
     c.status = "beyond_drift_bound";
     c.detail += "; " + why;
     out->closures.push_back(std::make_shared<msg::LoopClosure>(std::move(c)));
   }
-  held_.reset();
 }
 
 SlamKeyframeId LoopCloser::standIn(SlamKeyframeId id) const {
@@ -279,9 +283,7 @@ LoopCloser::Output LoopCloser::verify(SlamKeyframeId query, SlamKeyframeId match
   std::vector<msg::LoopClosure> waited;  // the held loop first, then those that agreed with it
   if (confirming) {
     edges.push_back(confirmed_edge);
-    waited.push_back(held_->closure);
-    waited.insert(waited.end(), held_->agreeing.begin(), held_->agreeing.end());
-    held_.reset();
+    waited = takeHeld();
   }
   c->detail = numbers;
   // The points the verified pairs name on both sides are one point each (the match side's is older).

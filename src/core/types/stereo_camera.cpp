@@ -43,8 +43,12 @@ StereoCamera kitti00Camera() { return make(718.856, 607.1928, 185.2157, 386.1448
 StereoCamera kittiCameraByName(const std::string& name) {
   if (name == "kitti00" || name == "kitti01" || name == "kitti02") return kitti00Camera();
   if (name == "kitti03") return make(721.5377, 609.5593, 172.854, 387.5744, 1242, 375);
-  if (name == "kitti04") return make(707.0912, 601.8873, 183.1104, 379.8145, 1226, 370);
-  throw std::invalid_argument("unknown camera '" + name + "' (known: kitti00, kitti03, kitti04)");
+  // Routes 04-12 were recorded on the same day as 04, with its calibration.
+  static const char* const kSameAs04[] = {"kitti04", "kitti05", "kitti06", "kitti07", "kitti08",
+                                          "kitti09", "kitti10", "kitti11", "kitti12"};
+  for (const char* n : kSameAs04)
+    if (name == n) return make(707.0912, 601.8873, 183.1104, 379.8145, 1226, 370);
+  throw std::invalid_argument("unknown camera '" + name + "' (known: kitti00-kitti12, by route)");
 }
 
 }  // namespace binloop
