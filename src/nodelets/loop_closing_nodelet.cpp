@@ -108,6 +108,9 @@ void LoopClosingNodelet::onInit() {
 
 // A loaded map or a reset: what the nodelet kept of the old closer's input goes; a loaded map's loops show.
 void LoopClosingNodelet::startOver(std::unique_ptr<binloop::LoopCloser> c) {
+  std_msgs::Header h;
+  h.stamp = ros::Time::now();
+  handle(closer_->finish(), h);  // a loop the old map held is reported as it goes
   closer_ = std::move(c);
   pending_.clear();
   keyframes_seen_.clear();

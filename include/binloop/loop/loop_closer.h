@@ -85,6 +85,10 @@ class LoopCloser {
   Output process(const msg::LoopCandidates& c);
   /// A loop proposed from outside (another front end, a person): verified and guarded the same way.
   Output addExternalLoop(SlamKeyframeId query, SlamKeyframeId match, const std::string& source = "external");
+  /// The input has ended (the run is over, or the map is about to be replaced): a held loop and those that
+  /// waited with it get their final status, beyond_drift_bound, since no second loop will confirm them.
+  /// Safe to call more than once; the closer still answers later input.
+  Output finish();
 
   size_t keyframeCount() const { return states_.size(); }
   struct KeyframePose {
@@ -98,7 +102,7 @@ class LoopCloser {
   uint64_t correctionsMade() const { return history_.applied(); }
 
   /// Its keyframes (as refined and corrected), the loops closed and the corrections made. A held loop is not
-  /// saved: it waits for a confirmation that a loaded map will not bring.
+  /// saved: it waits for a confirmation that a loaded map will not bring (finish() first reports it).
   void save(StateWriter& w) const;
   /// Into a newly made closer. Throws DataError for a broken file.
   void load(StateReader& r);

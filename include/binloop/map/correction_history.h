@@ -3,6 +3,7 @@
 // tracking made while loop closing was optimising, an update local mapping sent meanwhile) can be brought
 // into the corrected map when it arrives: its pose moves as its parent keyframe's did. Every stage that
 // receives corrections keeps one; in lock-step no message is ever late and none of this is used.
+#include <functional>
 #include <unordered_map>
 #include <vector>
 
@@ -27,8 +28,11 @@ class CorrectionHistory {
   /// a correction did not know the anchor.
   Pose3 since(uint64_t seen, SlamKeyframeId anchor) const;
   /// since(), and records that keyframe `id` (made late) moved with `anchor` in those corrections, so that
-  /// keyframes made on it later move the same way.
-  Pose3 adopt(uint64_t seen, SlamKeyframeId id, SlamKeyframeId anchor);
+  /// keyframes made on it later move the same way. `up` gives the parent a culled keyframe had (kNoId for
+  /// none): an anchor culled before a correction is not in it, and the pose moves as the nearest ancestor
+  /// that is.
+  Pose3 adopt(uint64_t seen, SlamKeyframeId id, SlamKeyframeId anchor,
+              const std::function<SlamKeyframeId(SlamKeyframeId)>& up = {});
 
   void save(StateWriter& w) const;
   void load(StateReader& r);

@@ -61,6 +61,9 @@ class MapReplica {
   std::unordered_map<SlamKeyframeId, msg::KeyframeState> keyframes_;
   std::unordered_map<MapPointId, std::vector<SlamKeyframeId>> observers_;
   std::unordered_map<MapPointId, MapPointId> replaced_;
+  // Culled keyframe -> its parent then: an unsent keyframe made on it is carried as that parent moves. Not
+  // saved: a loaded replica has nothing in flight, and a keyframe made after the load names a held parent.
+  std::unordered_map<SlamKeyframeId, SlamKeyframeId> culled_parent_;
   SlamKeyframeId last_keyframe_ = kNoId;
 };
 

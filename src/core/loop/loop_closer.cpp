@@ -115,6 +115,12 @@ LoopCloser::Output LoopCloser::addExternalLoop(SlamKeyframeId query, SlamKeyfram
   return out;
 }
 
+LoopCloser::Output LoopCloser::finish() {
+  Output out;
+  if (held_) rejectHeld("the input ended before a second loop confirmed it", &out);
+  return out;
+}
+
 void LoopCloser::expireHeld(Output* out) {
   if (!held_ || order_.size() < held_->held_at + static_cast<size_t>(p_.hold_keyframes)) return;
   rejectHeld("no second loop confirmed it within " + std::to_string(p_.hold_keyframes) + " keyframes", out);

@@ -28,10 +28,17 @@ Pose3 CorrectionHistory::since(uint64_t seen, SlamKeyframeId anchor) const {
   return d;
 }
 
-Pose3 CorrectionHistory::adopt(uint64_t seen, SlamKeyframeId id, SlamKeyframeId anchor) {
+Pose3 CorrectionHistory::adopt(uint64_t seen, SlamKeyframeId id, SlamKeyframeId anchor,
+                               const std::function<SlamKeyframeId(SlamKeyframeId)>& up) {
   Pose3 d = Pose3::Identity();
   for (uint64_t k = seen; k < applied(); ++k) {
     auto it = deltas_[k].find(anchor);
+    SlamKeyframeId a = anchor;
+    for (int hops = 0; it == deltas_[k].end() && up && hops < 1000; ++hops) {  // the bound guards a cycle
+      a = up(a);
+      if (a == kNoId) break;
+      it = deltas_[k].find(a);
+    }
     if (it == deltas_[k].end()) continue;
     d = it->second * d;
     deltas_[k][id] = it->second;

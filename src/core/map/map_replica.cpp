@@ -65,6 +65,7 @@ void MapReplica::removePoint(MapPointId id) {
 void MapReplica::removeKeyframe(SlamKeyframeId id) {
   auto it = keyframes_.find(id);
   if (it == keyframes_.end()) return;
+  culled_parent_[id] = it->second.parent;
   unlinkKeyframe(it->second);
   keyframes_.erase(it);
 }
@@ -144,9 +145,9 @@ std::unordered_map<SlamKeyframeId, Pose3> MapReplica::unsentMoves(const msg::Loc
         d = s->second;
         break;
       }
-      auto held = keyframes_.find(a);
-      if (held == keyframes_.end()) break;  // an ancestor neither side holds: it stays
-      a = held->second.parent;
+      if (auto held = keyframes_.find(a); held != keyframes_.end()) a = held->second.parent;
+      else if (auto gone = culled_parent_.find(a); gone != culled_parent_.end()) a = gone->second;  // culled meanwhile
+      else break;  // an ancestor neither side holds: it stays
     }
     moves.emplace(id, d);
   }

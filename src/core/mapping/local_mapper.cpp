@@ -89,7 +89,12 @@ void LocalMapper::insert(const msg::KeyFrame& in) {
   camera_ = in.camera;
   // Made before a loop correction tracking had not heard of yet: it moves as its parent did.
   const bool is_late = in.corrections_seen < history_.applied();
-  const Pose3 late = is_late ? history_.adopt(in.corrections_seen, in.id, in.state.parent) : Pose3::Identity();
+  const Pose3 late = is_late ? history_.adopt(in.corrections_seen, in.id, in.state.parent,
+                                              [this](SlamKeyframeId a) {
+                                                auto c = culled_.find(a);
+                                                return c == culled_.end() ? kNoId : c->second.first;
+                                              })
+                              : Pose3::Identity();
   KF& kf = kfs_[in.id];
   kf.state = in.state;
   kf.state.covisible.clear();

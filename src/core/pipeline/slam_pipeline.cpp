@@ -199,6 +199,14 @@ void SlamPipeline::finish() {
     if (mapping_thread_.joinable()) mapping_thread_.join();
     mergeGlobalBa(true, false);  // the last loop's global BA, waited for
   }
+  if (closer_) {  // a loop still held gets its final status in the log
+    LoopCloser::Output c = closer_->finish();
+    if (!c.closures.empty()) {
+      LoopLogEntry entry;
+      entry.closures = c.closures;
+      loop_log_.push_back(entry);
+    }
+  }
   drainUpdates();
 }
 

@@ -256,6 +256,26 @@ TEST_F(LoopCloserTest, LoopsTooNearToConfirmAHeldOneWaitWithIt) {
   EXPECT_TRUE(alone.loops().empty());
 }
 
+TEST_F(LoopCloserTest, ALoopStillHeldWhenTheInputEndsGetsItsFinalStatus) {
+  drift = 0.3;
+  LoopCloser lc;
+  driveLap(lc);
+  for (int k = 0; k < 2; ++k) {
+    lc.addKeyframe(keyframe(kLap + k, truthOnCircle(kLap + k), k, truthOnCircle(k)));
+    for (const auto& c : lc.process(proposal(kLap + k, k)).closures) EXPECT_EQ(c->status, "held") << c->detail;
+  }
+  const LoopCloser::Output end = lc.finish();
+  ASSERT_EQ(end.closures.size(), 2u);
+  for (const auto& c : end.closures) {
+    EXPECT_EQ(c->status, "beyond_drift_bound");
+    EXPECT_NE(c->detail.find("input ended"), std::string::npos) << c->detail;
+  }
+  EXPECT_EQ(end.closures[0]->query, id(kLap));  // the held loop first, then the one that waited with it
+  EXPECT_FALSE(end.correction);
+  EXPECT_TRUE(lc.loops().empty());
+  EXPECT_TRUE(lc.finish().closures.empty());  // nothing is held any more
+}
+
 TEST_F(LoopCloserTest, AnExternalLoopIsVerifiedBeforeItIsApplied) {
   LoopCloser lc;
   driveLap(lc);

@@ -392,5 +392,33 @@ TEST(MapReplica, KeyframesNotYetSentMoveWithTheirAncestorAfterACorrection) {
   EXPECT_TRUE(plain.point(P3)->p_w.isApprox(point(P3).p_w));
 }
 
+// Mapping culled K2 before the correction, so the corrected map names neither K2 nor K3 (made on K2, not yet
+// sent): K3 moves as K2's parent K1 moved, as mapping will move it when it arrives.
+TEST(MapReplica, AnUnsentKeyframeWhoseParentWasCulledMovesWithTheParentsParent) {
+  MapReplica m;
+  m.add(keyframeMessage(K1, {P1}, {P1}));
+  msg::KeyFrame k2 = keyframeMessage(K2, {P1, P2}, {P2});
+  k2.state.parent = K1;
+  m.add(k2);
+  msg::KeyFrame k3 = keyframeMessage(K3, {P2, P3}, {P3});
+  k3.state.parent = K2;
+  k3.new_points[0].reference = K3;
+  m.add(k3);
+  msg::LocalMapUpdate cull;
+  cull.culled_keyframes.push_back(K2);
+  m.apply(cull);
+  ASSERT_EQ(m.keyframe(K2), nullptr);
+
+  msg::LocalMapUpdate u;
+  u.correction = true;
+  u.corrections_seen = 1;
+  KeyframeState k1 = keyframe(K1, {P1});
+  k1.T_w_c.translation() = Eigen::Vector3d(0, 0, 5);
+  u.keyframes.push_back(k1);
+  m.apply(u, true);
+  EXPECT_TRUE(m.keyframe(K3)->T_w_c.isApprox(k1.T_w_c));
+  EXPECT_TRUE(m.point(P3)->p_w.isApprox(k1.T_w_c * point(P3).p_w));
+}
+
 }  // namespace
 }  // namespace binloop
