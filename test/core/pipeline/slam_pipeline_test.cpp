@@ -5,6 +5,7 @@
 #include <cmath>
 #include <filesystem>
 #include <map>
+#include <tuple>
 #include <limits>
 
 #include "binloop/eval/trajectory_metrics.h"
@@ -27,27 +28,30 @@ double rotationDeg(const Pose3& T) {
   return Eigen::AngleAxisd(T.linear()).angle() * 180.0 / M_PI;
 }
 
-// Frames 0..n-1 of KITTI route 06 rendered as the `render` tool does (kitti04 camera, seed 1): by default
-// with its road texture that repeats every 8 m, or as `render --aperiodic-ground`.
+// Frames first..first+n-1 of KITTI route 06 rendered as the `render` tool does (kitti04 camera, seed 1): by
+// default with its road texture that repeats every 8 m, or as `render --aperiodic-ground`. frames[k] shows
+// route[first + k].
 struct RenderedStretch {
   std::vector<Pose3> route;
   std::vector<StereoFrame> frames;
+  int first = 0;
   StereoCamera cam = kittiCameraByName("kitti04");
 };
 
-const RenderedStretch* renderedStretch(int n, bool aperiodic_ground = false) {
-  static std::map<std::pair<int, bool>, RenderedStretch> cache;
-  auto it = cache.find({n, aperiodic_ground});
+const RenderedStretch* renderedStretch(int n, bool aperiodic_ground = false, int first = 0) {
+  static std::map<std::tuple<int, bool, int>, RenderedStretch> cache;
+  auto it = cache.find({n, aperiodic_ground, first});
   if (it != cache.end()) return &it->second;
   const std::string poses = test::sharedData("kitti/poses/06.txt");
   if (!std::filesystem::exists(poses)) return nullptr;
-  RenderedStretch& s = cache[{n, aperiodic_ground}];
+  RenderedStretch& s = cache[{n, aperiodic_ground, first}];
   s.route = readKittiPoses(poses);
+  s.first = first;
   sim::WorldParams wp;
   wp.aperiodic_ground = aperiodic_ground;
   const auto world = sim::World::build(s.route, sim::TextureBank::build(sim::defaultTexturePhotos(), 1), wp, 1);
   sim::StereoRenderer r(world, s.cam, {}, 1);
-  s.frames = sim::renderFrames(r, s.route, 0, static_cast<size_t>(n));
+  s.frames = sim::renderFrames(r, s.route, static_cast<size_t>(first), static_cast<size_t>(n));
   return &s;
 }
 
@@ -208,18 +212,18 @@ TEST(SlamPipeline, TrackingGoesOnAfterFiveMissingFrames) {
 // 0.2-0.3 m, is not relocalisation's to mend). Measured: 20 missing, the first frame after the gap is
 // tracked, 0.31 m off; the next ten 0.19-0.38 m; 30 frames on 0.51 m (0.08 m without a gap).
 void expectFoundAfterGap(const RenderedStretch& s, int start, int gap, double first_ten_m, double all_m) {
-  ASSERT_LE(start + gap + 30, static_cast<int>(s.frames.size()));
+  ASSERT_LE(start + gap + 30, s.first + static_cast<int>(s.frames.size()));
   SlamPipeline slam(s.cam, {}, {}, PipelineMode::kLockStep);
   Pose3 last;
-  for (int i = 0; i < start; ++i) {
-    const msg::TrackedFrame tf = slam.process(s.frames[i]);
+  for (int i = s.first; i < start; ++i) {
+    const msg::TrackedFrame tf = slam.process(s.frames[i - s.first]);
     ASSERT_EQ(tf.state, msg::TrackingState::kOk) << i;
     last = tf.T_w_c;
   }
   const Pose3 drift = last * s.route[start - 1].inverse();
   int lost = 0;
   for (int i = start + gap; i < start + gap + 30; ++i) {
-    const msg::TrackedFrame tf = slam.process(s.frames[i]);
+    const msg::TrackedFrame tf = slam.process(s.frames[i - s.first]);
     if (tf.state == msg::TrackingState::kLost) {
       ++lost;
       EXPECT_LE(i, start + gap + 1) << "lost at frame " << i << ": " << tf.problem;
@@ -241,6 +245,17 @@ TEST(SlamPipeline, TrackingIsFoundAgainAfterTwentyMissingFrames) {
   const RenderedStretch* s = renderedStretch(340, true);
   if (!s) GTEST_SKIP() << "needs " << test::sharedData("kitti/poses/06.txt");
   expectFoundAfterGap(*s, 100, 20, 0.45, 0.65);
+}
+
+// The issue's bound, 0.3 m after 20 missing frames, where the car drives slowly: frames 350-449 mapped, then
+// 470-499 (15 m skipped). Measured (bench_recovery --start 450 --lead 100 --gap 20): 0.18 m on the first
+// frame, at most 0.28 m over the 30. At the usual 26-30 m skipped it does not hold: the map's points then in
+// view were measured from 40-70 m away and are metres off along the view (README, "Why the found places are
+// off").
+TEST(SlamPipeline, TwentyMissingFramesOnASlowStretchAreFoundWithinThirtyCentimetres) {
+  const RenderedStretch* s = renderedStretch(150, true, 350);
+  if (!s) GTEST_SKIP() << "needs " << test::sharedData("kitti/poses/06.txt");
+  expectFoundAfterGap(*s, 450, 20, 0.3, 0.3);
 }
 
 // Frame 309 of route 06 comes out of a bend: after 10 missing frames the ordinary tracking (the motion
