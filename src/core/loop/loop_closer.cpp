@@ -8,6 +8,7 @@
 #include <queue>
 #include <stdexcept>
 
+#include "binloop/map/ancestors.h"
 #include "binloop/util/fixed_decimals.h"
 
 namespace binloop {
@@ -142,13 +143,11 @@ void LoopCloser::rejectHeld(const std::string& why, Output* out) {
 }
 
 SlamKeyframeId LoopCloser::standIn(SlamKeyframeId id) const {
-  for (int hops = 0; hops < 100; ++hops) {
-    if (frames_.count(id)) return id;
-    auto cu = culled_.find(id);
-    if (cu == culled_.end()) break;
-    id = cu->second;
-  }
-  return kNoId;
+  auto culledParent = [this](SlamKeyframeId k) {
+    auto cu = culled_.find(k);
+    return cu == culled_.end() ? kNoId : cu->second;
+  };
+  return firstAncestor(id, culledParent, [this](SlamKeyframeId k) { return frames_.count(k) > 0; }, 100);
 }
 
 SlamKeyframeId LoopCloser::reanchor(SlamKeyframeId query, SlamKeyframeId match, LoopVerification* v) const {

@@ -1,5 +1,6 @@
 #include "binloop/map/correction_history.h"
 
+#include "binloop/map/ancestors.h"
 #include "binloop/messages/message_state.h"
 #include "binloop/util/sorted_keys.h"
 
@@ -32,13 +33,9 @@ Pose3 CorrectionHistory::adopt(uint64_t seen, SlamKeyframeId id, SlamKeyframeId 
                                const std::function<SlamKeyframeId(SlamKeyframeId)>& up) {
   Pose3 d = Pose3::Identity();
   for (uint64_t k = seen; k < applied(); ++k) {
-    auto it = deltas_[k].find(anchor);
-    SlamKeyframeId a = anchor;
-    for (int hops = 0; it == deltas_[k].end() && up && hops < 1000; ++hops) {  // the bound guards a cycle
-      a = up(a);
-      if (a == kNoId) break;
-      it = deltas_[k].find(a);
-    }
+    const SlamKeyframeId a =
+        up ? firstAncestor(anchor, up, [&](SlamKeyframeId x) { return deltas_[k].count(x) > 0; }) : anchor;
+    auto it = deltas_[k].find(a);
     if (it == deltas_[k].end()) continue;
     d = it->second * d;
     deltas_[k][id] = it->second;

@@ -3,6 +3,8 @@
 #include <algorithm>
 #include <unordered_set>
 
+#include "binloop/map/ancestors.h"
+
 namespace binloop {
 
 namespace {
@@ -134,22 +136,18 @@ std::unordered_map<SlamKeyframeId, Pose3> MapReplica::unsentMoves(const msg::Loc
     sent[k.id] = it == keyframes_.end() ? Pose3::Identity() : Pose3(k.T_w_c * it->second.T_w_c.inverse());
   }
   const std::unordered_set<SlamKeyframeId> culled(u.culled_keyframes.begin(), u.culled_keyframes.end());
+  auto parentOf = [this](SlamKeyframeId k) {
+    if (auto held = keyframes_.find(k); held != keyframes_.end()) return held->second.parent;
+    auto gone = culled_parent_.find(k);  // culled meanwhile
+    return gone == culled_parent_.end() ? kNoId : gone->second;
+  };
   std::unordered_map<SlamKeyframeId, Pose3> moves;
   for (const auto& [id, kf] : keyframes_) {
     if (sent.count(id) || culled.count(id)) continue;
-    // Up the parents (unsent ones were made here one on another) to the first the update names.
-    Pose3 d = Pose3::Identity();
-    SlamKeyframeId a = kf.parent;
-    for (int hops = 0; hops < 1000 && a != kNoId; ++hops) {
-      if (auto s = sent.find(a); s != sent.end()) {
-        d = s->second;
-        break;
-      }
-      if (auto held = keyframes_.find(a); held != keyframes_.end()) a = held->second.parent;
-      else if (auto gone = culled_parent_.find(a); gone != culled_parent_.end()) a = gone->second;  // culled meanwhile
-      else break;  // an ancestor neither side holds: it stays
-    }
-    moves.emplace(id, d);
+    // Up the parents (unsent ones were made here one on another) to the first the update names; with an
+    // ancestor neither side holds, it stays.
+    const SlamKeyframeId a = firstAncestor(kf.parent, parentOf, [&](SlamKeyframeId x) { return sent.count(x) > 0; });
+    moves.emplace(id, a == kNoId ? Pose3::Identity() : sent.at(a));
   }
   return moves;
 }
