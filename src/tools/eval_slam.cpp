@@ -16,6 +16,7 @@
 #include <map>
 #include <thread>
 
+#include "binloop/eval/accuracy_table.h"
 #include "binloop/eval/loop_ground_truth.h"
 #include "binloop/eval/slam_evaluation.h"
 #include "binloop/eval/trajectory_metrics.h"
@@ -104,11 +105,15 @@ pid_t launch(const std::vector<std::string>& argv, const std::string& log) {
 // One model's row of the table; `failure` empty when it was scored.
 struct Row {
   std::string model, failure;
+  std::string name;  // the model, or "<model>/run-<k>" when each model runs several times
+  fs::path dir;      // where its run writes
+  int lost_frames = 0;
   TrajectoryMetrics tm;
   LoopScore loops;
   double detect_median = NAN, detect_p95 = NAN, query_median = NAN, signature_median = NAN, verify_median = NAN;
   std::vector<Pose3> aligned;
   int first_frame = 0, last_frame = 0;
+  bool pose_judged = false;  // loops.csv had every accepted loop's relative pose
 };
 
 void score(Row& row, const fs::path& dir, const std::vector<Pose3>& gt, const std::vector<RevisitSegment>& segments) {
@@ -133,11 +138,19 @@ void score(Row& row, const fs::path& dir, const std::vector<Pose3>& gt, const st
   row.last_frame = m.frames.back();
 
   std::vector<std::pair<int, int>> accepted;
+  std::vector<Pose3> poses;  // their relative poses, when the log has them
+  bool all_posed = true;
   if (row.model != "none")  // run writes no loops.csv without a detector
     for (const LoggedLoop& l : readLoopLog((dir / "loops.csv").string()))
-      if (l.status == "accepted") accepted.emplace_back(static_cast<int>(l.query_frame), static_cast<int>(l.match_frame));
-  row.loops = scoreLoops(accepted, gt, segments);
+      if (l.status == "accepted") {
+        accepted.emplace_back(static_cast<int>(l.query_frame), static_cast<int>(l.match_frame));
+        poses.push_back(l.T_query_match);
+        all_posed = all_posed && l.has_pose;
+      }
+  row.pose_judged = all_posed;
+  row.loops = all_posed ? scoreLoops(accepted, poses, gt, segments) : scoreLoops(accepted, gt, segments);
 
+  row.lost_frames = static_cast<int>(jsonNumber(json, "lost_frames"));
   row.detect_median = jsonNumber(json, "detect_" + row.model + "_ms_median");
   row.detect_p95 = jsonNumber(json, "detect_" + row.model + "_ms_p95");
   row.query_median = jsonNumber(json, "detect_" + row.model + "_query_ms_median");
@@ -158,10 +171,13 @@ int main(int argc, char** argv) {
   CliArgs args("eval-slam",
                "scripts/binloop eval-slam --sequence <dir> --out <dir> [--detectors all|hbow,fabmap,...,none]\n"
                "    [--loop-gt loops.txt] [--jobs N] [--config config/kitti.yaml] [--lockstep] [--run-args \"...\"]\n"
-               "    [--score-only]\n"
+               "    [--score-only] [--runs N] [--reference <peer dir>]\n"
                "Runs the SLAM (the run tool) once per detector into <out>/<detector>/ (its output in run.log there),\n"
                "scores each against <sequence>/poses.txt and the loop ground truth, and writes <out>/summary.csv\n"
-               "(also printed) and <out>/trajectories.png. Exits 1 when a run failed or could not be scored.");
+               "(also printed) and <out>/trajectories.png. With --runs N > 1 each detector runs N times into\n"
+               "<out>/<detector>/run-<k>/ and <out>/accuracy.csv sums them up (median, min-max, loops wrong in any\n"
+               "run, revisits closed in every run), beside a peer's runs when --reference names their folder.\n"
+               "Exits 1 when a run failed or could not be scored.");
   args.option("sequence", "KITTI-layout sequence folder with poses.txt (the ground truth)")
       .option("out", "output folder: one folder per detector, summary.csv, trajectories.png")
       .option("detectors", "comma list of hbow, fabmap, vlad, hmvlad, vladpq, none (no loop closing); 'all' stands "
@@ -172,7 +188,10 @@ int main(int argc, char** argv) {
       .option("config", "passed to run")
       .flag("lockstep", "passed to run")
       .option("run-args", "more arguments for run, split at spaces (no quoting), e.g. \"--end 60 --seed 2\"")
-      .flag("score-only", "run nothing: score the <out>/<detector>/ folders already there");
+      .flag("score-only", "run nothing: score the <out>/<detector>/ folders already there")
+      .option("runs", "runs of each detector; more than 1: median and range in <out>/accuracy.csv", "1")
+      .option("reference", "a peer's run folders to score by the same rules (sub-folders with CameraTrajectory.txt, "
+                           "loops.txt, TrackingTimes.txt, e.g. ORB-SLAM2's reference results for this sequence)");
   return runTool("eval-slam", [&] {
     if (!args.parse(argc, argv)) return 0;
     for (const char* o : {"sequence", "out"})
@@ -190,6 +209,8 @@ int main(int argc, char** argv) {
       if (std::find(models.begin(), models.begin() + i, models[i]) != models.begin() + i)
         throw CliError("--detectors: '" + models[i] + "' is named twice");
     }
+    const long runs = args.integer("runs");
+    if (runs < 1) throw CliError("--runs must be >= 1");
     const long jobs = args.has("jobs") ? args.integer("jobs") : std::max(1u, std::thread::hardware_concurrency());
     if (jobs < 1) throw CliError("--jobs must be >= 1");
     const std::vector<std::string> run_args = split(args.str("run-args"), " \t");
@@ -227,8 +248,15 @@ int main(int argc, char** argv) {
       std::cout << (i ? ", " : " at query frames ") << segments[i].first << "-" << segments[i].last;
     std::cout << "\n";
 
-    std::vector<Row> rows(models.size());
-    for (size_t i = 0; i < models.size(); ++i) rows[i].model = models[i];
+    std::vector<Row> rows;
+    for (const std::string& m : models)
+      for (long k = 1; k <= runs; ++k) {
+        Row r;
+        r.model = m;
+        r.name = runs == 1 ? m : m + "/run-" + std::to_string(k);
+        r.dir = out / r.name;
+        rows.push_back(r);
+      }
     if (!args.has("score-only")) {
       std::error_code ec;
       fs::path self = fs::read_symlink("/proc/self/exe", ec);
@@ -239,19 +267,19 @@ int main(int argc, char** argv) {
       std::map<pid_t, size_t> running;
       std::map<size_t, std::chrono::steady_clock::time_point> started;
       size_t next = 0;
-      while (next < models.size() || !running.empty()) {
-        while (next < models.size() && static_cast<long>(running.size()) < jobs) {
-          const fs::path dir = out / models[next];
+      while (next < rows.size() || !running.empty()) {
+        while (next < rows.size() && static_cast<long>(running.size()) < jobs) {
+          const fs::path dir = rows[next].dir;
           fs::create_directories(dir);
           // A failed run must not leave an earlier run's results to be scored as its own.
           for (const char* f : {"trajectory.kitti.txt", "loops.csv", "summary.json"}) fs::remove(dir / f);
-          std::vector<std::string> cmd{run_bin.string(), seq.string(), "--out", dir.string(), "--detector", models[next]};
+          std::vector<std::string> cmd{run_bin.string(), seq.string(), "--out", dir.string(), "--detector", rows[next].model};
           if (args.has("lockstep")) cmd.push_back("--lockstep");
           if (args.has("config")) cmd.insert(cmd.end(), {"--config", args.str("config")});
           cmd.insert(cmd.end(), run_args.begin(), run_args.end());
           running[launch(cmd, (dir / "run.log").string())] = next;
           started[next] = std::chrono::steady_clock::now();
-          std::cerr << "eval-slam: " << models[next] << ": running (log " << (dir / "run.log").string() << ")\n";
+          std::cerr << "eval-slam: " << rows[next].name << ": running (log " << (dir / "run.log").string() << ")\n";
           ++next;
         }
         int status = 0;
@@ -264,21 +292,21 @@ int main(int argc, char** argv) {
         if (it == running.end()) continue;
         Row& row = rows[it->second];
         const double secs = std::chrono::duration<double>(std::chrono::steady_clock::now() - started[it->second]).count();
-        const std::string log = (out / row.model / "run.log").string();
+        const std::string log = (row.dir / "run.log").string();
         if (WIFEXITED(status) && WEXITSTATUS(status) == 0)
-          std::cerr << "eval-slam: " << row.model << ": done in " << fixed(secs, 0) << " s\n";
+          std::cerr << "eval-slam: " << row.name << ": done in " << fixed(secs, 0) << " s\n";
         else
           row.failure = (WIFEXITED(status) ? "run exited with " + std::to_string(WEXITSTATUS(status))
                                            : "run killed by signal " + std::to_string(WTERMSIG(status))) +
                         ", see " + log;
-        if (!row.failure.empty()) std::cerr << "eval-slam: " << row.model << ": " << row.failure << "\n";
+        if (!row.failure.empty()) std::cerr << "eval-slam: " << row.name << ": " << row.failure << "\n";
         running.erase(it);
       }
     }
     for (Row& row : rows) {
       if (!row.failure.empty()) continue;
       try {
-        score(row, out / row.model, gt, segments);
+        score(row, row.dir, gt, segments);
       } catch (const DataError& e) {
         row.failure = e.what();
       }
@@ -286,21 +314,21 @@ int main(int argc, char** argv) {
 
     // The table: printed aligned, written as CSV.
     const std::vector<std::string> header{"model", "ate_m", "t_rel_pct", "r_rel_deg_100m", "loops_accepted",
-                                          "loops_correct", "segments_closed", "detect_ms_median", "detect_ms_p95",
+                                          "loops_correct", "loops_wrong_pose", "segments_closed", "detect_ms_median", "detect_ms_p95",
                                           "query_ms_median", "signature_ms_median", "verify_ms_median", "status"};
     std::vector<std::vector<std::string>> cells{header};
     for (const Row& r : rows) {
       if (!r.failure.empty()) {
         std::vector<std::string> c(header.size(), "-");
-        c.front() = r.model;
+        c.front() = r.name;
         c.back() = "failed: " + r.failure;
         cells.push_back(c);
         continue;
       }
       const RelativeErrors& rel = r.tm.relative;
-      cells.push_back({r.model, fixed(r.tm.ate_rmse_m, 3), fixed(rel.valid ? rel.t_rel_pct : NAN, 3),
+      cells.push_back({r.name, fixed(r.tm.ate_rmse_m, 3), fixed(rel.valid ? rel.t_rel_pct : NAN, 3),
                        fixed(rel.valid ? rel.r_rel_deg_per_100m : NAN, 4), std::to_string(r.loops.accepted),
-                       std::to_string(r.loops.correct),
+                       std::to_string(r.loops.correct), r.pose_judged ? std::to_string(r.loops.wrong_pose) : "n/a",
                        std::to_string(r.loops.segmentsClosed()) + "/" + std::to_string(segments.size()),
                        fixed(r.detect_median, 2), fixed(r.detect_p95, 2), fixed(r.query_median, 2),
                        fixed(r.signature_median, 2), fixed(r.verify_median, 2), "ok"});
@@ -321,11 +349,34 @@ int main(int argc, char** argv) {
     if (!csv.flush()) throw DataError(csv_path.string() + ": cannot write");
     std::cout << "summary: " << csv_path.string() << "\n";
 
+    if (runs > 1 || args.has("reference")) {
+      std::vector<AccuracyRow> acc;
+      for (const std::string& m : models) {
+        std::vector<RunScore> scored;
+        for (const Row& r : rows)
+          if (r.model == m && r.failure.empty()) scored.push_back({r.tm, r.loops, r.lost_frames});
+        if (!scored.empty()) acc.push_back(summarizeRuns(m, scored, static_cast<int>(segments.size())));
+      }
+      if (args.has("reference")) {
+        const auto peer = scorePeerRuns(args.str("reference"), "peer:", gt, segments);
+        acc.insert(acc.end(), peer.begin(), peer.end());
+      }
+      std::cout << "\naccuracy over " << runs << " run" << (runs == 1 ? "" : "s") << " per detector"
+                << (args.has("reference") ? " and the peer's runs in " + args.str("reference") : std::string()) << ":\n"
+                << formatAccuracyTable(acc, false);
+      const fs::path acc_path = out / "accuracy.csv";
+      std::ofstream acc_csv(acc_path);
+      acc_csv << formatAccuracyTable(acc, true);
+      if (!acc_csv.flush()) throw DataError(acc_path.string() + ": cannot write");
+      std::cout << "accuracy: " << acc_path.string() << "\n";
+    }
+
     // One top view of every scored model over the ground truth they cover.
     std::vector<std::pair<std::string, std::vector<Pose3>>> aligned;
     int first = static_cast<int>(gt.size()), last = -1;
     for (const Row& r : rows) {
       if (!r.failure.empty()) continue;
+      if (r.name != r.model && r.name != r.model + "/run-1") continue;  // one run of each model in the plot
       aligned.emplace_back(r.model + " (ATE " + fixed(r.tm.ate_rmse_m, 3) + " m)", r.aligned);
       first = std::min(first, r.first_frame);
       last = std::max(last, r.last_frame);
@@ -343,7 +394,7 @@ int main(int argc, char** argv) {
     std::string failed;
     int n_failed = 0;
     for (const Row& r : rows)
-      if (!r.failure.empty()) failed += (n_failed++ ? ", " : "") + r.model;
+      if (!r.failure.empty()) failed += (n_failed++ ? ", " : "") + r.name;
     if (n_failed)
       throw DataError(std::to_string(n_failed) + " of " + std::to_string(rows.size()) + " models failed: " + failed +
                       " (see the status column)");

@@ -273,7 +273,7 @@ int main(int argc, char** argv) {
     stat("local_ba", ba, false);
     stat("triangulation", tri, false);
     if (slam.closesLoops()) {
-      writeLoopLog((out / "loops.csv").string(), slam.loopLog());
+      writeLoopLog((out / "loops.csv").string(), slam.loopLog(), seq.hasPoses() ? &seq.poses() : nullptr);
       std::map<std::string, int> by_status;
       std::map<std::string, std::vector<double>> detect_ms, query_ms, signature_ms;
       std::vector<double> verify_ms, optimize_ms, correction_ms, switch_ms, global_ba_ms;

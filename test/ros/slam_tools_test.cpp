@@ -79,11 +79,11 @@ TEST(SlamTools, EvalSlamScoresEveryDetectorInOneTable) {
                                        kVocab + "\"");
   ASSERT_EQ(r.code, 0) << r.out;
   const std::string table = readAll(tmp / "out/summary.csv");
-  EXPECT_EQ(table.rfind("model,ate_m,t_rel_pct,r_rel_deg_100m,loops_accepted,loops_correct,segments_closed,", 0), 0u)
+  EXPECT_EQ(table.rfind("model,ate_m,t_rel_pct,r_rel_deg_100m,loops_accepted,loops_correct,loops_wrong_pose,segments_closed,", 0), 0u)
       << table;
   EXPECT_NE(table.find("\nvladpq,"), std::string::npos) << table;
   EXPECT_NE(table.find("\nnone,"), std::string::npos) << table;
-  EXPECT_NE(table.find(",0,0,0/1,"), std::string::npos) << "no loop in 11 frames: nothing accepted, the segment open\n"
+  EXPECT_NE(table.find(",0,0,0,0/1,"), std::string::npos) << "no loop in 11 frames: nothing accepted, the segment open\n"
                                                          << table;
   EXPECT_TRUE(binloop::test::exists(tmp / "out/trajectories.png"));
 }

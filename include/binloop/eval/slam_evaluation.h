@@ -30,8 +30,25 @@ std::vector<RevisitSegment> revisitSegments(const std::vector<std::pair<int, int
 /// when a frame is outside the ground truth (e.g. the run was of another sequence).
 bool loopIsCorrect(int query, int match, const std::vector<Pose3>& gt, double radius_m = kLoopCorrectRadiusM);
 
+/// A loop's relative pose against the ground truth's: how far the verified T_query_match is from
+/// T_w_query^-1 * T_w_match of the ground truth, in translation (m) and rotation (degrees).
+struct LoopPoseError {
+  double translation_m = 0, rotation_deg = 0;
+};
+/// Throws DataError when a frame is outside the ground truth.
+LoopPoseError loopPoseError(int query, int match, const Pose3& T_query_match, const std::vector<Pose3>& gt);
+
+/// A loop is wrong when its relative pose is off by more than this, wherever its two frames are: a loop
+/// between frames 8 m apart whose pose is right corrects the map; one 2 m apart with a wrong pose bends it.
+constexpr double kLoopWrongPoseM = 1.0;
+constexpr double kLoopWrongPoseDeg = 2.0;
+inline bool loopPoseIsWrong(const LoopPoseError& e) {
+  return e.translation_m > kLoopWrongPoseM || e.rotation_deg > kLoopWrongPoseDeg;
+}
+
 struct LoopScore {
   int accepted = 0, correct = 0;
+  int wrong_pose = 0;   // accepted loops whose relative pose is wrong (loopPoseIsWrong); only when poses were given
   std::vector<bool> closed;  // one per segment
   int segmentsClosed() const;
 };
@@ -40,5 +57,11 @@ struct LoopScore {
 /// and its revisit segments.
 LoopScore scoreLoops(const std::vector<std::pair<int, int>>& accepted, const std::vector<Pose3>& gt,
                      const std::vector<RevisitSegment>& segments, double radius_m = kLoopCorrectRadiusM);
+
+/// The same, also judging each loop's relative pose (`T_query_match[i]` for `accepted[i]`): a loop with a
+/// wrong pose counts in wrong_pose and, whatever its distance, neither as correct nor as closing a segment.
+LoopScore scoreLoops(const std::vector<std::pair<int, int>>& accepted, const std::vector<Pose3>& T_query_match,
+                     const std::vector<Pose3>& gt, const std::vector<RevisitSegment>& segments,
+                     double radius_m = kLoopCorrectRadiusM);
 
 }  // namespace binloop

@@ -9,13 +9,18 @@
 
 namespace binloop {
 
-void writeLoopLog(const std::string& path, const std::vector<SlamPipeline::LoopLogEntry>& log);
+/// `ground_truth` (T_w_c by frame index), when given, adds each verified loop's error against it
+/// (gt_error_m, gt_error_deg; eval/slam_evaluation.h's loopPoseError).
+void writeLoopLog(const std::string& path, const std::vector<SlamPipeline::LoopLogEntry>& log,
+                  const std::vector<Pose3>* ground_truth = nullptr);
 
 struct LoggedLoop {
   std::string model, status;
   uint64_t query_frame = 0, match_frame = 0;
   int inliers = 0;
   double correction_m = 0;
+  bool has_pose = false;  // false in a loops.csv written before the relative pose was logged
+  Pose3 T_query_match = Pose3::Identity();
 };
 /// Every row of loops.csv that names a verified loop (accepted, held, or rejected by closing).
 /// Throws DataError for a missing file or a malformed row.

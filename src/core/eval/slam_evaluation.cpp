@@ -1,5 +1,6 @@
 #include "binloop/eval/slam_evaluation.h"
 
+#include <cmath>
 #include <set>
 
 #include "binloop/io/data_error.h"
@@ -27,6 +28,16 @@ bool loopIsCorrect(int query, int match, const std::vector<Pose3>& gt, double ra
   return (gt[query].translation() - gt[match].translation()).norm() <= radius_m;
 }
 
+LoopPoseError loopPoseError(int query, int match, const Pose3& T_query_match, const std::vector<Pose3>& gt) {
+  loopIsCorrect(query, match, gt);  // checks the frames
+  const Pose3 truth = gt[query].inverse() * gt[match];
+  const Pose3 diff = truth.inverse() * T_query_match;
+  LoopPoseError e;
+  e.translation_m = diff.translation().norm();
+  e.rotation_deg = Eigen::AngleAxisd(diff.linear()).angle() * 180.0 / M_PI;
+  return e;
+}
+
 int LoopScore::segmentsClosed() const {
   int n = 0;
   for (bool c : closed) n += c;
@@ -44,6 +55,23 @@ LoopScore scoreLoops(const std::vector<std::pair<int, int>>& accepted, const std
     for (size_t i = 0; i < segments.size(); ++i)
       if (query >= segments[i].first && query <= segments[i].last) s.closed[i] = true;
   }
+  return s;
+}
+
+LoopScore scoreLoops(const std::vector<std::pair<int, int>>& accepted, const std::vector<Pose3>& T_query_match,
+                     const std::vector<Pose3>& gt, const std::vector<RevisitSegment>& segments, double radius_m) {
+  if (T_query_match.size() != accepted.size())
+    throw DataError("scoring loops: " + std::to_string(accepted.size()) + " loops but " +
+                    std::to_string(T_query_match.size()) + " relative poses");
+  std::vector<std::pair<int, int>> right_pose;
+  int wrong = 0;
+  for (size_t i = 0; i < accepted.size(); ++i) {
+    if (loopPoseIsWrong(loopPoseError(accepted[i].first, accepted[i].second, T_query_match[i], gt))) ++wrong;
+    else right_pose.push_back(accepted[i]);
+  }
+  LoopScore s = scoreLoops(right_pose, gt, segments, radius_m);
+  s.accepted += wrong;
+  s.wrong_pose = wrong;
   return s;
 }
 

@@ -16,7 +16,7 @@ namespace {
 
 // One setting: where it lives in the structs and the smallest value it accepts.
 struct Setting {
-  enum Kind { kInt, kFloat, kDouble, kBool } kind;
+  enum Kind { kInt, kFloat, kDouble, kBool, kSubPixelFit } kind;  // kSubPixelFit: 0 parabola, 1 equiangular
   void* ptr;
   double min;
 };
@@ -38,6 +38,10 @@ std::map<std::string, std::map<std::string, Setting>> settingsOf(SlamConfig& c) 
       {"stereo",
        {{"max_hamming", {S::kInt, &t.stereo.max_hamming, 0}},
         {"sad_half_window", {S::kInt, &t.stereo.sad_half_window, 1}},
+        {"sad_search_px", {S::kInt, &t.stereo.sad_search_px, 1}},
+        {"sad_outlier_factor", {S::kFloat, &t.stereo.sad_outlier_factor, 0.01}},
+        {"centre_pixel_offset", {S::kBool, &t.stereo.centre_pixel_offset, 0}},
+        {"equiangular_fit", {S::kSubPixelFit, &t.stereo.fit, 0}},
         {"close_depth_baselines", {S::kDouble, &t.stereo.close_depth_baselines, 1}}}},
       {"tracking",
        {{"init_min_stereo", {S::kInt, &t.init_min_stereo, 10}},
@@ -125,6 +129,8 @@ double valueOf(const Setting& s) {
     case Setting::kFloat: return *static_cast<float*>(s.ptr);
     case Setting::kDouble: return *static_cast<double*>(s.ptr);
     case Setting::kBool: return *static_cast<bool*>(s.ptr) ? 1 : 0;
+    case Setting::kSubPixelFit:
+      return *static_cast<StereoMatchParams::SubPixelFit*>(s.ptr) == StereoMatchParams::SubPixelFit::kEquiangular;
   }
   return 0;
 }
@@ -196,17 +202,22 @@ SlamConfig loadSlamConfig(const std::string& path) {
       if (!std::isfinite(x) || x < s.min)
         throw ConfigError(path + ": " + section + "." + key + " = " + std::to_string(x) + " is out of range (at least " +
                           std::to_string(s.min) + ")");
-      if ((s.kind == Setting::kInt || s.kind == Setting::kBool) && x != std::floor(x))
+      const bool binary = s.kind == Setting::kBool || s.kind == Setting::kSubPixelFit;
+      if ((s.kind == Setting::kInt || binary) && x != std::floor(x))
         throw ConfigError(path + ": " + section + "." + key + " must be a whole number");
       if (s.kind == Setting::kInt && x > std::numeric_limits<int>::max())
         throw ConfigError(path + ": " + section + "." + key + " = " + std::to_string(x) + " is out of range (at most " +
                           std::to_string(std::numeric_limits<int>::max()) + ")");
-      if (s.kind == Setting::kBool && x > 1) throw ConfigError(path + ": " + section + "." + key + " must be 0 or 1");
+      if (binary && x > 1) throw ConfigError(path + ": " + section + "." + key + " must be 0 or 1");
       switch (s.kind) {
         case Setting::kInt: *static_cast<int*>(s.ptr) = static_cast<int>(x); break;
         case Setting::kFloat: *static_cast<float*>(s.ptr) = static_cast<float>(x); break;
         case Setting::kDouble: *static_cast<double*>(s.ptr) = x; break;
         case Setting::kBool: *static_cast<bool*>(s.ptr) = x != 0; break;
+        case Setting::kSubPixelFit:
+          *static_cast<StereoMatchParams::SubPixelFit*>(s.ptr) =
+              x != 0 ? StereoMatchParams::SubPixelFit::kEquiangular : StereoMatchParams::SubPixelFit::kParabola;
+          break;
       }
     }
   }

@@ -71,3 +71,32 @@ TEST(LoopScore, AFrameOutsideTheGroundTruthIsAnError) {
   const auto gt = outAndBack();
   EXPECT_THROW_WITH(scoreLoops({{250, 10}}, gt, {}), DataError, "frame 250 is outside the 201 ground-truth poses");
 }
+
+// A loop between frames at the same place whose relative pose is 1.5 m or 3 degrees off is wrong: it would
+// bend the map, so it neither counts as correct nor closes its segment.
+TEST(LoopScore, ALoopWithAWrongRelativePoseClosesNothing) {
+  const auto gt = outAndBack();
+  const std::vector<RevisitSegment> segments{{140, 160, 21}};
+  const Pose3 truth = gt[150].inverse() * gt[50];  // identity: the same place
+  Pose3 off = truth;
+  off.translation().x() += 1.5;
+  Pose3 turned = truth;
+  turned.linear() = Eigen::AngleAxisd(3.0 * M_PI / 180, Eigen::Vector3d::UnitY()).toRotationMatrix();
+  Pose3 close = truth;
+  close.translation().z() += 0.5;
+  EXPECT_NEAR(loopPoseError(150, 50, off, gt).translation_m, 1.5, 1e-9);
+  EXPECT_NEAR(loopPoseError(150, 50, turned, gt).rotation_deg, 3.0, 1e-9);
+  EXPECT_FALSE(loopPoseIsWrong(loopPoseError(150, 50, close, gt)));
+
+  const LoopScore wrong = scoreLoops({{150, 50}, {151, 49}}, {off, turned}, gt, segments);
+  EXPECT_EQ(wrong.accepted, 2);
+  EXPECT_EQ(wrong.correct, 0);
+  EXPECT_EQ(wrong.wrong_pose, 2);
+  EXPECT_EQ(wrong.segmentsClosed(), 0);
+  const LoopScore right = scoreLoops({{150, 50}, {151, 49}}, {close, turned}, gt, segments);
+  EXPECT_EQ(right.accepted, 2);
+  EXPECT_EQ(right.correct, 1);
+  EXPECT_EQ(right.wrong_pose, 1);
+  EXPECT_EQ(right.segmentsClosed(), 1);
+  EXPECT_THROW_WITH(scoreLoops({{150, 50}}, {}, gt, segments), DataError, "1 loops but 0 relative poses");
+}

@@ -3,6 +3,7 @@
 
 #include <gtest/gtest.h>
 
+#include "binloop/eval/slam_evaluation.h"
 #include "binloop/io/data_error.h"
 #include <fstream>
 #include <sstream>
@@ -64,8 +65,58 @@ TEST(LoopLog, ABrokenFileNamesTheLine) {
   std::stringstream text;
   text << in.rdbuf();
   test::writeText(tmp / "short.csv", text.str() + "1,2,3\n");
-  EXPECT_THROW_WITH(readLoopLog(tmp / "short.csv"), DataError, "short.csv:4: 3 fields, expected 21");
+  EXPECT_THROW_WITH(readLoopLog(tmp / "short.csv"), DataError, "short.csv:4: 3 fields, expected 24");
   test::writeText(tmp / "header.csv", "frame,model\n");
   EXPECT_THROW_WITH(readLoopLog(tmp / "header.csv"), DataError, "not a loops.csv");
   EXPECT_THROW_WITH(readLoopLog(tmp / "missing.csv"), DataError, "cannot open");
+}
+
+// Each verified loop's relative pose is logged and read back; with ground truth its error is logged too.
+TEST(LoopLog, ARelativePoseAndItsErrorAgainstTheGroundTruth) {
+  test::TempDir tmp;
+  SlamPipeline::LoopLogEntry e = entry(2, 4, "accepted", 1);
+  Pose3 T = Pose3::Identity();
+  T.translation() = Eigen::Vector3d(0.2, 0, -3.0);  // the match 3 m behind, 0.2 m off sideways
+  T.linear() = Eigen::AngleAxisd(0.05, Eigen::Vector3d::UnitY()).toRotationMatrix();
+  auto c = std::make_shared<msg::LoopClosure>(*e.closures[0]);
+  c->T_query_match = T;
+  e.closures[0] = c;
+  // Ground truth: frame k at z = k metres, no rotation; so the truth is (0, 0, -3), no turn.
+  std::vector<Pose3> gt(5, Pose3::Identity());
+  for (int k = 0; k < 5; ++k) gt[k].translation().z() = k;
+  writeLoopLog(tmp / "loops.csv", {e}, &gt);
+  const std::vector<LoggedLoop> loops = readLoopLog(tmp / "loops.csv");
+  ASSERT_EQ(loops.size(), 1u);
+  ASSERT_TRUE(loops[0].has_pose);
+  EXPECT_TRUE(loops[0].T_query_match.isApprox(T, 1e-6));
+  const std::string text = [&] {
+    std::ifstream in(tmp / "loops.csv");
+    std::stringstream t;
+    t << in.rdbuf();
+    return t.str();
+  }();
+  const LoopPoseError err = loopPoseError(4, 1, T, gt);
+  EXPECT_NEAR(err.rotation_deg, 0.05 * 180 / M_PI, 1e-6);
+  EXPECT_NEAR(err.translation_m, 0.2, 1e-9);  // the truth is (0, 0, -3): 0.2 m sideways off
+  std::ostringstream expected;
+  expected << "," << err.translation_m << "," << err.rotation_deg << "\n";
+  EXPECT_NE(text.find(expected.str()), std::string::npos) << text;
+}
+
+// A loops.csv written before the relative pose was logged still reads, without poses.
+TEST(LoopLog, AnOlderLogWithoutPosesStillReads) {
+  test::TempDir tmp;
+  writeLoopLog(tmp / "loops.csv", {entry(2, 40, "accepted", 3)});
+  std::ifstream in(tmp / "loops.csv");
+  std::string line, old;
+  while (std::getline(in, line)) {
+    // Drop the three last fields (query_to_match, gt_error_m, gt_error_deg).
+    for (int i = 0; i < 3; ++i) line = line.substr(0, line.rfind(','));
+    old += line + "\n";
+  }
+  test::writeText(tmp / "old.csv", old);
+  const std::vector<LoggedLoop> loops = readLoopLog(tmp / "old.csv");
+  ASSERT_EQ(loops.size(), 1u);
+  EXPECT_FALSE(loops[0].has_pose);
+  EXPECT_EQ(loops[0].match_frame, 3u);
 }
