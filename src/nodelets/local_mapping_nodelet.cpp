@@ -10,6 +10,7 @@
 #include <memory>
 
 #include "binloop/mapping/local_mapper.h"
+#include "binloop_ros/callback_guard.h"
 #include "binloop_ros/cpu_meter.h"
 #include "binloop_ros/stage_diagnostics.h"
 #include "binloop_ros/node_params.h"
@@ -33,11 +34,12 @@ class LocalMappingNodelet : public nodelet::Nodelet {
   binloop::LocalMapperParams params_;
   std::unique_ptr<binloop::LocalMapper> mapper_;
   std::unique_ptr<StageServices> services_;
+  CallbackGuard guard_{"LocalMapping"};
   std::string counts() const;
   std::string map_frame_;
   int cloud_every_ = 5;
   ros::Subscriber keyframe_sub_, correction_sub_;
-  ros::Timer merge_timer_;
+  ros::WallTimer merge_timer_;
   ros::Publisher refined_pub_, update_pub_, cloud_pub_, keyframes_pub_;
   std::unique_ptr<StageDiagnostics> diag_;
   CpuMeter cpu_;
@@ -65,10 +67,14 @@ void LocalMappingNodelet::onInit() {
   cloud_pub_ = nh.advertise<sensor_msgs::PointCloud2>("map_points", 1, true);
   keyframes_pub_ = nh.advertise<geometry_msgs::PoseArray>("keyframes", 1, true);
   // Deep queues: a keyframe or a correction dropped here would be lost for good.
-  keyframe_sub_ = nh.subscribe("keyframe", 1000, &LocalMappingNodelet::onKeyframe, this);
-  correction_sub_ = nh.subscribe("correction", 100, &LocalMappingNodelet::onCorrection, this);
+  keyframe_sub_ = guard_.subscribe(nh, "keyframe", 1000, &LocalMappingNodelet::onKeyframe, this);
+  correction_sub_ = guard_.subscribe(nh, "correction", 100, &LocalMappingNodelet::onCorrection, this);
   // A background global BA is merged when it is done, whether or not keyframes come (same queue as them).
-  merge_timer_ = nh.createTimer(ros::Duration(0.1), [this](const ros::TimerEvent&) { mergeGlobalBa(); });
+  // Wall clock: under simulated time a ROS timer stops with /clock when the bag ends, and the last global BA
+  // would never be merged.
+  merge_timer_ = nh.createWallTimer(ros::WallDuration(0.1), guard_.wrap("global BA merge", [this](const ros::WallTimerEvent&) {
+    mergeGlobalBa();
+  }));
   diag_ = std::make_unique<StageDiagnostics>(
       nh, pnh, "local mapping", [this](diagnostic_updater::DiagnosticStatusWrapper& s) { diagnose(s); });
   StageServiceHandlers h;
@@ -188,6 +194,10 @@ void LocalMappingNodelet::diagnose(diagnostic_updater::DiagnosticStatusWrapper& 
   s.add("corrections applied", corrections_);
   s.add("input dropped", rejected_);
   s.add("last problem", last_problem_);
+  s.add("callbacks failed", guard_.failures());
+  s.add("last callback failure", guard_.lastFailure());
+  s.add("global BAs failed", mapper_ ? mapper_->globalBaStats().failed : 0);
+  s.add("last global BA failure", mapper_ ? mapper_->globalBaStats().last_failure : std::string());
   s.add("last keyframe ms", last_ms_);
   s.add("last local BA ms", last_ba_ms_);
   s.add("cpu s in callbacks", cpu_.seconds());

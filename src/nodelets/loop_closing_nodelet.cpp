@@ -16,6 +16,7 @@
 #include <unordered_map>
 
 #include "binloop/loop/loop_closer.h"
+#include "binloop_ros/callback_guard.h"
 #include "binloop_ros/cpu_meter.h"
 #include "binloop_ros/stage_diagnostics.h"
 #include "binloop_ros/node_params.h"
@@ -45,6 +46,7 @@ class LoopClosingNodelet : public nodelet::Nodelet {
   binloop::LoopCloserParams params_;
   std::unique_ptr<binloop::LoopCloser> closer_;
   std::unique_ptr<StageServices> services_;
+  CallbackGuard guard_{"LoopClosing"};
   std::string map_frame_;
   ros::Subscriber keyframe_sub_, update_sub_, candidates_sub_;
   ros::Publisher correction_pub_, closure_pub_, path_pub_, edges_pub_;
@@ -81,10 +83,13 @@ void LoopClosingNodelet::onInit() {
   closure_pub_ = nh.advertise<binloop::LoopClosure>("loop_closure", 100);
   path_pub_ = nh.advertise<nav_msgs::Path>("corrected_path", 1, true);
   edges_pub_ = nh.advertise<visualization_msgs::MarkerArray>("loop_edges", 1, true);
-  keyframe_sub_ = nh.subscribe("refined_keyframe", 1000, &LoopClosingNodelet::onKeyframe, this);
-  update_sub_ = nh.subscribe("local_map_update", 1000, &LoopClosingNodelet::onUpdate, this);
-  candidates_sub_ = nh.subscribe("loop_candidates", 1000, &LoopClosingNodelet::onCandidates, this);
-  external_srv_ = nh.advertiseService("add_external_loop", &LoopClosingNodelet::onExternalLoop, this);
+  keyframe_sub_ = guard_.subscribe(nh, "refined_keyframe", 1000, &LoopClosingNodelet::onKeyframe, this);
+  update_sub_ = guard_.subscribe(nh, "local_map_update", 1000, &LoopClosingNodelet::onUpdate, this);
+  candidates_sub_ = guard_.subscribe(nh, "loop_candidates", 1000, &LoopClosingNodelet::onCandidates, this);
+  external_srv_ = nh.advertiseService<binloop::AddExternalLoop::Request, binloop::AddExternalLoop::Response>(
+      "add_external_loop", [this](binloop::AddExternalLoop::Request& req, binloop::AddExternalLoop::Response& res) {
+        return guard_.run("add_external_loop", [&] { onExternalLoop(req, res); });  // false: the caller sees a failed call
+      });
   diag_ = std::make_unique<StageDiagnostics>(
       nh, pnh, "loop closing", [this](diagnostic_updater::DiagnosticStatusWrapper& s) { diagnose(s); });
   StageServiceHandlers h;
@@ -269,6 +274,8 @@ void LoopClosingNodelet::diagnose(diagnostic_updater::DiagnosticStatusWrapper& s
   s.add("candidates waiting", pending_.size());
   s.add("input dropped", rejected_input_);
   s.add("last problem", last_problem_);
+  s.add("callbacks failed", guard_.failures());
+  s.add("last callback failure", guard_.lastFailure());
   s.add("cpu s in callbacks", cpu_.seconds());
 }
 

@@ -13,6 +13,7 @@
 
 #include "binloop/loop/loop_detector.h"
 #include "binloop/pipeline/model_files.h"
+#include "binloop_ros/callback_guard.h"
 #include "binloop_ros/cpu_meter.h"
 #include "binloop_ros/stage_diagnostics.h"
 #include "binloop_ros/node_params.h"
@@ -38,6 +39,7 @@ class LoopDetectorNodelet : public nodelet::Nodelet {
   binloop::LoopDetector::ModelFactory make_;
   std::vector<std::string> shadow_;
   std::unique_ptr<StageServices> services_;
+  CallbackGuard guard_{"LoopDetector"};
 
   binloop::SlamConfig config_;
   std::string vocab_dir_;
@@ -79,8 +81,10 @@ void LoopDetectorNodelet::onInit() {
   diag_ = std::make_unique<StageDiagnostics>(
       nh, pnh, "loop detector", [this](diagnostic_updater::DiagnosticStatusWrapper& s) { diagnose(s); });
   reconfigure_ = std::make_unique<dynamic_reconfigure::Server<binloop::LoopDetectorConfig>>(pnh);
-  reconfigure_->setCallback([this](binloop::LoopDetectorConfig& c, uint32_t level) { onReconfigure(c, level); });
-  keyframe_sub_ = nh.subscribe("refined_keyframe", 1000, &LoopDetectorNodelet::onKeyframe, this);
+  reconfigure_->setCallback([this](binloop::LoopDetectorConfig& c, uint32_t level) {
+    guard_.run("dynamic_reconfigure", [&] { onReconfigure(c, level); });
+  });
+  keyframe_sub_ = guard_.subscribe(nh, "refined_keyframe", 1000, &LoopDetectorNodelet::onKeyframe, this);
   StageServiceHandlers h;
   auto need = [this] {
     if (!detector_) throw std::runtime_error("no usable loop model: " + last_problem_);
@@ -210,6 +214,8 @@ void LoopDetectorNodelet::diagnose(diagnostic_updater::DiagnosticStatusWrapper& 
   s.add("last detection ms", last_ms_);
   s.add("last switch rebuild ms", last_switch_ms_);
   s.add("input dropped", rejected_);
+  s.add("callbacks failed", guard_.failures());
+  s.add("last callback failure", guard_.lastFailure());
   s.add("cpu s in callbacks", cpu_.seconds());
 }
 

@@ -20,11 +20,13 @@
 
 #include "binloop/pipeline/model_files.h"
 #include "binloop/tracking/tracker.h"
+#include "binloop_ros/callback_guard.h"
 #include "binloop_ros/cpu_meter.h"
 #include "binloop_ros/stage_diagnostics.h"
 #include "binloop_ros/node_params.h"
 #include "binloop_ros/stage_msg_conversion.h"
 #include "binloop_ros/stage_services.h"
+#include "binloop_ros/stamp_gate.h"
 #include "binloop_ros/topics.h"
 
 namespace binloop_ros {
@@ -40,6 +42,11 @@ class TrackingNodelet : public nodelet::Nodelet {
   using Exact = mf::sync_policies::ExactTime<Image, Image>;
   using Approx = mf::sync_policies::ApproximateTime<Image, Image>;
 
+  // message_filters' synchronizers bind a member function with nine arguments, not a generic callable, so the
+  // pair goes through the guard here.
+  void onPair(const sensor_msgs::ImageConstPtr& left, const sensor_msgs::ImageConstPtr& right) {
+    guard_.run("stereo pair", [&] { onImages(left, right); });
+  }
   void onImages(const sensor_msgs::ImageConstPtr& left, const sensor_msgs::ImageConstPtr& right);
   void track(const sensor_msgs::ImageConstPtr& left, const sensor_msgs::ImageConstPtr& right);
   void trackWaiting();
@@ -52,6 +59,12 @@ class TrackingNodelet : public nodelet::Nodelet {
   void diagnose(diagnostic_updater::DiagnosticStatusWrapper& s);
   void startOver(std::unique_ptr<binloop::Tracker> t);
   std::unique_ptr<StageServices> services_;
+  CallbackGuard guard_{"Tracking"};
+  std::unique_ptr<StampGate> stamps_;
+  double stale_after_s_ = 2;
+  size_t path_max_poses_ = 1000;
+  ros::WallTime last_pair_wall_;
+  uint64_t clock_restarts_ = 0;
 
   binloop::SlamConfig config_;
   std::unique_ptr<binloop::Tracker> tracker_;
@@ -73,7 +86,6 @@ class TrackingNodelet : public nodelet::Nodelet {
   std::unique_ptr<StageDiagnostics> diag_;
   CpuMeter cpu_;
   nav_msgs::Path path_;
-  ros::Time last_stamp_;
   uint64_t frames_ = 0, rejected_ = 0, keyframes_sent_ = 0, lost_ = 0;
   int pending_ = 0;             // keyframes sent to mapping and not yet answered by an update
   uint64_t corrections_ = 0;    // corrected maps applied: the map-frame pose may jump then, odom must not
@@ -95,7 +107,12 @@ void TrackingNodelet::onInit() {
   try {
     requireKnownParams(pnh, {"config", "reloc_vocab", "force_extractor", "sync", "queue_size", "max_stamp_diff",
                              "map_frame", "odom_frame", "camera_frame", "camera", "seed", "lockstep",
-                             "view_frame", "ground_truth_frame", "base_frame", "camera_in_base"});
+                             "view_frame", "ground_truth_frame", "base_frame", "camera_in_base", "max_time_jump",
+                             "time_jump_confirm_pairs", "stale_after_s", "path_max_poses"});
+    stamps_ = std::make_unique<StampGate>(StampGateParams{numberParam(pnh, "max_time_jump", 5),
+                                                          static_cast<int>(numberParam(pnh, "time_jump_confirm_pairs", 3))});
+    stale_after_s_ = numberParam(pnh, "stale_after_s", 2);
+    path_max_poses_ = static_cast<size_t>(std::max(1.0, numberParam(pnh, "path_max_poses", 1000)));
     config_ = slamConfigFrom(pnh);
     config_.tracker.seed = static_cast<uint64_t>(numberParam(pnh, "seed", 1));
     const std::string reloc = stringParam(pnh, "reloc_vocab", "");
@@ -180,19 +197,19 @@ void TrackingNodelet::onInit() {
     static_tf_ = std::make_unique<tf2_ros::StaticTransformBroadcaster>();
     static_tf_->sendTransform(statics);
   }
-  update_sub_ = nh.subscribe("local_map_update", 100, &TrackingNodelet::onUpdate, this);
+  update_sub_ = guard_.subscribe(nh, "local_map_update", 100, &TrackingNodelet::onUpdate, this);
   left_info_sub_ = nh.subscribe<sensor_msgs::CameraInfo>(
-      topics::kLeftInfo, 2, [this](const sensor_msgs::CameraInfoConstPtr& m) { onInfo(m, false); });
+      topics::kLeftInfo, 2, guard_.wrap("left camera_info", [this](const sensor_msgs::CameraInfoConstPtr& m) { onInfo(m, false); }));
   right_info_sub_ = nh.subscribe<sensor_msgs::CameraInfo>(
-      topics::kRightInfo, 2, [this](const sensor_msgs::CameraInfoConstPtr& m) { onInfo(m, true); });
+      topics::kRightInfo, 2, guard_.wrap("right camera_info", [this](const sensor_msgs::CameraInfoConstPtr& m) { onInfo(m, true); }));
   left_sub_.subscribe(nh, topics::kLeftImage, queue);
   right_sub_.subscribe(nh, topics::kRightImage, queue);
   if (sync == "approximate") {
     approx_ = std::make_unique<mf::Synchronizer<Approx>>(Approx(queue), left_sub_, right_sub_);
-    approx_->registerCallback(&TrackingNodelet::onImages, this);
+    approx_->registerCallback(&TrackingNodelet::onPair, this);
   } else {
     exact_ = std::make_unique<mf::Synchronizer<Exact>>(Exact(queue), left_sub_, right_sub_);
-    exact_->registerCallback(&TrackingNodelet::onImages, this);
+    exact_->registerCallback(&TrackingNodelet::onPair, this);
   }
   diag_ = std::make_unique<StageDiagnostics>(
       nh, pnh, "tracking", [this](diagnostic_updater::DiagnosticStatusWrapper& s) { diagnose(s); });
@@ -224,6 +241,7 @@ void TrackingNodelet::onInit() {
     return s;
   };
   services_ = std::make_unique<StageServices>(pnh, "tracking", h);
+  last_pair_wall_ = ros::WallTime::now();  // no pair at all for ~stale_after_s is reported too
   NODELET_INFO("binloop/Tracking: %s sync on %s + %s, map frame '%s'", sync.c_str(), topics::kLeftImage,
                topics::kRightImage, map_frame_.c_str());
 }
@@ -233,7 +251,7 @@ void TrackingNodelet::startOver(std::unique_ptr<binloop::Tracker> t) {
   tracker_ = std::move(t);
   pending_ = 0;
   have_last_ = false;
-  last_stamp_ = ros::Time();
+  stamps_->reset();
   path_.poses.clear();
 }
 
@@ -250,9 +268,6 @@ void TrackingNodelet::reject(const std::string& why) {
 }
 
 std::string TrackingNodelet::check(const Image& left, const Image& right) {
-  if (!last_stamp_.isZero() && left.header.stamp <= last_stamp_)
-    return "stamp " + std::to_string(left.header.stamp.toSec()) + " s is not after the previous pair's " +
-           std::to_string(last_stamp_.toSec()) + " s (out of order or repeated)";
   last_stamp_diff_ = std::abs((left.header.stamp - right.header.stamp).toSec());
   if (last_stamp_diff_ > max_stamp_diff_)
     return "left and right stamps differ by " + std::to_string(last_stamp_diff_) + " s (more than ~max_stamp_diff " +
@@ -276,11 +291,24 @@ std::string TrackingNodelet::check(const Image& left, const Image& right) {
   if (static_cast<int>(left.width) != cam.width || static_cast<int>(left.height) != cam.height)
     return "image is " + std::to_string(left.width) + "x" + std::to_string(left.height) + ", the camera " +
            std::to_string(cam.width) + "x" + std::to_string(cam.height);
+  // Last, as it counts the pairs it takes: the stamp.
+  const StampGate::Decision time = stamps_->check(left.header.stamp.toSec());
+  if (!time.taken()) return time.reason;
+  if (time.verdict == StampGate::Verdict::kRestart) {
+    tracker_->restartClock();
+    ++clock_restarts_;
+    path_.poses.clear();
+  }
+  if (time.verdict != StampGate::Verdict::kTake) {
+    last_problem_ = time.reason;
+    NODELET_WARN("binloop/Tracking: %s", time.reason.c_str());
+  }
   return "";
 }
 
 void TrackingNodelet::onImages(const sensor_msgs::ImageConstPtr& left, const sensor_msgs::ImageConstPtr& right) {
   CpuMeter::Scope cpu(cpu_);
+  last_pair_wall_ = ros::WallTime::now();
   // Pairs wait while there is no camera yet (camera_info may come just after the first images) and, in
   // lock-step, while mapping has not answered.
   const bool no_camera = !tracker_ && (!left_info_ || !right_info_);
@@ -317,7 +345,6 @@ void TrackingNodelet::track(const sensor_msgs::ImageConstPtr& left, const sensor
     }
   }
   if (!problem.empty()) return reject(problem);
-  last_stamp_ = left->header.stamp;
   frame.index = static_cast<int>(frames_++);
   frame.stamp_s = left->header.stamp.toSec();
   binloop::Tracker::Output out = tracker_->track(frame, pending_);
@@ -368,9 +395,13 @@ void TrackingNodelet::publishPose(const binloop::msg::TrackedFrame& f, const std
   odom.pose.pose = toPoseMsg(T_odom_x);
   odom_pub_.publish(odom);
 
+  // The live path: the last ~path_max_poses poses, serialised only for a subscriber (a whole drive's path
+  // grew by a pose a frame and was re-sent every frame).
   path_.header = pose.header;
   path_.poses.push_back(pose);
-  path_pub_.publish(path_);
+  if (path_.poses.size() > path_max_poses_)
+    path_.poses.erase(path_.poses.begin(), path_.poses.begin() + static_cast<long>(path_.poses.size() - path_max_poses_));
+  if (path_pub_.getNumSubscribers() > 0) path_pub_.publish(path_);
 
   auto tf = [&](const binloop::Pose3& T, const std::string& parent, const std::string& child) {
     geometry_msgs::TransformStamped t;
@@ -437,7 +468,11 @@ void TrackingNodelet::onUpdate(const binloop::LocalMapUpdateConstPtr& m) {
 
 void TrackingNodelet::diagnose(diagnostic_updater::DiagnosticStatusWrapper& s) {
   const bool lost = tracker_ && tracker_->state() == binloop::msg::TrackingState::kLost;
+  const double quiet_s = last_pair_wall_.isZero() ? 0 : (ros::WallTime::now() - last_pair_wall_).toSec();
   if (!tracker_) s.summary(diagnostic_msgs::DiagnosticStatus::WARN, "waiting for camera_info");
+  else if (quiet_s > stale_after_s_)
+    s.summary(diagnostic_msgs::DiagnosticStatus::WARN, "no stereo pair for " + std::to_string(static_cast<int>(quiet_s)) + " s");
+  else if (guard_.failures() > 0) s.summary(diagnostic_msgs::DiagnosticStatus::WARN, "tracking; a callback failed");
   else if (lost) s.summary(diagnostic_msgs::DiagnosticStatus::WARN, "lost");
   else if (rejected_ > 0) s.summary(diagnostic_msgs::DiagnosticStatus::WARN, "tracking; some input dropped");
   else s.summary(diagnostic_msgs::DiagnosticStatus::OK, "tracking");
@@ -445,6 +480,10 @@ void TrackingNodelet::diagnose(diagnostic_updater::DiagnosticStatusWrapper& s) {
   s.add("frames lost", lost_);
   s.add("input dropped", rejected_);
   s.add("last problem", last_problem_);
+  s.add("callbacks failed", guard_.failures());
+  s.add("last callback failure", guard_.lastFailure());
+  s.add("clock restarts", clock_restarts_);
+  s.add("seconds since the last pair", quiet_s);
   s.add("keyframes sent", keyframes_sent_);
   s.add("mapping queue", pending_);
   s.add("pairs waiting", waiting_.size());

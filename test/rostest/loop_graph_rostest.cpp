@@ -62,6 +62,7 @@ const Drive& drive() {
 struct Observed {
   std::mutex m;
   std::map<double, geometry_msgs::Pose> poses;  // by stamp
+  std::vector<double> pose_stamps;              // every pose message's stamp, in order
   std::vector<binloop::LoopClosure> closures;
   std::vector<binloop::LoopCandidates> candidates;
   nav_msgs::Path corrected_path;
@@ -79,6 +80,7 @@ class LoopGraph : public ::testing::Test {
     subs_.push_back(nh.subscribe<geometry_msgs::PoseStamped>("/binloop/pose", 1000, [this](const auto& m) {
       std::lock_guard<std::mutex> lk(seen_.m);
       seen_.poses[m->header.stamp.toSec()] = m->pose;
+      seen_.pose_stamps.push_back(m->header.stamp.toSec());
     }));
     subs_.push_back(nh.subscribe<binloop::LoopClosure>("/binloop/loop_closure", 100, [this](const auto& m) {
       std::lock_guard<std::mutex> lk(seen_.m);
@@ -357,6 +359,65 @@ TEST_F(LoopGraph, MalformedPairsAreReportedAndTrackingGoesOn) {
     auto it = seen_.tracking_diag.find("input dropped");
     return it != seen_.tracking_diag.end() && std::stoi(it->second) >= 4;
   })) << "diagnostics do not count the dropped pairs";
+}
+
+// Run alone on a fresh graph by field_faults.test: the stamps the field sends. One pair stamped at the end of
+// ROS's time range (it once ended the manager: converting the pose back threw out of a callback), one a
+// million seconds ahead (it once made every later pair "not after the previous one"), and the same pairs
+// sent again (a replayed bag: time goes back). The graph stays up, drops the bad pairs with their reason and
+// tracks the replay again within a few pairs.
+TEST_F(LoopGraph, BadStampsAndAReplayDoNotStopTheGraph) {
+  const Drive& d = drive();
+  ASSERT_TRUE(d.problem.empty()) << d.problem;
+  const std::vector<Pair> pairs = readPairs(d.bag);
+  ASSERT_GE(pairs.size(), 60u);
+  ASSERT_TRUE(graphConnected());
+  auto send = [&](const Pair& p) {
+    publishPair(p.left, p.right, p.left_info, p.right_info);
+    ros::WallDuration(0.1).sleep();
+  };
+  auto stamped = [](Pair p, ros::Time s) {
+    p.left.header.stamp = p.right.header.stamp = p.left_info.header.stamp = p.right_info.header.stamp = s;
+    return p;
+  };
+  auto posesBetween = [&](double from, double to) {
+    std::lock_guard<std::mutex> lk(seen_.m);
+    int n = 0;
+    for (const auto& [t, pose] : seen_.poses) n += t >= from && t <= to;
+    return n;
+  };
+  for (size_t i = 0; i < 30; ++i) send(pairs[i]);
+  send(stamped(pairs[30], ros::Time(4294967295u, 900000000u)));
+  for (size_t i = 30; i < 40; ++i) send(pairs[i]);
+  send(stamped(pairs[40], pairs[40].left.header.stamp + ros::Duration(1e6)));
+  for (size_t i = 40; i < 50; ++i) send(pairs[i]);
+  ASSERT_TRUE(waitFor(10, [&] { return seen_.poses.count(pairs[49].left.header.stamp.toSec()) > 0; }))
+      << "the last pair before the replay was not tracked";
+  const double t0 = pairs[0].left.header.stamp.toSec(), t29 = pairs[29].left.header.stamp.toSec();
+  EXPECT_GE(posesBetween(t0, t29), 25);
+  EXPECT_GE(posesBetween(pairs[30].left.header.stamp.toSec(), pairs[39].left.header.stamp.toSec()), 9)
+      << "pairs after the stamp at the end of ROS's range were not tracked";
+  EXPECT_GE(posesBetween(pairs[40].left.header.stamp.toSec(), pairs[49].left.header.stamp.toSec()), 9)
+      << "pairs after the stamp a million seconds ahead were not tracked";
+  EXPECT_EQ(posesBetween(1e5, 5e9), 0) << "a pose for a bad stamp";
+
+  // The same ten pairs again: three to agree that the clock went back, then relocalised and tracked.
+  size_t before = 0;
+  {
+    std::lock_guard<std::mutex> lk(seen_.m);
+    before = seen_.pose_stamps.size();
+  }
+  for (size_t i = 40; i < 50; ++i) send(pairs[i]);
+  EXPECT_TRUE(waitFor(10, [&] { return seen_.pose_stamps.size() >= before + 5; }))
+      << "the replayed pairs were not tracked again";
+  EXPECT_TRUE(waitFor(5, [&] {
+    auto dropped = seen_.tracking_diag.find("input dropped"), restarts = seen_.tracking_diag.find("clock restarts");
+    return dropped != seen_.tracking_diag.end() && std::stoi(dropped->second) >= 4 &&
+           restarts != seen_.tracking_diag.end() && restarts->second == "1";
+  })) << "diagnostics do not count the dropped pairs and the clock restart";
+  // Every stage is still there and answers.
+  const auto stats = statistics();
+  EXPECT_FALSE(stats.empty()) << "the graph does not answer /binloop/statistics";
 }
 
 // Run alone on a fresh graph by no_camera_info.test (the other .test files leave it out): pairs that come

@@ -7,6 +7,7 @@
 #include <deque>
 #include <map>
 #include <memory>
+#include <string>
 #include <unordered_map>
 #include <vector>
 
@@ -79,6 +80,8 @@ class LocalMapper {
   msg::LocalMapUpdatePtr mergeGlobalBa(bool wait = false);
   struct GlobalBaStats {
     int started = 0, merged = 0, aborted = 0;  // aborted: stopped by a correction (or discarded at the end)
+    int failed = 0;                            // threw in its thread: the map stays as it was
+    std::string last_failure;
     double last_ms = 0;                        // the last merged one's solve
     int last_keyframes = 0, last_added_meanwhile = 0;
   };

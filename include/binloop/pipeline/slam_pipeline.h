@@ -50,6 +50,9 @@ class SlamPipeline {
   /// Waits until every stage has processed everything sent to it and tracking has applied every update.
   void finish();
 
+  /// The input's clock started again (a bag replayed): Tracker::restartClock. From the caller of process().
+  void restartClock() { tracker_.restartClock(); }
+
   /// The model loop detection uses from its next keyframe on (any thread). Throws PlaceError for a model
   /// that cannot be made; the running one stays.
   void switchDetector(const std::string& model);

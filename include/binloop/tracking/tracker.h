@@ -99,6 +99,11 @@ class Tracker {
 
   void apply(const msg::LocalMapUpdate& u);
 
+  /// The clock started again (a bag played again, simulated time reset): the next frame may come earlier
+  /// than the last. The map stays; the motion model goes, and the next frame is searched for around the last
+  /// keyframe and then relocalised anywhere, as after a load. Before the first frame it changes nothing.
+  void restartClock();
+
   msg::TrackingState state() const { return state_; }
   const MapReplica& map() const { return map_; }
   const TrackerParams& params() const { return p_; }

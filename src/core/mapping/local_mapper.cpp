@@ -675,6 +675,7 @@ struct LocalMapper::GlobalBaJob {
   uint64_t seq_at_start = 0;  // keyframes inserted after it were added meanwhile
   LocalBaResult result;
   std::atomic<bool> abort{false}, done{false};
+  std::string failure;  // what it threw, if it did (written before done)
   std::thread thread;
 };
 
@@ -687,7 +688,14 @@ void LocalMapper::startGlobalBa(const std::vector<SlamKeyframeId>& keyframes) {
   ++global_ba_.started;
   GlobalBaJob* j = job.get();
   job->thread = std::thread([j, params = globalBaParams(), cam = camera_] {
-    j->result = binloop::localBundleAdjustment(cam, j->setup.problem, params, &j->abort);
+    // An exception leaving a thread's function ends the process: it is kept and reported at the merge.
+    try {
+      j->result = binloop::localBundleAdjustment(cam, j->setup.problem, params, &j->abort);
+    } catch (const std::exception& e) {
+      j->failure = e.what();
+    } catch (...) {
+      j->failure = "an unknown exception";
+    }
     j->done = true;
   });
   gba_ = std::move(job);
@@ -705,6 +713,11 @@ msg::LocalMapUpdatePtr LocalMapper::mergeGlobalBa(bool wait) {
   if (!gba_ || (!wait && !gba_->done)) return nullptr;
   gba_->thread.join();
   std::unique_ptr<GlobalBaJob> job = std::move(gba_);
+  if (!job->failure.empty()) {
+    ++global_ba_.failed;
+    global_ba_.last_failure = job->failure;
+    return nullptr;
+  }
   const auto t0 = std::chrono::steady_clock::now();
   auto u = std::make_shared<msg::LocalMapUpdate>();
   u->sequence = ++updates_;

@@ -562,6 +562,12 @@ msg::KeyFramePtr Tracker::makeKeyframe(Frame& f) {
   return kf;
 }
 
+void Tracker::restartClock() {
+  have_stamp_ = false;
+  have_velocity_ = false;
+  if (state_ != msg::TrackingState::kNotInitialized) state_ = msg::TrackingState::kLost;
+}
+
 void Tracker::apply(const msg::LocalMapUpdate& u) {
   // Keyframes made since mapping sent its corrected map are carried along, as mapping will carry them.
   map_.apply(u, u.correction && u.corrections_seen > corrections_seen_);
