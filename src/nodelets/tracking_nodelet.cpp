@@ -88,6 +88,12 @@ class TrackingNodelet : public nodelet::Nodelet {
   nav_msgs::Path path_;
   uint64_t frames_ = 0, rejected_ = 0, keyframes_sent_ = 0, lost_ = 0;
   int pending_ = 0;             // keyframes sent to mapping and not yet answered by an update
+  // Flow control heals itself: a keyframe mapping never answers (mapping restarting, a full TCP queue in the
+  // split launch) would hold pending_ up for good, and at the queue limit no keyframe would be made again.
+  double keyframe_timeout_s_ = 5;  // ~keyframe_timeout_s: no answer for this long: the keyframes in flight are given up
+  ros::WallTime last_mapping_contact_;  // the last keyframe sent or update received
+  uint64_t keyframes_given_up_ = 0;
+  size_t max_waiting_ = 100;            // lock-step pairs held for mapping at most (the oldest are dropped)
   uint64_t corrections_ = 0;    // corrected maps applied: the map-frame pose may jump then, odom must not
   uint64_t corrections_at_last_ = 0;
   std::string last_problem_;
@@ -108,7 +114,8 @@ void TrackingNodelet::onInit() {
     requireKnownParams(pnh, {"config", "reloc_vocab", "force_extractor", "sync", "queue_size", "max_stamp_diff",
                              "map_frame", "odom_frame", "camera_frame", "camera", "seed", "lockstep",
                              "view_frame", "ground_truth_frame", "base_frame", "camera_in_base", "max_time_jump",
-                             "time_jump_confirm_pairs", "stale_after_s", "path_max_poses"});
+                             "time_jump_confirm_pairs", "stale_after_s", "path_max_poses", "keyframe_timeout_s"});
+    keyframe_timeout_s_ = numberParam(pnh, "keyframe_timeout_s", 5);
     stamps_ = std::make_unique<StampGate>(StampGateParams{numberParam(pnh, "max_time_jump", 5),
                                                           static_cast<int>(numberParam(pnh, "time_jump_confirm_pairs", 3))});
     stale_after_s_ = numberParam(pnh, "stale_after_s", 2);
@@ -309,6 +316,15 @@ std::string TrackingNodelet::check(const Image& left, const Image& right) {
 void TrackingNodelet::onImages(const sensor_msgs::ImageConstPtr& left, const sensor_msgs::ImageConstPtr& right) {
   CpuMeter::Scope cpu(cpu_);
   last_pair_wall_ = ros::WallTime::now();
+  if (pending_ > 0 && (last_pair_wall_ - last_mapping_contact_).toSec() > keyframe_timeout_s_) {
+    keyframes_given_up_ += static_cast<uint64_t>(pending_);
+    last_problem_ = "local mapping answered none of the last " + std::to_string(pending_) + " keyframes for " +
+                    std::to_string(keyframe_timeout_s_) + " s (~keyframe_timeout_s): they are given up";
+    NODELET_WARN("binloop/Tracking: %s", last_problem_.c_str());
+    pending_ = 0;
+    last_mapping_contact_ = last_pair_wall_;
+    trackWaiting();
+  }
   // Pairs wait while there is no camera yet (camera_info may come just after the first images) and, in
   // lock-step, while mapping has not answered.
   const bool no_camera = !tracker_ && (!left_info_ || !right_info_);
@@ -318,6 +334,9 @@ void TrackingNodelet::onImages(const sensor_msgs::ImageConstPtr& left, const sen
       waiting_.pop_front();
       reject(std::string("no camera_info received on ") + (left_info_ ? topics::kRightInfo : topics::kLeftInfo) +
              " (or give ~camera)");
+    } else if (waiting_.size() > max_waiting_) {
+      waiting_.pop_front();
+      reject("lock-step: " + std::to_string(max_waiting_) + " pairs already wait for local mapping; the oldest is dropped");
     }
     return;
   }
@@ -353,6 +372,7 @@ void TrackingNodelet::track(const sensor_msgs::ImageConstPtr& left, const sensor
   if (out.keyframe) {
     ++pending_;
     ++keyframes_sent_;
+    last_mapping_contact_ = ros::WallTime::now();
     keyframe_pub_.publish(boost::make_shared<binloop::KeyFrame>(toRos(*out.keyframe, map_frame_)));
   }
   frame_pub_.publish(boost::make_shared<binloop::TrackedFrame>(toRos(out.frame, map_frame_)));
@@ -458,6 +478,7 @@ void TrackingNodelet::onUpdate(const binloop::LocalMapUpdateConstPtr& m) {
     tracker_->apply(u);
     if (u.correction) ++corrections_;
     else if (pending_ > 0) --pending_;
+    last_mapping_contact_ = ros::WallTime::now();
     trackWaiting();
   } catch (const std::exception& e) {
     ++rejected_;
@@ -473,6 +494,8 @@ void TrackingNodelet::diagnose(diagnostic_updater::DiagnosticStatusWrapper& s) {
   else if (quiet_s > stale_after_s_)
     s.summary(diagnostic_msgs::DiagnosticStatus::WARN, "no stereo pair for " + std::to_string(static_cast<int>(quiet_s)) + " s");
   else if (guard_.failures() > 0) s.summary(diagnostic_msgs::DiagnosticStatus::WARN, "tracking; a callback failed");
+  else if (keyframes_given_up_ > 0)
+    s.summary(diagnostic_msgs::DiagnosticStatus::WARN, "tracking; local mapping did not answer some keyframes");
   else if (lost) s.summary(diagnostic_msgs::DiagnosticStatus::WARN, "lost");
   else if (rejected_ > 0) s.summary(diagnostic_msgs::DiagnosticStatus::WARN, "tracking; some input dropped");
   else s.summary(diagnostic_msgs::DiagnosticStatus::OK, "tracking");
@@ -486,6 +509,7 @@ void TrackingNodelet::diagnose(diagnostic_updater::DiagnosticStatusWrapper& s) {
   s.add("seconds since the last pair", quiet_s);
   s.add("keyframes sent", keyframes_sent_);
   s.add("mapping queue", pending_);
+  s.add("keyframes given up (mapping did not answer)", keyframes_given_up_);
   s.add("pairs waiting", waiting_.size());
   s.add("loop corrections applied", corrections_);
   s.add("stereo stamp difference s", last_stamp_diff_);

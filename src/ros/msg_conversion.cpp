@@ -1,5 +1,7 @@
 #include "binloop_ros/msg_conversion.h"
 
+#include <cmath>
+
 #include <opencv2/imgproc.hpp>
 #include <sensor_msgs/image_encodings.h>
 
@@ -108,6 +110,9 @@ geometry_msgs::Pose toPoseMsg(const binloop::Pose3& T) {
 }
 
 binloop::Pose3 toPose3(const geometry_msgs::Pose& msg) {
+  for (double v : {msg.position.x, msg.position.y, msg.position.z, msg.orientation.x, msg.orientation.y,
+                   msg.orientation.z, msg.orientation.w})
+    if (!std::isfinite(v)) throw ConversionError("pose has a NaN or infinite number");
   Eigen::Quaterniond q(msg.orientation.w, msg.orientation.x, msg.orientation.y, msg.orientation.z);
   if (q.norm() < 1e-6) throw ConversionError("pose orientation is a zero quaternion");
   binloop::Pose3 T = binloop::Pose3::Identity();

@@ -1,6 +1,8 @@
 #include "binloop_ros/stage_msg_conversion.h"
 
+#include <cmath>
 #include <cstring>
+#include <initializer_list>
 
 namespace binloop_ros {
 namespace {
@@ -15,6 +17,14 @@ ros::Time stampOf(double seconds) {
 void requireId(uint64_t id, const char* field) {
   if (id == binloop::kNoId) throw ConversionError(std::string(field) + " is 0 (no id)");
 }
+
+void requireFinite(std::initializer_list<double> values, const std::string& what) {
+  for (double v : values)
+    if (!std::isfinite(v)) throw ConversionError(what + " has a NaN or infinite number");
+}
+
+// Larger images than any camera makes: a keyframe's grid and pyramid are sized by them.
+constexpr uint32_t kMaxImageSide = 16384;
 
 void checkSize(size_t got, size_t want, const std::string& what) {
   if (got != want)
@@ -46,6 +56,9 @@ binloop::MapPoint toRos(const core::MapPoint& p) {
 
 core::MapPoint fromRos(const binloop::MapPoint& m) {
   requireId(m.id, "MapPoint.id");
+  requireFinite({m.position.x, m.position.y, m.position.z, m.normal.x, m.normal.y, m.normal.z, m.min_distance,
+                 m.max_distance},
+                "MapPoint " + std::to_string(m.id));
   core::MapPoint p;
   p.id = m.id;
   p.p_w = Eigen::Vector3d(m.position.x, m.position.y, m.position.z);
@@ -158,8 +171,13 @@ core::KeyFrame fromRos(const binloop::KeyFrame& m) {
   checkSize(m.descriptors.size(), n * binloop::Desc256::kBytes, "KeyFrame.descriptors (bytes, 32 per keypoint)");
   if (!m.state.point_ids.empty()) checkSize(m.state.point_ids.size(), n, "KeyFrame.state.point_ids");
   if (m.state.id != m.id) throw ConversionError("KeyFrame.state.id differs from KeyFrame.id");
+  requireFinite({m.camera.fx, m.camera.fy, m.camera.cx, m.camera.cy, m.camera.baseline_m, m.scale_factor},
+                "KeyFrame.camera or scale_factor");
   if (m.camera.fx <= 0 || m.camera.fy <= 0 || m.camera.baseline_m <= 0)
     throw ConversionError("KeyFrame.camera has a non-positive focal length or baseline");
+  if (m.camera.width == 0 || m.camera.height == 0 || m.camera.width > kMaxImageSide || m.camera.height > kMaxImageSide)
+    throw ConversionError("KeyFrame.camera is " + std::to_string(m.camera.width) + "x" + std::to_string(m.camera.height) +
+                          " px (1 to " + std::to_string(kMaxImageSide) + " a side)");
   if (m.scale_factor <= 1 || m.levels == 0) throw ConversionError("KeyFrame.scale_factor must be > 1 and levels > 0");
   core::KeyFrame kf;
   kf.id = m.id;
@@ -179,6 +197,7 @@ core::KeyFrame fromRos(const binloop::KeyFrame& m) {
   for (size_t i = 0; i < n; ++i) {
     const auto& mk = m.keypoints[i];
     if (mk.octave >= m.levels) throw ConversionError("KeyFrame.keypoints[" + std::to_string(i) + "].octave beyond levels");
+    requireFinite({mk.x, mk.y, mk.angle, mk.right_x, mk.depth}, "KeyFrame.keypoints[" + std::to_string(i) + "]");
     kf.keypoints[i] = {mk.x, mk.y, mk.angle, mk.octave, mk.right_x, mk.depth};
   }
   kf.descriptors.resize(n);

@@ -331,6 +331,20 @@ TEST(StageMsgConversion, MalformedMessagesAreRefusedNamingTheField) {
   m = good;
   m.camera.baseline_m = 0;
   EXPECT_TRUE(refusedWith(m, "baseline"));
+  // Numbers that are not numbers, and a camera no keyframe grid should be sized by.
+  m = good;
+  m.state.pose.position.y = std::nan("");
+  EXPECT_TRUE(refusedWith(m, "NaN or infinite"));
+  m = good;
+  m.keypoints[2].depth = std::numeric_limits<float>::infinity();
+  EXPECT_TRUE(refusedWith(m, "KeyFrame.keypoints[2]"));
+  m = good;
+  m.camera.width = m.camera.height = 1000000;
+  EXPECT_TRUE(refusedWith(m, "1000000x1000000 px"));
+  m = good;
+  ASSERT_FALSE(m.new_points.empty());
+  m.new_points[0].position.z = std::nan("");
+  EXPECT_TRUE(refusedWith(m, "MapPoint"));
 
   binloop::Correction c;
   c.sequence = 0;

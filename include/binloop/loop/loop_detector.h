@@ -31,6 +31,7 @@ struct LoopDetectorParams {
   int ignore_recent = 20;   // keyframes just before the query are never candidates (they are not loops)
   int consistency = 2;      // consecutive consistent queries before a candidate is accepted (ORB-SLAM2: 3;
                             // config/kitti.yaml says why 2)
+  int consistency_gap = 2;  // queries a chain may skip (ConsistencyGroups' max_gap; ORB-SLAM2: 0)
 };
 
 class LoopDetector {

@@ -10,7 +10,7 @@ LoopDetector::LoopDetector(const LoopDetectorParams& p, ModelFactory make)
     : p_(p), make_(std::move(make)), active_(makeModel(p.model)), active_name_(p.model) {}
 
 LoopDetector::Model LoopDetector::makeModel(const std::string& name) const {
-  Model m{name, make_(name), ConsistencyGroups(p_.consistency)};
+  Model m{name, make_(name), ConsistencyGroups(p_.consistency, p_.consistency_gap)};
   if (!m.recognizer) throw PlaceError("loop detector: no model made for '" + name + "'");
   // The stage's own store is the one copy of the descriptors (models are replaced on a switch).
   m.recognizer->setKeepDescriptors(false);

@@ -85,6 +85,15 @@ void LocalMapper::insert(const msg::KeyFrame& in) {
   if (in.id == kNoId || in.state.id != in.id)
     throw std::invalid_argument("keyframe " + std::to_string(in.id) + ": its state names keyframe " +
                                 std::to_string(in.state.id));
+  // Ids are never reused: one the map holds (or culled) comes from another tracking session (a tracker
+  // restarted while mapping kept its map), and taking it would overwrite a keyframe or point others refer to.
+  if (kfs_.count(in.id) || culled_.count(in.id))
+    throw std::invalid_argument("keyframe " + std::to_string(in.id) + " is already in the map (its id was issued " +
+                                "again: a tracker restarted without mapping?); refused");
+  for (const msg::MapPoint& np : in.new_points)
+    if (np.id == kNoId || pts_.count(np.id) || replaced_.count(np.id))
+      throw std::invalid_argument("keyframe " + std::to_string(in.id) + ": new map point " + std::to_string(np.id) +
+                                  " is 0 or already in the map; refused");
   if (scales_.levels() == 0) scales_ = ScalePyramid(in.scale_factor, in.levels);
   camera_ = in.camera;
   // Made before a loop correction tracking had not heard of yet: it moves as its parent did.

@@ -98,6 +98,7 @@ std::map<std::string, std::map<std::string, Setting>> settingsOf(SlamConfig& c) 
        {{"max_reference", {S::kInt, &d.max_reference, 1}},
         {"ignore_recent", {S::kInt, &d.ignore_recent, 0}},
         {"consistency", {S::kInt, &d.consistency, 1}},
+        {"consistency_gap", {S::kInt, &d.consistency_gap, 0}},
         {"hbow_min_bar", {S::kDouble, &r.hbow_min_bar, 0}},
         {"fabmap_l2_offset", {S::kDouble, &r.fabmap_l2_offset, 0}},
         {"vladpq_shared_slack", {S::kInt, &r.vladpq_shared_slack, 0}}}},

@@ -1,5 +1,7 @@
 #include "binloop/mapping/local_mapper.h"
 
+#include "support/test_support.h"
+
 #include <gtest/gtest.h>
 
 #include <algorithm>
@@ -159,6 +161,23 @@ TEST_F(LocalMapperTest, AKeyframeNamingSizesThatDifferIsRefused) {
   msg::KeyFrame k2 = keyframe(0, range(0, 50), true);
   k2.state.id = kNoId;
   EXPECT_THROW(m.process(k2), std::invalid_argument);
+}
+
+// A tracker restarted on its own issues ids from 1 again: mapping refuses a keyframe or point id it holds
+// instead of overwriting what others refer to, and the map stays as it was.
+TEST_F(LocalMapperTest, AnIdItAlreadyHoldsIsRefusedAndTheMapStays) {
+  for (int i = 0; i < 60; ++i) addPoint({rng.uniform(-6, 6), rng.uniform(-2, 1), rng.uniform(8, 18)});
+  LocalMapper m;
+  const msg::KeyFrame k1 = keyframe(0, range(0, 50), true);
+  m.process(k1);
+  const size_t points = m.pointCount();
+  EXPECT_THROW_WITH(m.process(k1), std::invalid_argument, "is already in the map");
+  msg::KeyFrame k2 = keyframe(1, range(10, 60), true);
+  ASSERT_FALSE(k2.new_points.empty());
+  k2.new_points[0].id = k1.new_points[0].id;  // a point id issued again
+  EXPECT_THROW_WITH(m.process(k2), std::invalid_argument, "already in the map");
+  EXPECT_EQ(m.keyframeCount(), 1u);
+  EXPECT_EQ(m.pointCount(), points);
 }
 
 // A loop correction names k1 (unchanged) and k2 (moved 1 m sideways and turned 2 degrees); k3, which loop
