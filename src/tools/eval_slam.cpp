@@ -150,7 +150,8 @@ void score(Row& row, const fs::path& dir, const std::vector<Pose3>& gt, const st
   row.pose_judged = all_posed;
   row.loops = all_posed ? scoreLoops(accepted, poses, gt, segments) : scoreLoops(accepted, gt, segments);
 
-  row.lost_frames = static_cast<int>(jsonNumber(json, "lost_frames"));
+  const double lost = jsonNumber(json, "lost_frames");  // NaN when a summary lacks it: casting that is undefined
+  row.lost_frames = std::isfinite(lost) ? static_cast<int>(lost) : 0;
   row.detect_median = jsonNumber(json, "detect_" + row.model + "_ms_median");
   row.detect_p95 = jsonNumber(json, "detect_" + row.model + "_ms_p95");
   row.query_median = jsonNumber(json, "detect_" + row.model + "_query_ms_median");
