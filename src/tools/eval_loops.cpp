@@ -59,7 +59,7 @@ int main(int argc, char** argv) {
       .option("fabmap-l2-offset", "offset added to the closest reference's L2 distance in fabmap's pre-filter", "0.05")
       .option("hbow-min-bar", "hbow's bar never goes below this L1 score", "0.005")
       .option("vladpq-slack", "vladpq's pre-filter passes keyframes sharing this many (word, code) pairs fewer than the best reference", "1")
-      .option("rank-floor", "ranking: an L1-score bar (hbow) counts as at least this ", "0.02")
+      .option("rank-floor", "ranking: an L1-score bar (hbow) counts as at least this", "0.03")
       .option("rank-cap", "ranking: a distance bar (vlad, hmvlad, vladpq) counts as at most this fraction of the bits", "0.35")
       .option("dump-ranked", "also write ranked_<model>.csv: each query's bar and its N best keyframes by raw score", "0")
       .flag("force-extractor", "use a model trained with other extractor settings than these (warns instead of refusing)");
@@ -81,16 +81,38 @@ int main(int argc, char** argv) {
       for (std::string m; std::getline(ss, m, ',');) models.push_back(m);
     }
     for (const auto& m : models) modelTypeFromName(m);  // unknown names fail before any work
-    const ExtractOptions eo = extractOptionsFrom(args);
+    ExtractOptions eo = extractOptionsFrom(args);
+    const auto modelFile = [&](const std::string& name) {
+      return (fs::path(args.str("vocab-dir")) / (name + ".bin")).string();
+    };
+    // A model records the BRIEF tests and the image size it was trained with; without --pattern and
+    // --max-side the queries follow the first model, so a photo vocabulary (ORB's learned tests, 1024 px)
+    // takes images of any size with no flag. Every other model is then checked against the same settings.
+    ModelHeader first;
+    try {
+      first = readModelHeader(modelFile(models.front()));
+    } catch (const PlaceError&) {  // a missing or broken file is reported where the model is loaded
+    }
+    const bool binloop_orb = first.extractor.kind == ExtractorKind::kBinloopOrb ||
+                             first.extractor.kind == ExtractorKind::kBinloopOrbRbrief;
+    if (binloop_orb && !args.has("pattern")) {
+      eo.orb.pattern = first.extractor.kind == ExtractorKind::kBinloopOrbRbrief ? BriefPatternKind::kOrbLearned
+                                                                               : BriefPatternKind::kGaussian;
+      if (eo.orb.pattern != OrbSlamParams{}.pattern)
+        std::cout << "eval-loops: " << modelFile(models.front()) << " was trained on descriptors with "
+                  << briefPatternName(eo.orb.pattern) << " BRIEF tests; queries use them too (--pattern to choose)\n";
+    }
+    if (binloop_orb && !args.has("max-side") && first.extractor.max_side > 0) {
+      eo.max_side = static_cast<int>(first.extractor.max_side);
+      std::cout << "eval-loops: " << modelFile(models.front()) << " was trained on images scaled to a longer side <= "
+                << eo.max_side << " px; queries are scaled the same way (--max-side 0: full size)\n";
+    }
     // Every model file must have been trained on descriptors of these settings (or --force-extractor):
     // checked from the headers alone, below.
     ExtractorCheck extractor_check;
     extractor_check.expected = extractorSettings(eo);
     extractor_check.force = args.has("force-extractor");
     extractor_check.warn = [](const std::string& line) { std::cerr << "eval-loops: warning: " << line << "\n"; };
-    const auto modelFile = [&](const std::string& name) {
-      return (fs::path(args.str("vocab-dir")) / (name + ".bin")).string();
-    };
     const auto images = listImages(args.str("sequence"));
     std::vector<Pose3> poses;
     const std::string poses_path = args.has("poses") ? args.str("poses") : (fs::path(args.str("sequence")) / "poses.txt").string();

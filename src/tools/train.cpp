@@ -1,6 +1,7 @@
 // train: trains a place-recognition model (vocabulary) from images, or imports a DBoW2 vocabulary
 // (see README, "Loop models").
 #include <chrono>
+#include <filesystem>
 #include <iostream>
 
 #include "binloop/features/extract_options_cli.h"
@@ -32,6 +33,9 @@ int main(int argc, char** argv) {
     if (!args.parse(argc, argv)) return 0;
     const auto type = binloop::modelTypeFromName(args.str("model"));
     if (!args.has("out")) throw binloop::CliError("--out is required");
+    // The folder of the model file is made, as `run --out` makes its own.
+    const std::filesystem::path out_dir = std::filesystem::path(args.str("out")).parent_path();
+    if (!out_dir.empty()) std::filesystem::create_directories(out_dir);
     const auto t0 = std::chrono::steady_clock::now();
     if (args.has("import")) {
       if (type != binloop::ModelType::kHbow) throw binloop::CliError("--import makes hbow models only");

@@ -67,7 +67,7 @@ TEST(EvalLoopsTool, RefusesAModelOfOtherExtractorSettingsUnlessForced) {
   const auto train = binloop::test::runCommand(std::string(BINLOOP_TOOL_DIR) + "/train vlad --images " + desk +
                                                " --features 500 --out " + (tmp / "vlad.bin"));
   ASSERT_EQ(train.code, 0) << train.out;
-  EXPECT_NE(train.out.find("from binloop ORB (500 features, scale 1.2, 8 levels, FAST 20/7, 30-px cells, full-size images)"),
+  EXPECT_NE(train.out.find("from binloop ORB with the Gaussian BRIEF pattern (500 features, scale 1.2, 8 levels, FAST 20/7, 30-px cells, full-size images)"),
             std::string::npos) << train.out;
   binloop::test::writeText(tmp / "gt.txt", "9 0\n");
   const std::string common = "--sequence " + desk + " --gt " + (tmp / "gt.txt") + " --models vlad --vocab-dir " + tmp.path() +
@@ -75,8 +75,9 @@ TEST(EvalLoopsTool, RefusesAModelOfOtherExtractorSettingsUnlessForced) {
   const auto refused = run(common);
   EXPECT_EQ(refused.code, 1) << refused.out;
   EXPECT_NE(refused.out.find("eval-loops: error: " + (tmp / "vlad.bin") +
-                             ": trained on descriptors of binloop ORB (500 features, scale 1.2, 8 levels, FAST 20/7, "
-                             "30-px cells, full-size images), but they will come from binloop ORB (2000 features, "
+                             ": trained on descriptors of binloop ORB with the Gaussian BRIEF pattern (500 features, scale "
+                             "1.2, 8 levels, FAST 20/7, 30-px cells, full-size images), but they will come from binloop ORB "
+                             "with the Gaussian BRIEF pattern (2000 features, "
                              "scale 1.2, 8 levels, FAST 20/7, 30-px cells, full-size images) (differ: features 500 vs "
                              "2000); a vocabulary only fits descriptors like those it was trained on: retrain it with "
                              "these settings, or use it anyway with --force-extractor"),
@@ -85,11 +86,47 @@ TEST(EvalLoopsTool, RefusesAModelOfOtherExtractorSettingsUnlessForced) {
   EXPECT_EQ(refused.out.find("keyframes"), std::string::npos) << "refused before reading images:\n" << refused.out;
   const auto forced = run(common + " --force-extractor");
   EXPECT_EQ(forced.code, 0) << forced.out;
-  EXPECT_NE(forced.out.find("eval-loops: warning: " + (tmp / "vlad.bin") + ": trained on descriptors of binloop ORB (500"),
+  EXPECT_NE(forced.out.find("eval-loops: warning: " + (tmp / "vlad.bin") + ": trained on descriptors of binloop ORB with the Gaussian BRIEF pattern (500"),
             std::string::npos) << forced.out;
   EXPECT_NE(forced.out.find("used anyway (--force-extractor)"), std::string::npos) << forced.out;
   // The same settings as training: no warning.
   const auto same = run(common + " --features 500");
   EXPECT_EQ(same.code, 0) << same.out;
   EXPECT_EQ(same.out.find("warning"), std::string::npos) << same.out;
+}
+
+// A model records the BRIEF tests and the image size it was trained with, and eval-loops queries it the same
+// way unless told otherwise: a photo vocabulary (ORB's learned tests, 1024 px) needs no flag. Asked for
+// other settings, it refuses and names the difference.
+TEST(EvalLoopsTool, QueriesFollowThePatternAndImageSizeTheModelRecords) {
+  const std::string desk = binloop::test::sharedData("tum_desk");
+  BINLOOP_REQUIRE_DATA(desk);
+  binloop::test::TempDir tmp;
+  const auto learned = binloop::test::runCommand(std::string(BINLOOP_TOOL_DIR) + "/train vlad --images " + desk +
+                                                 " --pattern orb --out " + (tmp / "l/vlad.bin"));
+  ASSERT_EQ(learned.code, 0) << learned.out;
+  const auto small = binloop::test::runCommand(std::string(BINLOOP_TOOL_DIR) + "/train vlad --images " + desk +
+                                               " --max-side 320 --out " + (tmp / "s/vlad.bin"));
+  ASSERT_EQ(small.code, 0) << small.out;
+  binloop::test::writeText(tmp / "gt.txt", "9 0\n");
+  const std::string common = "--sequence " + desk + " --gt " + (tmp / "gt.txt") + " --models vlad --window 0 --reference 1 --out " +
+                             (tmp / "out") + " --vocab-dir ";
+  const auto follows = run(common + (tmp / "l"));
+  EXPECT_EQ(follows.code, 0) << follows.out;
+  EXPECT_NE(follows.out.find("was trained on descriptors with orb BRIEF tests; queries use them too"), std::string::npos)
+      << follows.out;
+  const auto refused = run(common + (tmp / "l") + " --pattern gaussian");
+  EXPECT_EQ(refused.code, 1) << refused.out;
+  EXPECT_NE(refused.out.find("(differ: extractor binloop ORB with ORB's learned pattern vs binloop ORB with the "
+                             "Gaussian BRIEF pattern)"),
+            std::string::npos)
+      << refused.out;
+  const auto scaled = run(common + (tmp / "s"));
+  EXPECT_EQ(scaled.code, 0) << scaled.out;
+  EXPECT_NE(scaled.out.find("was trained on images scaled to a longer side <= 320 px; queries are scaled the same way"),
+            std::string::npos)
+      << scaled.out;
+  const auto full = run(common + (tmp / "s") + " --max-side 0");
+  EXPECT_EQ(full.code, 1) << full.out;
+  EXPECT_NE(full.out.find("max side 320 vs none"), std::string::npos) << full.out;
 }

@@ -6,12 +6,15 @@
 // image (a corner per region, not the hundred best of the busiest texture), and they need the pyramid
 // itself for sub-pixel stereo, so the pyramid is a value the caller can keep.
 //
-// The BRIEF test pattern is binloop's own, not ORB's learned one: 256 pairs of points drawn from an
-// isotropic Gaussian (sigma = 31/5 px, BRIEF's "G II" layout) by HashRng with a fixed seed, each point kept
-// inside the radius-15 orientation disc so a rotated point never leaves the keypoint's border. Descriptors
-// are therefore NOT comparable with ORB-SLAM2's or OpenCV's: vocabularies must be trained on this extractor.
-// Its bits are biased and correlated; `learn-pattern` (features/brief_pattern_learning.h) learns a pattern
-// as ORB learned rBRIEF.
+// Two sets of BRIEF tests. kGaussian (the default): binloop's own, 256 pairs drawn from an isotropic
+// Gaussian (sigma = 31/5 px, BRIEF's "G II" layout) by HashRng with a fixed seed, each point inside the
+// radius-15 orientation disc. kOrbLearned: ORB's learned rBRIEF tests, computed by OpenCV's ORB for
+// binloop's keypoints on the same level at the same angle, so a descriptor is what ORB-SLAM2 or OpenCV
+// would compute for that keypoint. The learned tests' bits are balanced and less correlated (the steered
+// Gaussian ones are biased, as the ORB paper found), which the place models gain from; but on renders
+// they survive a 24 m gap worse, and recovery after 20 missing frames fails with them, so the SLAM keeps
+// the Gaussian tests by default (docs/decisions.md, "ORB's learned BRIEF tests"). `learn-pattern` learns a
+// pattern as ORB learned rBRIEF.
 // It is the one extractor of binloop: SLAM, `train`, `eval-loops` and the benchmarks all use it (with the
 // same settings by default), and every model file records the settings it was trained with.
 #include <array>
@@ -19,6 +22,7 @@
 #include <cstdint>
 #include <opencv2/core/mat.hpp>
 #include <opencv2/core/types.hpp>
+#include <string>
 #include <vector>
 
 #include "binloop/place/binary_descriptor.h"
@@ -33,7 +37,8 @@ struct BriefTest {
 };
 using BriefPattern = std::array<BriefTest, 256>;
 
-/// The extractor's pattern: bit i of a descriptor is test i (bit i % 64 of word i / 64).
+/// binloop's Gaussian pattern (BriefPatternKind::kGaussian): bit i of a descriptor is test i (bit i % 64 of
+/// word i / 64).
 const BriefPattern& briefPattern();
 
 /// The level BRIEF reads: Gaussian 7x7, sigma 2, reflected border (ORB-SLAM2's), so that single-pixel tests
@@ -51,6 +56,14 @@ inline void briefRotation(float angle_deg, float* cs, float* sn) {
   *sn = std::sin(a);
 }
 
+/// Which 256 BRIEF tests make the descriptor. Model files record it (ExtractorSettings::kind): a vocabulary
+/// trained on one pattern's bits is refused for the other's.
+enum class BriefPatternKind { kOrbLearned, kGaussian };
+
+/// "orb" or "gaussian"; briefPatternFromName throws PlaceError for another name.
+const char* briefPatternName(BriefPatternKind k);
+BriefPatternKind briefPatternFromName(const std::string& name);
+
 struct OrbFeatures {
   std::vector<cv::KeyPoint> keypoints;
   Descriptors descriptors;
@@ -63,6 +76,7 @@ struct OrbSlamParams {
   int ini_fast = 20;  // FAST threshold tried first in every cell
   int min_fast = 7;   // tried in a cell only when ini_fast found nothing there (low-contrast regions)
   int cell_px = 30;   // FAST cell side, level pixels
+  BriefPatternKind pattern = BriefPatternKind::kGaussian;
 
   bool operator==(const OrbSlamParams& o) const;
   bool operator!=(const OrbSlamParams& o) const { return !(*this == o); }

@@ -37,12 +37,13 @@ enum class Weighting : uint32_t { kTfIdf = 0, kTf = 1, kIdf = 2, kBinary = 3 };
 /// pyramid, image size) other statistics.
 enum class ExtractorKind : uint32_t {
   kUnknown = 0,      // not recorded: model files of versions 1-2, or trained from descriptors of unknown origin
-  kBinloopOrb = 1,   // binloop's ORB-SLAM2-style extractor (features/orb_slam_extractor.h), which SLAM uses
+  kBinloopOrb = 1,   // binloop's extractor (features/orb_slam_extractor.h), Gaussian BRIEF tests: the SLAM's default
   kDbow2Import = 2,  // an imported DBoW2 vocabulary (ORB-SLAM2's or OpenCV's ORB pattern; settings not known)
+  kBinloopOrbRbrief = 3,  // binloop's extractor with ORB's learned rBRIEF pattern (orb.learned_pattern: 1)
 };
 
-/// The extractor and its settings, as the model header records them (kBinloopOrb: every field; otherwise
-/// only `kind`). features/orb_slam_extractor.h makes one from OrbSlamParams (extractorSettings()).
+/// The extractor and its settings, as the model header records them (kBinloopOrb and kBinloopOrbRbrief: every
+/// field; otherwise only `kind`). features/orb_slam_extractor.h makes one from OrbSlamParams (extractorSettings()).
 struct ExtractorSettings {
   ExtractorKind kind = ExtractorKind::kUnknown;
   uint32_t features = 0;

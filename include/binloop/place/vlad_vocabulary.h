@@ -28,6 +28,14 @@ struct VladParams {
 /// Bits of sign(v) > 0, packed in 64-bit words.
 using BinarySignature = std::vector<uint64_t>;
 BinarySignature binarizeSigns(const std::vector<float>& v);
+/// The same, for a VLAD of words of `dims` floats, except that a word no descriptor fell into gets coin-flip
+/// bits seeded by `empty_seed` and the word's index. Why: its all-zero residual would give all-zero bits,
+/// and two images with few features (a blank wall, a blurred sky) would agree on every empty word and
+/// match each other more closely than true revisits do (real_heldout, 64 words: two such pairs outranked
+/// every true loop). Coin flips make an empty word look unrelated to anything, which is what it knows.
+BinarySignature binarizeSigns(const std::vector<float>& v, int dims, uint64_t empty_seed);
+/// A seed for binarizeSigns from the image's own descriptors: the same image, the same bits.
+uint64_t descriptorSeed(const Descriptors& d);
 inline int hammingBits(const BinarySignature& a, const BinarySignature& b) {
   int d = 0;
   for (size_t i = 0; i < a.size(); ++i) d += __builtin_popcountll(a[i] ^ b[i]);

@@ -17,6 +17,8 @@ void declareExtractOptions(CliArgs& args) {
       .option("ini-fast", "FAST threshold tried first in each cell", std::to_string(d.orb.ini_fast))
       .option("min-fast", "FAST threshold where a cell found nothing", std::to_string(d.orb.min_fast))
       .option("cell-px", "FAST cell side, level pixels", std::to_string(d.orb.cell_px))
+      .option("pattern", "BRIEF tests: gaussian (binloop's, as the SLAM by default) or orb (ORB's learned rBRIEF)",
+              briefPatternName(d.orb.pattern))
       .option("max-side", "scale larger images down to this longer side first (0 = never, as the SLAM)",
               std::to_string(d.max_side))
       .option("threads", "feature extraction threads", std::to_string(d.threads))
@@ -35,6 +37,11 @@ ExtractOptions extractOptionsFrom(const CliArgs& args) {
   eo.orb.min_fast = static_cast<int>(args.integer("min-fast"));
   eo.orb.cell_px = static_cast<int>(args.integer("cell-px"));
   eo.max_side = static_cast<int>(args.integer("max-side"));
+  try {
+    eo.orb.pattern = briefPatternFromName(args.str("pattern"));
+  } catch (const PlaceError& e) {
+    throw CliError(std::string("--pattern: ") + e.what());
+  }
   eo.threads = static_cast<int>(args.integer("threads"));
   if (eo.max_side < 0) throw CliError("--max-side must be >= 0, got " + std::to_string(eo.max_side));
   try {

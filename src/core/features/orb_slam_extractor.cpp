@@ -3,6 +3,7 @@
 #include <algorithm>
 #include <array>
 #include <cmath>
+#include <cstring>
 #include <numeric>
 #include <opencv2/features2d.hpp>
 #include <opencv2/imgproc.hpp>
@@ -252,6 +253,30 @@ void checkImage(const cv::Mat& gray) {
     throw PlaceError("ORB needs an 8-bit single-channel (grey) image, got " + cv::typeToString(gray.type()));
 }
 
+// OpenCV's ORB describes keypoints it is handed without moving them: on a single level (octave 0) it pads
+// the level by reflection, smooths it as briefSmoothed() does and reads its learned pattern at each
+// keypoint's own angle. Edge threshold 0 keeps every keypoint (ours stay kEdge from the border, and the
+// padding covers the rotated pattern). A fresh instance per call: ORB keeps no state, but nothing promises
+// that one instance may serve several threads.
+void describeWithOrb(const cv::Mat& level, std::vector<cv::KeyPoint>& kps, Descriptors& out) {
+  if (kps.empty()) return;
+  const cv::Ptr<cv::ORB> orb = cv::ORB::create(static_cast<int>(kps.size()), 1.2f, 1, /*edgeThreshold=*/0,
+                                               /*firstLevel=*/0, /*WTA_K=*/2, cv::ORB::FAST_SCORE, kPatchSize);
+  std::vector<cv::KeyPoint> level_kps = kps;
+  for (auto& k : level_kps) k.octave = 0;
+  cv::Mat desc;
+  orb->compute(level, level_kps, desc);
+  if (level_kps.size() != kps.size() || desc.rows != static_cast<int>(kps.size()) || desc.cols != 32 ||
+      desc.type() != CV_8UC1)
+    throw PlaceError("ORB-SLAM extractor: OpenCV's ORB described " + std::to_string(desc.rows) + " of " +
+                     std::to_string(kps.size()) + " keypoints");
+  for (int r = 0; r < desc.rows; ++r) {
+    Desc256 d;
+    std::memcpy(d.w.data(), desc.ptr<uint8_t>(r), 32);  // test 8j+i is bit i of byte j, as OpenCV matches it
+    out.push_back(d);
+  }
+}
+
 [[noreturn]] void fail(const std::string& what) { throw PlaceError("ORB-SLAM extractor: " + what); }
 
 // Messages are built only on failure: extract() checks its pyramid on every frame.
@@ -286,14 +311,22 @@ void briefSmoothed(const cv::Mat& level, cv::Mat& out) {
   cv::GaussianBlur(level, out, cv::Size(7, 7), 2, 2, cv::BORDER_REFLECT_101);
 }
 
+const char* briefPatternName(BriefPatternKind k) { return k == BriefPatternKind::kGaussian ? "gaussian" : "orb"; }
+
+BriefPatternKind briefPatternFromName(const std::string& name) {
+  if (name == "orb") return BriefPatternKind::kOrbLearned;
+  if (name == "gaussian") return BriefPatternKind::kGaussian;
+  throw PlaceError("unknown BRIEF pattern '" + name + "' (known: orb, gaussian)");
+}
+
 bool OrbSlamParams::operator==(const OrbSlamParams& o) const {
   return features == o.features && scale_factor == o.scale_factor && levels == o.levels && ini_fast == o.ini_fast &&
-         min_fast == o.min_fast && cell_px == o.cell_px;
+         min_fast == o.min_fast && cell_px == o.cell_px && pattern == o.pattern;
 }
 
 ExtractorSettings extractorSettings(const OrbSlamParams& p, int max_side) {
   ExtractorSettings e;
-  e.kind = ExtractorKind::kBinloopOrb;
+  e.kind = p.pattern == BriefPatternKind::kGaussian ? ExtractorKind::kBinloopOrb : ExtractorKind::kBinloopOrbRbrief;
   e.features = static_cast<uint32_t>(std::max(0, p.features));
   e.scale_factor = p.scale_factor;
   e.levels = static_cast<uint32_t>(std::max(0, p.levels));
@@ -358,7 +391,8 @@ OrbFeatures OrbSlamExtractor::extract(const ImagePyramid& pyr) const {
   out.keypoints.reserve(static_cast<size_t>(p_.features) + 8 * static_cast<size_t>(p_.levels));
   out.descriptors.reserve(out.keypoints.capacity());
   // One buffer for every level's blur: a fresh allocation per level cost page faults on each frame.
-  cv::Mat blur_buffer(pyr.levels[0].size(), CV_8UC1);
+  cv::Mat blur_buffer;
+  if (p_.pattern == BriefPatternKind::kGaussian) blur_buffer.create(pyr.levels[0].size(), CV_8UC1);
   for (int level = 0; level < p_.levels; ++level) {
     const cv::Mat& img = pyr.levels[level];
     cv::Rect area;
@@ -367,15 +401,21 @@ OrbFeatures OrbSlamExtractor::extract(const ImagePyramid& pyr) const {
     QuadTree tree(candidates, area);
     tree.splitTo(per_level_[level]);
     std::vector<cv::KeyPoint> kps = tree.strongestPerNode();
-    // BRIEF compares single pixels, so it reads a smoothed level; the angle uses the raw one as ORB-SLAM2.
-    cv::Mat blurred = blur_buffer(cv::Rect(0, 0, img.cols, img.rows));
-    briefSmoothed(img, blurred);
     const float scale = pyr.scale[level];
     for (auto& k : kps) {
-      k.octave = level;
       k.size = kPatchSize * scale;
       k.angle = centroidAngle(img, cv::Point(cvRound(k.pt.x), cvRound(k.pt.y)));
-      out.descriptors.push_back(rotatedBrief(blurred, k));
+    }
+    if (p_.pattern == BriefPatternKind::kOrbLearned) {
+      describeWithOrb(img, kps, out.descriptors);
+    } else {
+      // BRIEF compares single pixels, so it reads a smoothed level; the angle uses the raw one as ORB-SLAM2.
+      cv::Mat blurred = blur_buffer(cv::Rect(0, 0, img.cols, img.rows));
+      briefSmoothed(img, blurred);
+      for (const auto& k : kps) out.descriptors.push_back(rotatedBrief(blurred, k));
+    }
+    for (auto& k : kps) {
+      k.octave = level;
       k.pt *= scale;
       out.keypoints.push_back(k);
     }

@@ -16,7 +16,8 @@ namespace {
 
 // One setting: where it lives in the structs and the smallest value it accepts.
 struct Setting {
-  enum Kind { kInt, kFloat, kDouble, kBool, kSubPixelFit } kind;  // kSubPixelFit: 0 parabola, 1 equiangular
+  // kSubPixelFit: 0 parabola, 1 equiangular; kPattern: 0 Gaussian, 1 ORB's learned pattern
+  enum Kind { kInt, kFloat, kDouble, kBool, kSubPixelFit, kPattern } kind;
   void* ptr;
   double min;
 };
@@ -34,7 +35,8 @@ std::map<std::string, std::map<std::string, Setting>> settingsOf(SlamConfig& c) 
         {"scale_factor", {S::kFloat, &t.orb.scale_factor, 1.01}},
         {"levels", {S::kInt, &t.orb.levels, 1}},
         {"ini_fast", {S::kInt, &t.orb.ini_fast, 1}},
-        {"min_fast", {S::kInt, &t.orb.min_fast, 1}}}},
+        {"min_fast", {S::kInt, &t.orb.min_fast, 1}},
+        {"learned_pattern", {S::kPattern, &t.orb.pattern, 0}}}},
       {"stereo",
        {{"max_hamming", {S::kInt, &t.stereo.max_hamming, 0}},
         {"sad_half_window", {S::kInt, &t.stereo.sad_half_window, 1}},
@@ -132,6 +134,7 @@ double valueOf(const Setting& s) {
     case Setting::kBool: return *static_cast<bool*>(s.ptr) ? 1 : 0;
     case Setting::kSubPixelFit:
       return *static_cast<StereoMatchParams::SubPixelFit*>(s.ptr) == StereoMatchParams::SubPixelFit::kEquiangular;
+    case Setting::kPattern: return *static_cast<BriefPatternKind*>(s.ptr) == BriefPatternKind::kOrbLearned;
   }
   return 0;
 }
@@ -203,7 +206,7 @@ SlamConfig loadSlamConfig(const std::string& path) {
       if (!std::isfinite(x) || x < s.min)
         throw ConfigError(path + ": " + section + "." + key + " = " + std::to_string(x) + " is out of range (at least " +
                           std::to_string(s.min) + ")");
-      const bool binary = s.kind == Setting::kBool || s.kind == Setting::kSubPixelFit;
+      const bool binary = s.kind == Setting::kBool || s.kind == Setting::kSubPixelFit || s.kind == Setting::kPattern;
       if ((s.kind == Setting::kInt || binary) && x != std::floor(x))
         throw ConfigError(path + ": " + section + "." + key + " must be a whole number");
       if (s.kind == Setting::kInt && x > std::numeric_limits<int>::max())
@@ -218,6 +221,9 @@ SlamConfig loadSlamConfig(const std::string& path) {
         case Setting::kSubPixelFit:
           *static_cast<StereoMatchParams::SubPixelFit*>(s.ptr) =
               x != 0 ? StereoMatchParams::SubPixelFit::kEquiangular : StereoMatchParams::SubPixelFit::kParabola;
+          break;
+        case Setting::kPattern:
+          *static_cast<BriefPatternKind*>(s.ptr) = x != 0 ? BriefPatternKind::kOrbLearned : BriefPatternKind::kGaussian;
           break;
       }
     }

@@ -5,6 +5,7 @@
 
 #include "binloop/place/place_error.h"
 #include "binloop/place/vlad_recognizer.h"
+#include "binloop/util/hash_random.h"
 
 namespace binloop {
 
@@ -15,8 +16,9 @@ HmvladRecognizer::HmvladRecognizer(std::shared_ptr<const VladVocabulary> voc) : 
 
 void HmvladRecognizer::addSignature(Slot, const Descriptors& d) {
   const auto levels = voc_->aggregate(d);
-  short_.push(binarizeSigns(levels.front()));
-  long_.push(binarizeSigns(levels.back()));
+  const uint64_t seed = descriptorSeed(d);
+  short_.push(binarizeSigns(levels.front(), voc_->dims(), seed));
+  long_.push(binarizeSigns(levels.back(), voc_->dims(), hashCombine(seed, 1)));
 }
 
 size_t HmvladRecognizer::indexBytesPerKeyframe() const {

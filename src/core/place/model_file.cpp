@@ -116,7 +116,8 @@ namespace {
 std::string kindName(ExtractorKind k) {
   switch (k) {
     case ExtractorKind::kUnknown: return "unknown";
-    case ExtractorKind::kBinloopOrb: return "binloop ORB";
+    case ExtractorKind::kBinloopOrb: return "binloop ORB with the Gaussian BRIEF pattern";
+    case ExtractorKind::kBinloopOrbRbrief: return "binloop ORB with ORB's learned pattern";
     case ExtractorKind::kDbow2Import: return "imported DBoW2";
   }
   return "kind " + std::to_string(static_cast<uint32_t>(k));
@@ -133,7 +134,8 @@ std::string ExtractorSettings::describe() const {
     case ExtractorKind::kDbow2Import:
       return "the ORB of an imported DBoW2 vocabulary (ORB-SLAM2's or OpenCV's pattern, settings not recorded)";
     case ExtractorKind::kBinloopOrb:
-      s << "binloop ORB (" << features << " features, scale " << scale_factor << ", " << levels << " levels, FAST "
+    case ExtractorKind::kBinloopOrbRbrief:
+      s << kindName(kind) << " (" << features << " features, scale " << scale_factor << ", " << levels << " levels, FAST "
         << ini_fast << "/" << min_fast << ", " << cell_px << "-px cells, "
         << (max_side ? "images scaled to a longer side <= " + std::to_string(max_side) + " px" : "full-size images")
         << ")";

@@ -20,7 +20,7 @@ std::shared_ptr<const VladVocabulary> VladRecognizer::loadVocabulary(const std::
 }
 
 void VladRecognizer::addSignature(Slot, const Descriptors& d) {
-  sigs_.push(binarizeSigns(voc_->aggregate(d).back()));
+  sigs_.push(binarizeSigns(voc_->aggregate(d).back(), voc_->dims(), descriptorSeed(d)));
 }
 
 size_t VladRecognizer::indexBytesPerKeyframe() const {

@@ -1,10 +1,12 @@
 #include "binloop/place/vlad_vocabulary.h"
 
 #include <Eigen/Eigenvalues>
+#include <algorithm>
 #include <cmath>
 #include <string>
 
 #include "binloop/place/float_kmeans.h"
+#include "binloop/place/model_file.h"
 #include "binloop/util/hash_random.h"
 
 namespace binloop {
@@ -23,6 +25,20 @@ BinarySignature binarizeSigns(const std::vector<float>& v) {
     if (v[i] > 0) s[i >> 6] |= uint64_t{1} << (i & 63);
   return s;
 }
+
+BinarySignature binarizeSigns(const std::vector<float>& v, int dims, uint64_t empty_seed) {
+  BinarySignature s = binarizeSigns(v);
+  if (dims < 1) return s;
+  for (size_t first = 0; first + dims <= v.size(); first += dims) {
+    if (std::any_of(v.begin() + first, v.begin() + first + dims, [](float e) { return e != 0.f; })) continue;
+    HashRng coin(hashCombine(empty_seed, first / dims));
+    for (size_t i = first; i < first + dims; ++i)
+      if (coin.next() & 1u) s[i >> 6] |= uint64_t{1} << (i & 63);
+  }
+  return s;
+}
+
+uint64_t descriptorSeed(const Descriptors& d) { return hashBytes(d.data(), d.size() * sizeof(Desc256)); }
 
 void VladVocabulary::residual(const float* x, uint32_t node, float* out) const {
   const float* c = &centres_[static_cast<size_t>(node) * kD];

@@ -40,7 +40,7 @@ VladPqRecognizer::VladPqRecognizer(VladPqModel model, PqVerify verify, int share
 
 void VladPqRecognizer::addSignature(Slot slot, const Descriptors& d) {
   auto v = model_.vlad->aggregate(d).back();
-  sigs_.push(binarizeSigns(v));
+  sigs_.push(binarizeSigns(v, model_.vlad->dims(), descriptorSeed(d)));
   PqCodes codes = model_.pq->encode(v);
   codes_.push_back(std::move(codes));
   const PqCodes& c = codes_.back();

@@ -68,10 +68,13 @@ TEST(BriefPatternLearning, LearnedTestsAreBalancedOnHeldOutFrames) {
   EXPECT_GT(gaussian, learned + 0.1);
 }
 
-// samplePatches reads what the extractor reads: the pattern's tests on the samples are the descriptors' bits.
+// samplePatches reads what the extractor reads: the Gaussian pattern's tests on the samples are the bits of
+// the extractor's descriptors with that pattern.
 TEST(BriefPatternLearning, SamplesGiveTheExtractorsBits) {
   BINLOOP_REQUIRE_DATA(kittiLeftPath(10));  // frames 0-10 of the real sample
-  const OrbSlamExtractor ex;
+  OrbSlamParams gaussian;  // the pattern briefPattern() holds; the default is ORB's learned one
+  gaussian.pattern = BriefPatternKind::kGaussian;
+  const OrbSlamExtractor ex(gaussian);
   const cv::Mat img = kittiLeft(0);
   const OrbFeatures f = ex.extract(img);
   const PatchSamples s = samplePatches(img, ex, 1000000, 1);

@@ -4,9 +4,11 @@
 
 #include <algorithm>
 #include <cmath>
+#include <cstring>
 #include <opencv2/features2d.hpp>
 #include <opencv2/imgproc.hpp>
 
+#include "binloop/features/descriptor_statistics.h"
 #include "binloop/io/kitti_sequence.h"
 #include "binloop/place/place_error.h"
 #include "binloop/util/hash_random.h"
@@ -295,4 +297,62 @@ TEST(OrbSlamExtractor, TinyAndFlatImagesGiveNoKeypoints) {
   const OrbSlamExtractor ex;
   EXPECT_TRUE(ex.extract(cv::Mat(20, 20, CV_8UC1, cv::Scalar(7))).keypoints.empty());
   EXPECT_TRUE(ex.extract(cv::Mat(376, 1241, CV_8UC1, cv::Scalar(7))).keypoints.empty());
+}
+
+// The learned pattern is ORB's: OpenCV's own ORB, building its own pyramid from the image, describes the
+// extractor's keypoints with the same bits (its levels are resized slightly differently, so a few bits may
+// differ above level 0).
+TEST(OrbSlamExtractor, LearnedPatternGivesOpenCvOrbDescriptorsOfTheSameKeypoints) {
+  BINLOOP_REQUIRE_DATA(kittiLeft(0));
+  const cv::Mat img = readGrayImage(kittiLeft(0));
+  OrbSlamParams learned;
+  learned.pattern = BriefPatternKind::kOrbLearned;
+  const OrbSlamExtractor ex(learned);
+  const OrbFeatures f = ex.extract(img);
+  std::vector<cv::KeyPoint> kps = f.keypoints;
+  cv::Mat theirs;
+  cv::ORB::create(2000, 1.2f, 8, 0)->compute(img, kps, theirs);
+  ASSERT_EQ(static_cast<size_t>(theirs.rows), f.descriptors.size());
+  int level0 = 0, level0_same = 0, close = 0;
+  for (int i = 0; i < theirs.rows; ++i) {
+    Desc256 d;
+    std::memcpy(d.w.data(), theirs.ptr<uint8_t>(i), 32);
+    const int h = hamming(d, f.descriptors[i]);
+    close += h <= 10;
+    if (f.keypoints[i].octave == 0) {
+      ++level0;
+      level0_same += h == 0;
+    }
+  }
+  EXPECT_GT(level0, 300);
+  EXPECT_EQ(level0_same, level0);
+  EXPECT_GE(close, theirs.rows * 95 / 100);
+}
+
+// What the learned pattern is for: on a real frame its bits are far less biased than the Gaussian ones
+// (ORB paper, section 4), and two unrelated descriptors differ in about half of them.
+TEST(OrbSlamExtractor, LearnedPatternBitsAreBalancedOnARealFrame) {
+  BINLOOP_REQUIRE_DATA(kittiLeft(0));
+  const cv::Mat img = readGrayImage(kittiLeft(0));
+  OrbSlamParams orb;
+  orb.pattern = BriefPatternKind::kOrbLearned;
+  const BitStatistics learned = bitStatistics(OrbSlamExtractor(orb).extract(img).descriptors);
+  const BitStatistics old = bitStatistics(OrbSlamExtractor().extract(img).descriptors);
+  std::printf("mean |P(1) - 0.5|: learned %.3f, Gaussian %.3f; random pairs %.1f vs %.1f bits apart\n",
+              learned.mean_bias, old.mean_bias, learned.random_pair_distance, old.random_pair_distance);
+  EXPECT_LT(learned.mean_bias, 0.10);
+  EXPECT_GT(old.mean_bias, 0.15);
+  EXPECT_GT(learned.random_pair_distance, 118);
+  EXPECT_LT(old.random_pair_distance, 110);
+}
+
+TEST(OrbSlamExtractor, ModelHeaderRecordsThePattern) {
+  OrbSlamParams learned;
+  learned.pattern = BriefPatternKind::kOrbLearned;
+  EXPECT_EQ(OrbSlamParams{}.pattern, BriefPatternKind::kGaussian) << "the SLAM's default";
+  const ExtractorSettings a = extractorSettings(learned), b = extractorSettings(OrbSlamParams{});
+  EXPECT_NE(a, b);
+  EXPECT_NE(a.differences(b).find("learned"), std::string::npos) << a.differences(b);
+  EXPECT_EQ(briefPatternFromName("gaussian"), BriefPatternKind::kGaussian);
+  EXPECT_THROW(briefPatternFromName("brisk"), PlaceError);
 }

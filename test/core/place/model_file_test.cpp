@@ -202,12 +202,12 @@ TEST(ModelFile, HeaderRecordsTheExtractorAndItsSettings) {
     EXPECT_EQ(h.training_images, 10u);
   }
   EXPECT_NE(ModelReader(f).header().describe().find(
-                "from binloop ORB (1500 features, scale 1.25, 6 levels, FAST 18/5, 40-px cells, images scaled to a "
+                "from binloop ORB with the Gaussian BRIEF pattern (1500 features, scale 1.25, 6 levels, FAST 18/5, 40-px cells, images scaled to a "
                 "longer side <= 1024 px)"),
             std::string::npos)
       << ModelReader(f).header().describe();
   EXPECT_EQ(slamExtractor().describe(),
-            "binloop ORB (2000 features, scale 1.2, 8 levels, FAST 20/7, 30-px cells, full-size images)");
+            "binloop ORB with the Gaussian BRIEF pattern (2000 features, scale 1.2, 8 levels, FAST 20/7, 30-px cells, full-size images)");
   // A model trained from descriptors of unknown origin says so.
   TempDir dir2;
   EXPECT_FALSE(ModelReader(trainSmallHbow(dir2)).header().extractor.known());
@@ -222,8 +222,8 @@ TEST(ModelFile, OtherExtractorSettingsAreRefusedWithBothNamed) {
   o.extractor.expected = slamExtractor();
   EXPECT_THROW_WITH(
       makePlaceRecognizer("hbow", o), PlaceError,
-      f + ": trained on descriptors of binloop ORB (1000 features, scale 1.2, 8 levels, FAST 20/7, 30-px cells, "
-          "images scaled to a longer side <= 1024 px), but they will come from binloop ORB (2000 features, scale 1.2, "
+      f + ": trained on descriptors of binloop ORB with the Gaussian BRIEF pattern (1000 features, scale 1.2, 8 levels, FAST 20/7, 30-px cells, "
+          "images scaled to a longer side <= 1024 px), but they will come from binloop ORB with the Gaussian BRIEF pattern (2000 features, scale 1.2, "
           "8 levels, FAST 20/7, 30-px cells, full-size images) (differ: features 1000 vs 2000, max side 1024 vs "
           "none); a vocabulary only fits descriptors like those it was trained on: retrain it with these settings, "
           "or use it anyway with --force-extractor");
@@ -237,7 +237,7 @@ TEST(ModelFile, OtherExtractorSettingsAreRefusedWithBothNamed) {
   imported.kind = ExtractorKind::kDbow2Import;
   TempDir dir2;
   EXPECT_THROW_WITH(checkModelExtractor(trainSmallHbow(dir2, imported), o.extractor), PlaceError,
-                    "(differ: extractor imported DBoW2 vs binloop ORB)");
+                    "(differ: extractor imported DBoW2 vs binloop ORB with the Gaussian BRIEF pattern)");
 }
 
 TEST(ModelFile, ForcedExtractorMismatchWarnsAndLoads) {
@@ -253,8 +253,8 @@ TEST(ModelFile, ForcedExtractorMismatchWarnsAndLoads) {
   ASSERT_TRUE(rec);
   rec->add(1, randomPlace(3, 1, 50));
   ASSERT_EQ(warnings.size(), 1u);
-  EXPECT_EQ(warnings[0], f + ": trained on descriptors of binloop ORB (1000 features, scale 1.2, 8 levels, FAST 20/7, "
-                             "30-px cells, full-size images), but they will come from binloop ORB (2000 features, "
+  EXPECT_EQ(warnings[0], f + ": trained on descriptors of binloop ORB with the Gaussian BRIEF pattern (1000 features, scale 1.2, 8 levels, FAST 20/7, "
+                             "30-px cells, full-size images), but they will come from binloop ORB with the Gaussian BRIEF pattern (2000 features, "
                              "scale 1.2, 8 levels, FAST 20/7, 30-px cells, full-size images) (differ: features 1000 vs "
                              "2000); used anyway (--force-extractor)");
   // Equal settings: no warning.
@@ -282,7 +282,7 @@ TEST(ModelFile, ReadsVersion2FilesAsExtractorUnknownAndWarns) {
   EXPECT_NO_THROW(makePlaceRecognizer("hbow", o));  // not forced, still loaded: it may well fit
   ASSERT_EQ(warnings.size(), 1u);
   EXPECT_EQ(warnings[0], v2 + ": the model file (version 2) does not record which extractor it was trained with; "
-                              "descriptors will come from binloop ORB (2000 features, scale 1.2, 8 levels, FAST 20/7, "
+                              "descriptors will come from binloop ORB with the Gaussian BRIEF pattern (2000 features, scale 1.2, 8 levels, FAST 20/7, "
                               "30-px cells, full-size images) (retrain it if they differ)");
   // A version from the future is refused.
   std::fstream s(v2, std::ios::in | std::ios::out | std::ios::binary);

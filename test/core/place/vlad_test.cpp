@@ -59,6 +59,40 @@ TEST(Vlad, HierarchicalVocabularyGivesOneSignaturePerLevel) {
   EXPECT_NEAR(n, 1.0, 1e-5);
 }
 
+// Two images whose few descriptors fall into one word must not agree on the words that are empty in both:
+// an empty word gets coin-flip bits, seeded by the image's own descriptors (real_heldout with 64 words: two
+// nearly featureless wallpapers were the closest pair of the whole set before).
+TEST(Vlad, EmptyWordsGetCoinFlipsNotAgreement) {
+  std::vector<Descriptors> images;
+  for (int p = 0; p < 8; ++p) images.push_back(randomPlace(11, p, 200));
+  VladParams p;
+  p.k = 16;
+  const VladVocabulary v = VladVocabulary::train(images, p);
+  const Descriptors a(3, images[0][0]), b(3, images[1][0]);  // three copies of one descriptor each
+  const auto va = v.aggregate(a).front(), vb = v.aggregate(b).front();
+  const BinarySignature plain_a = binarizeSigns(va), plain_b = binarizeSigns(vb);
+  const BinarySignature sa = binarizeSigns(va, v.dims(), descriptorSeed(a));
+  const BinarySignature sb = binarizeSigns(vb, v.dims(), descriptorSeed(b));
+  // At most 2 of 16 words are occupied: plain signs leave >= 14 x 256 bits at 0 in both.
+  EXPECT_LE(hammingBits(plain_a, plain_b), 2 * 256);
+  // Coin flips: about half of the bits of the empty words differ.
+  EXPECT_GT(hammingBits(sa, sb), 14 * 256 * 4 / 10);
+  EXPECT_EQ(sa, binarizeSigns(va, v.dims(), descriptorSeed(a))) << "same descriptors, same bits";
+  // An occupied word keeps its sign bits.
+  int occupied = -1;
+  for (int w = 0; w < 16 && occupied < 0; ++w)
+    for (int j = 0; j < 256; ++j)
+      if (va[w * 256 + j] != 0.f) occupied = w;
+  ASSERT_GE(occupied, 0);
+  for (int j = 0; j < 256; ++j) {
+    const size_t i = static_cast<size_t>(occupied) * 256 + j;
+    EXPECT_EQ((sa[i >> 6] >> (i & 63)) & 1u, (plain_a[i >> 6] >> (i & 63)) & 1u) << j;
+  }
+  // A full image occupies every word: nothing changes.
+  const auto full = v.aggregate(images[2]).front();
+  EXPECT_EQ(binarizeSigns(full, v.dims(), 5), binarizeSigns(full));
+}
+
 TEST(Vlad, LcsPcaWhitensResiduals) {
   std::vector<Descriptors> images;
   for (int p = 0; p < 20; ++p) images.push_back(randomPlace(4, p, 100));

@@ -1,0 +1,73 @@
+// descriptor-stats: how balanced and independent the extractor's 256 bits are on a set of images, for each
+// BRIEF pattern (features/descriptor_statistics.h). One table row per pattern.
+#include <cmath>
+#include <iomanip>
+#include <iostream>
+#include <sstream>
+
+#include <opencv2/imgproc.hpp>
+
+#include "binloop/features/descriptor_statistics.h"
+#include "binloop/features/extract_options_cli.h"
+#include "binloop/io/data_error.h"
+#include "binloop/io/kitti_sequence.h"
+#include "binloop/place/place_error.h"
+#include "binloop/util/cli_args.h"
+
+int main(int argc, char** argv) {
+  binloop::CliArgs args("descriptor-stats", "descriptor-stats --images <dir>... [--patterns orb,gaussian] [options]");
+  args.option("images", "folder of images or KITTI-layout sequence (image_0/ is used); repeat for more")
+      .option("every", "use every n-th image of each folder", "1")
+      .option("patterns", "comma list of BRIEF patterns to compare (--pattern is ignored)", "orb,gaussian")
+      .option("seed", "seed of the random descriptor pairs", "1")
+      .flag("skip-unreadable", "skip images that cannot be read as 8-bit instead of stopping");
+  binloop::declareExtractOptions(args);
+  return binloop::runTool("descriptor-stats", [&] {
+    if (!args.parse(argc, argv)) return 0;
+    if (!args.has("images")) throw binloop::CliError("--images is required");
+    binloop::ExtractOptions eo = binloop::extractOptionsFrom(args);
+    const long every = args.integer("every");
+    if (every < 1) throw binloop::CliError("--every must be >= 1");
+    std::vector<cv::Mat> images;
+    for (const auto& dir : args.all("images")) {
+      const auto files = binloop::listImages(dir);
+      for (size_t i = 0; i < files.size(); i += every) {
+        try {
+          cv::Mat img = binloop::readGrayImage(files[i]);
+          const int side = std::max(img.cols, img.rows);
+          if (eo.max_side > 0 && side > eo.max_side) {
+            const double s = double(eo.max_side) / side;
+            cv::resize(img, img, cv::Size(), s, s, cv::INTER_AREA);
+          }
+          images.push_back(img);
+        } catch (const binloop::DataError& e) {
+          if (!args.has("skip-unreadable")) throw;
+          std::cerr << "descriptor-stats: skipped " << e.what() << "\n";
+        }
+      }
+    }
+    if (images.empty()) throw binloop::CliError("no images");
+    std::cout << "| pattern | images | descriptors | mean abs(P(1) - 0.5) | median abs(corr) | mean abs(corr) | max abs(corr) "
+                 "| random pairs, bits apart |\n|---|---|---|---|---|---|---|---|\n";
+    std::stringstream list(args.str("patterns"));
+    for (std::string name; std::getline(list, name, ',');) {
+      try {
+        eo.orb.pattern = binloop::briefPatternFromName(name);
+      } catch (const binloop::PlaceError& e) {
+        throw binloop::CliError(std::string("--patterns: ") + e.what());
+      }
+      const binloop::OrbSlamExtractor extractor(eo.orb);
+      binloop::Descriptors all;
+      for (const auto& img : images) {
+        const binloop::OrbFeatures f = extractor.extract(img);
+        all.insert(all.end(), f.descriptors.begin(), f.descriptors.end());
+      }
+      const binloop::BitStatistics s = binloop::bitStatistics(all, static_cast<uint64_t>(args.integer("seed")));
+      std::cout << std::fixed << std::setprecision(3) << "| " << name << " | " << images.size() << " | "
+                << s.descriptors << " | " << s.mean_bias << " | " << s.median_abs_correlation << " | "
+                << s.mean_abs_correlation << " | " << s.max_abs_correlation << " | " << std::setprecision(1)
+                << s.random_pair_distance << " |\n";
+    }
+    return 0;
+  });
+}
