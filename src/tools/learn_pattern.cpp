@@ -39,6 +39,8 @@ int main(int argc, char** argv) {
     if (!args.parse(argc, argv)) return 0;
     if (!args.has("out") || !args.has("images")) throw binloop::CliError("--images and --out are required");
     const binloop::ExtractOptions eo = binloop::extractOptionsFrom(args);
+    if (eo.orb.pattern != binloop::BriefPatternKind::kGaussian)
+      throw binloop::CliError("--pattern does not apply: learn-pattern learns its own tests from the keypoints");
     const long every = args.integer("every"), keypoints = args.integer("keypoints");
     if (every < 1 || keypoints < 1) throw binloop::CliError("--every and --keypoints must be >= 1");
     std::vector<std::string> paths;

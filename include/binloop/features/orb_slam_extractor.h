@@ -9,8 +9,8 @@
 // Two sets of BRIEF tests. kGaussian (the default): binloop's own, 256 pairs drawn from an isotropic
 // Gaussian (sigma = 31/5 px, BRIEF's "G II" layout) by HashRng with a fixed seed, each point inside the
 // radius-15 orientation disc. kOrbLearned: ORB's learned rBRIEF tests, computed by OpenCV's ORB for
-// binloop's keypoints on the same level at the same angle, so a descriptor is what ORB-SLAM2 or OpenCV
-// would compute for that keypoint. The learned tests' bits are balanced and less correlated (the steered
+// binloop's keypoints on the extractor's own level at the extractor's angle (OpenCV's ORB on the whole image
+// gives the same bits at level 0 and within a few bits above, where it resizes its own pyramid). The learned tests' bits are balanced and less correlated (the steered
 // Gaussian ones are biased, as the ORB paper found), which the place models gain from; but on renders
 // they survive a 24 m gap worse, and recovery after 20 missing frames fails with them, so the SLAM keeps
 // the Gaussian tests by default (docs/decisions.md, "ORB's learned BRIEF tests"). `learn-pattern` learns a

@@ -57,8 +57,8 @@ struct ExtractorSettings {
   bool known() const { return kind != ExtractorKind::kUnknown; }
   bool operator==(const ExtractorSettings& o) const;
   bool operator!=(const ExtractorSettings& o) const { return !(*this == o); }
-  /// One line, e.g. "binloop ORB (2000 features, scale 1.2, 8 levels, FAST 20/7, 30-px cells, full-size
-  /// images)".
+  /// One line, e.g. "binloop ORB with the Gaussian BRIEF pattern (2000 features, scale 1.2, 8 levels, FAST
+  /// 20/7, 30-px cells, full-size images)".
   std::string describe() const;
   /// The fields that differ from `o`, e.g. "features 1000 vs 2000, max side 1024 vs none"; "" when equal.
   std::string differences(const ExtractorSettings& o) const;

@@ -145,8 +145,13 @@ std::string ExtractorSettings::describe() const {
 }
 
 std::string ExtractorSettings::differences(const ExtractorSettings& o) const {
-  if (kind != o.kind) return "extractor " + kindName(kind) + " vs " + kindName(o.kind);
   std::ostringstream s;
+  if (kind != o.kind) {
+    s << "extractor " << kindName(kind) << " vs " << kindName(o.kind);
+    // Two binloop extractors differ in their BRIEF tests; say what else differs too.
+    const auto binloop = [](ExtractorKind k) { return k == ExtractorKind::kBinloopOrb || k == ExtractorKind::kBinloopOrbRbrief; };
+    if (!binloop(kind) || !binloop(o.kind)) return s.str();
+  }
   auto field = [&](const char* name, const auto& a, const auto& b) {
     if (a == b) return;
     s << (s.tellp() > 0 ? ", " : "") << name << " " << a << " vs " << b;

@@ -44,7 +44,16 @@ void VladPqRecognizer::addSignature(Slot slot, const Descriptors& d) {
   PqCodes codes = model_.pq->encode(v);
   codes_.push_back(std::move(codes));
   const PqCodes& c = codes_.back();
-  for (int w = 0; w < model_.pq->words(); ++w) inverted_[static_cast<size_t>(w) * model_.pq->m() + c[w]].push_back(slot);
+  // An empty word's sub-vector is all zero and encodes to the same code in every image: two images with few
+  // features would share it (as their sign bits would agree, binarizeSigns), so it is not indexed.
+  const size_t dims = static_cast<size_t>(model_.pq->dims());
+  std::vector<char> empty(static_cast<size_t>(model_.pq->words()), 0);
+  for (int w = 0; w < model_.pq->words(); ++w) {
+    const auto first = v.begin() + static_cast<std::ptrdiff_t>(w * dims);
+    empty[w] = std::all_of(first, first + static_cast<std::ptrdiff_t>(dims), [](float e) { return e == 0.f; });
+    if (!empty[w]) inverted_[static_cast<size_t>(w) * model_.pq->m() + c[w]].push_back(slot);
+  }
+  empty_.push_back(std::move(empty));
   raw_.push_back(verify_ == PqVerify::kAdc ? std::move(v) : std::vector<float>{});
 }
 
@@ -71,7 +80,8 @@ QueryResult VladPqRecognizer::querySignature(const SlotScope& scope) const {
   const PqCodes& qc = codes_[id];
   auto t = std::chrono::steady_clock::now();
   SlotCounter shared(sigs_.size());
-  for (int w = 0; w < model_.pq->words(); ++w) shared.add(inverted_[static_cast<size_t>(w) * model_.pq->m() + qc[w]]);
+  for (int w = 0; w < model_.pq->words(); ++w)
+    if (!empty_[id][w]) shared.add(inverted_[static_cast<size_t>(w) * model_.pq->m() + qc[w]]);
   const std::vector<Slot>& touched = shared.touched();  // the query itself too; scope.excluded drops it
   r.timings.push_back({"inverted_index", msSince(t)});
   t = std::chrono::steady_clock::now();

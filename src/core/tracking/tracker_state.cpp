@@ -24,7 +24,12 @@ void Tracker::load(StateReader& r) {
   if (state_ != msg::TrackingState::kNotInitialized) r.fail("tracking has started already; a map loads into a new tracker");
   const StereoCamera cam = readCamera(r);
   if (!(cam == cam_)) r.fail("the map was made with another camera:\n" + cam.describe() + "\nthis tracker has\n" + cam_.describe());
-  const std::string extractor = r.getString("extractor");
+  std::string extractor = r.getString("extractor");
+  // Maps saved before the BRIEF pattern became a setting (2026-11-25) name the Gaussian tests "binloop ORB (":
+  // the same descriptors as "binloop ORB with the Gaussian BRIEF pattern (".
+  const std::string old_name = "binloop ORB (";
+  if (extractor.rfind(old_name, 0) == 0)
+    extractor = "binloop ORB with the Gaussian BRIEF pattern (" + extractor.substr(old_name.size());
   const std::string mine = extractorSettings(p_.orb, 0).describe();
   if (extractor != mine)
     r.fail("the map's descriptors come from " + extractor + ", but this tracker extracts with " + mine +

@@ -72,9 +72,7 @@ TEST(BriefPatternLearning, LearnedTestsAreBalancedOnHeldOutFrames) {
 // the extractor's descriptors with that pattern.
 TEST(BriefPatternLearning, SamplesGiveTheExtractorsBits) {
   BINLOOP_REQUIRE_DATA(kittiLeftPath(10));  // frames 0-10 of the real sample
-  OrbSlamParams gaussian;  // the pattern briefPattern() holds; the default is ORB's learned one
-  gaussian.pattern = BriefPatternKind::kGaussian;
-  const OrbSlamExtractor ex(gaussian);
+  const OrbSlamExtractor ex;  // the default tests, binloop's Gaussian ones, which briefPattern() holds
   const cv::Mat img = kittiLeft(0);
   const OrbFeatures f = ex.extract(img);
   const PatchSamples s = samplePatches(img, ex, 1000000, 1);

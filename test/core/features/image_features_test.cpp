@@ -112,12 +112,16 @@ TEST(ImageFeatures, CommandLineSetsEveryExtractorSetting) {
                     "extractor options: ORB-SLAM extractor: FAST thresholds need 1 <= min_fast <= ini_fast, got 30 and 20");
   EXPECT_THROW_WITH(parse({"--max-side", "-1"}), CliError, "--max-side must be >= 0");
   EXPECT_THROW_WITH(parse({"--grid-cell", "64"}), CliError, "--grid-cell is retired");
+  EXPECT_EQ(parse({}).orb.pattern, BriefPatternKind::kGaussian);
+  EXPECT_EQ(parse({"--pattern", "orb"}).orb.pattern, BriefPatternKind::kOrbLearned);
+  EXPECT_EQ(extractorSettings(parse({"--pattern", "orb"})).kind, ExtractorKind::kBinloopOrbRbrief);
+  EXPECT_THROW_WITH(parse({"--pattern", "brisk"}), CliError, "--pattern: unknown BRIEF pattern 'brisk' (known: orb, gaussian)");
 }
 
 // The shipped vocabularies (vocab/make_vocab.sh) were trained on what the SLAM and the tools extract by
 // default: kitti08 with exactly the defaults, photos with the defaults on images scaled to 1024 px and ORB's
 // learned BRIEF tests (which eval-loops then follows).
-TEST(ImageFeatures, ShippedVocabulariesWereTrainedWithTheDefaultExtractor) {
+TEST(ImageFeatures, ShippedVocabulariesRecordTheExtractorMakeVocabUsed) {
   const std::string root = std::string(BINLOOP_ROOT_DIR) + "/vocab/";
   ExtractOptions photos;
   photos.max_side = 1024;

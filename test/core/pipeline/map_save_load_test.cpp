@@ -142,4 +142,10 @@ TEST(MapSaveLoad, BrokenOrMismatchedFilesAreRefusedWithTheReason) {
   Tracker t2(d->cam, tp);
   StateReader r2(stageStatePath(map, "tracking"), "tracking");
   EXPECT_THROW_WITH(t2.load(r2), DataError, "descriptors come from");
+  TrackerParams learned = trackerParams(*d);  // the same settings but the other BRIEF tests
+  learned.orb.pattern = BriefPatternKind::kOrbLearned;
+  Tracker t3(d->cam, learned);
+  StateReader r3(stageStatePath(map, "tracking"), "tracking");
+  EXPECT_THROW_WITH(t3.load(r3), DataError,
+                    "the map's descriptors come from binloop ORB with the Gaussian BRIEF pattern (2000 features");
 }

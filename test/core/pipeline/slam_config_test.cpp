@@ -191,6 +191,20 @@ TEST(SlamConfig, NonIntegerForAnIntKeyNamesFileAndKey) {
   EXPECT_THROW_WITH(loadSlamConfig(two), ConfigError, two + ": mapping.local_ba must be 0 or 1");
 }
 
+TEST(SlamConfig, LearnedPatternChoosesTheBriefTests) {
+  TempDir dir;
+  EXPECT_EQ(loadSlamConfig(configFile(dir, "orb:\n  learned_pattern: 0\n")).tracker.orb.pattern, BriefPatternKind::kGaussian);
+  EXPECT_EQ(loadSlamConfig(configFile(dir, "orb:\n  learned_pattern: 1\n", "b.yaml")).tracker.orb.pattern,
+            BriefPatternKind::kOrbLearned);
+  EXPECT_EQ(SlamConfig{}.tracker.orb.pattern, BriefPatternKind::kGaussian) << "the default";
+  const std::string two = configFile(dir, "orb:\n  learned_pattern: 2\n", "c.yaml");
+  EXPECT_THROW_WITH(loadSlamConfig(two), ConfigError, two + ": orb.learned_pattern must be 0 or 1");
+  const std::string half = configFile(dir, "orb:\n  learned_pattern: 0.5\n", "d.yaml");
+  EXPECT_THROW_WITH(loadSlamConfig(half), ConfigError, half + ": orb.learned_pattern must be a whole number");
+  EXPECT_NE(describe(loadSlamConfig(configFile(dir, "orb:\n  learned_pattern: 1\n", "e.yaml"))).find("orb.learned_pattern: 1"),
+            std::string::npos);
+}
+
 // Beyond INT_MAX a value used to wrap (OpenCV's YAML reader wraps integer literals itself, and a cast
 // wrapped real ones), so a typo of a few digits became a negative or arbitrary setting.
 TEST(SlamConfig, IntValueBeyondIntRangeIsOutOfRange) {
