@@ -1,16 +1,12 @@
 // descriptor-stats: how balanced and independent the extractor's 256 bits are on a set of images, for each
 // BRIEF pattern (features/descriptor_statistics.h). One table row per pattern.
-#include <cmath>
 #include <iomanip>
 #include <iostream>
 #include <sstream>
 
-#include <opencv2/imgproc.hpp>
-
 #include "binloop/features/descriptor_statistics.h"
 #include "binloop/features/extract_options_cli.h"
-#include "binloop/io/data_error.h"
-#include "binloop/io/kitti_sequence.h"
+#include "binloop/features/image_features.h"
 #include "binloop/place/place_error.h"
 #include "binloop/util/cli_args.h"
 
@@ -28,42 +24,32 @@ int main(int argc, char** argv) {
     binloop::ExtractOptions eo = binloop::extractOptionsFrom(args);
     const long every = args.integer("every");
     if (every < 1) throw binloop::CliError("--every must be >= 1");
-    std::vector<cv::Mat> images;
+    std::vector<std::string> paths;
     for (const auto& dir : args.all("images")) {
       const auto files = binloop::listImages(dir);
-      for (size_t i = 0; i < files.size(); i += every) {
-        try {
-          cv::Mat img = binloop::readGrayImage(files[i]);
-          const int side = std::max(img.cols, img.rows);
-          if (eo.max_side > 0 && side > eo.max_side) {
-            const double s = double(eo.max_side) / side;
-            cv::resize(img, img, cv::Size(), s, s, cv::INTER_AREA);
-          }
-          images.push_back(img);
-        } catch (const binloop::DataError& e) {
-          if (!args.has("skip-unreadable")) throw;
-          std::cerr << "descriptor-stats: skipped " << e.what() << "\n";
-        }
-      }
+      for (size_t i = 0; i < files.size(); i += every) paths.push_back(files[i]);
     }
-    if (images.empty()) throw binloop::CliError("no images");
     std::cout << "| pattern | images | descriptors | mean abs(P(1) - 0.5) | median abs(corr) | mean abs(corr) | max abs(corr) "
                  "| random pairs, bits apart |\n|---|---|---|---|---|---|---|---|\n";
+    eo.skip_unreadable = args.has("skip-unreadable");
     std::stringstream list(args.str("patterns"));
-    for (std::string name; std::getline(list, name, ',');) {
+    bool first_row = true;  // unreadable images are the same for every pattern: say so once
+    for (std::string name; std::getline(list, name, ','); first_row = false) {
       try {
         eo.orb.pattern = binloop::briefPatternFromName(name);
       } catch (const binloop::PlaceError& e) {
         throw binloop::CliError(std::string("--patterns: ") + e.what());
       }
-      const binloop::OrbSlamExtractor extractor(eo.orb);
+      std::vector<std::string> skipped;
+      eo.skipped = &skipped;
       binloop::Descriptors all;
-      for (const auto& img : images) {
-        const binloop::OrbFeatures f = extractor.extract(img);
-        all.insert(all.end(), f.descriptors.begin(), f.descriptors.end());
-      }
+      for (const auto& d : binloop::extractDescriptors(paths, eo)) all.insert(all.end(), d.begin(), d.end());
+      if (first_row)
+        for (const auto& why : skipped) std::cerr << "descriptor-stats: skipped " << why << "\n";
+      const size_t images = paths.size() - skipped.size();
+      if (images == 0) throw binloop::CliError("no readable images");
       const binloop::BitStatistics s = binloop::bitStatistics(all, static_cast<uint64_t>(args.integer("seed")));
-      std::cout << std::fixed << std::setprecision(3) << "| " << name << " | " << images.size() << " | "
+      std::cout << std::fixed << std::setprecision(3) << "| " << name << " | " << images << " | "
                 << s.descriptors << " | " << s.mean_bias << " | " << s.median_abs_correlation << " | "
                 << s.mean_abs_correlation << " | " << s.max_abs_correlation << " | " << std::setprecision(1)
                 << s.random_pair_distance << " |\n";

@@ -9,6 +9,11 @@ namespace {
 binloop::test::CommandResult run(const std::string& args) {
   return binloop::test::runCommand(std::string(BINLOOP_TOOL_DIR) + "/eval-loops " + args);
 }
+/// A VLAD model trained on `images` with `options` (extractor settings), written to `out`.
+binloop::test::CommandResult trainVlad(const std::string& images, const std::string& options, const std::string& out) {
+  return binloop::test::runCommand(std::string(BINLOOP_TOOL_DIR) + "/train vlad --images " + images + " " + options +
+                                   " --out " + out);
+}
 std::string readAll(const std::string& path) {
   std::ifstream f(path);
   std::stringstream s;
@@ -64,8 +69,7 @@ TEST(EvalLoopsTool, RefusesAModelOfOtherExtractorSettingsUnlessForced) {
   const std::string desk = binloop::test::sharedData("tum_desk");
   BINLOOP_REQUIRE_DATA(desk);
   binloop::test::TempDir tmp;
-  const auto train = binloop::test::runCommand(std::string(BINLOOP_TOOL_DIR) + "/train vlad --images " + desk +
-                                               " --features 500 --out " + (tmp / "vlad.bin"));
+  const auto train = trainVlad(desk, "--features 500", tmp / "vlad.bin");
   ASSERT_EQ(train.code, 0) << train.out;
   EXPECT_NE(train.out.find("from binloop ORB with the Gaussian BRIEF pattern (500 features, scale 1.2, 8 levels, FAST 20/7, 30-px cells, full-size images)"),
             std::string::npos) << train.out;
@@ -102,11 +106,9 @@ TEST(EvalLoopsTool, QueriesFollowThePatternAndImageSizeTheModelRecords) {
   const std::string desk = binloop::test::sharedData("tum_desk");
   BINLOOP_REQUIRE_DATA(desk);
   binloop::test::TempDir tmp;
-  const auto learned = binloop::test::runCommand(std::string(BINLOOP_TOOL_DIR) + "/train vlad --images " + desk +
-                                                 " --pattern orb --out " + (tmp / "l/vlad.bin"));
+  const auto learned = trainVlad(desk, "--pattern orb", tmp / "l/vlad.bin");
   ASSERT_EQ(learned.code, 0) << learned.out;
-  const auto small = binloop::test::runCommand(std::string(BINLOOP_TOOL_DIR) + "/train vlad --images " + desk +
-                                               " --max-side 320 --out " + (tmp / "s/vlad.bin"));
+  const auto small = trainVlad(desk, "--max-side 320", tmp / "s/vlad.bin");
   ASSERT_EQ(small.code, 0) << small.out;
   binloop::test::writeText(tmp / "gt.txt", "9 0\n");
   const std::string common = "--sequence " + desk + " --gt " + (tmp / "gt.txt") + " --models vlad --window 0 --reference 1 --out " +

@@ -33,6 +33,7 @@ class PqCodebooks {
  private:
   int words_ = 0, dims_ = 0, m_ = 0;
   std::vector<float> codebooks_;  // words × m × dims
+  std::vector<float> scales_;     // per word: the 16-bit step the file stores the codebooks in
   std::vector<float> sdc_table_;  // words × m × m squared distances
   void buildTable();
 };

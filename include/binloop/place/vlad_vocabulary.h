@@ -28,6 +28,8 @@ struct VladParams {
 /// Bits of sign(v) > 0, packed in 64-bit words.
 using BinarySignature = std::vector<uint64_t>;
 BinarySignature binarizeSigns(const std::vector<float>& v);
+/// For a VLAD of words of `dims` floats: 1 for each word no descriptor fell into (its residual all zero).
+std::vector<char> emptyWords(const std::vector<float>& v, int dims);
 /// The same, for a VLAD of words of `dims` floats, except that a word no descriptor fell into gets coin-flip
 /// bits seeded by `empty_seed` and the word's index. Why: its all-zero residual would give all-zero bits,
 /// and two images with few features (a blank wall, a blurred sky) would agree on every empty word and

@@ -26,13 +26,21 @@ BinarySignature binarizeSigns(const std::vector<float>& v) {
   return s;
 }
 
+std::vector<char> emptyWords(const std::vector<float>& v, int dims) {
+  std::vector<char> empty;
+  if (dims < 1) return empty;
+  for (size_t first = 0; first + dims <= v.size(); first += dims)
+    empty.push_back(std::all_of(v.begin() + first, v.begin() + first + dims, [](float e) { return e == 0.f; }));
+  return empty;
+}
+
 BinarySignature binarizeSigns(const std::vector<float>& v, int dims, uint64_t empty_seed) {
   BinarySignature s = binarizeSigns(v);
-  if (dims < 1) return s;
-  for (size_t first = 0; first + dims <= v.size(); first += dims) {
-    if (std::any_of(v.begin() + first, v.begin() + first + dims, [](float e) { return e != 0.f; })) continue;
-    HashRng coin(hashCombine(empty_seed, first / dims));
-    for (size_t i = first; i < first + dims; ++i)
+  const std::vector<char> empty = emptyWords(v, dims);
+  for (size_t w = 0; w < empty.size(); ++w) {
+    if (!empty[w]) continue;
+    HashRng coin(hashCombine(empty_seed, w));
+    for (size_t i = w * dims; i < (w + 1) * dims; ++i)
       if (coin.next() & 1u) s[i >> 6] |= uint64_t{1} << (i & 63);
   }
   return s;

@@ -46,13 +46,9 @@ void VladPqRecognizer::addSignature(Slot slot, const Descriptors& d) {
   const PqCodes& c = codes_.back();
   // An empty word's sub-vector is all zero and encodes to the same code in every image: two images with few
   // features would share it (as their sign bits would agree, binarizeSigns), so it is not indexed.
-  const size_t dims = static_cast<size_t>(model_.pq->dims());
-  std::vector<char> empty(static_cast<size_t>(model_.pq->words()), 0);
-  for (int w = 0; w < model_.pq->words(); ++w) {
-    const auto first = v.begin() + static_cast<std::ptrdiff_t>(w * dims);
-    empty[w] = std::all_of(first, first + static_cast<std::ptrdiff_t>(dims), [](float e) { return e == 0.f; });
+  std::vector<char> empty = emptyWords(v, model_.pq->dims());
+  for (int w = 0; w < model_.pq->words(); ++w)
     if (!empty[w]) inverted_[static_cast<size_t>(w) * model_.pq->m() + c[w]].push_back(slot);
-  }
   empty_.push_back(std::move(empty));
   raw_.push_back(verify_ == PqVerify::kAdc ? std::move(v) : std::vector<float>{});
 }

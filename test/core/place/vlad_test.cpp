@@ -4,6 +4,7 @@
 
 #include <cmath>
 
+#include "binloop/place/model_file.h"
 #include "binloop/place/pq_codebooks.h"
 #include "place_test_data.h"
 #include "support/test_support.h"
@@ -135,4 +136,49 @@ TEST(ProductQuantization, SdcAndAdcMatchBruteForce) {
     EXPECT_NEAR(pq.adc(a, cb), adc, 1e-4);
   }
   EXPECT_THROW_WITH(PqCodebooks::train({vlads[0], vlads[0]}, words, dims, m, 1), PlaceError, "degenerate PQ codebook");
+}
+
+TEST(ProductQuantization, SixteenBitFileGivesTheTrainedCodesAndOldFloatFilesStillLoad) {
+  HashRng rng(12);
+  const int words = 2, dims = 6, m = 4;
+  std::vector<std::vector<float>> vlads(40, std::vector<float>(words * dims));
+  for (auto& v : vlads)
+    for (auto& x : v) x = static_cast<float>(rng.normal());
+  const PqCodebooks pq = PqCodebooks::train(vlads, words, dims, m, 3);
+  TempDir dir;
+  ModelHeader h;
+  h.type = ModelType::kVladPq;
+  {
+    ModelWriter w(h);
+    pq.write(w);
+    w.save((dir / "pq.bin"));
+  }
+  ModelReader r((dir / "pq.bin"));
+  const PqCodebooks back = PqCodebooks::read(r);
+  for (int w = 0; w < words; ++w)
+    for (int c = 0; c < m; ++c)
+      for (int j = 0; j < dims; ++j) EXPECT_EQ(back.centroid(w, c)[j], pq.centroid(w, c)[j]);
+  EXPECT_EQ(back.sdc(back.encode(vlads[0]), back.encode(vlads[1])), pq.sdc(pq.encode(vlads[0]), pq.encode(vlads[1])));
+
+  // A file written before the 16-bit codebooks: three parameters and the floats themselves.
+  std::vector<float> floats;
+  for (int w = 0; w < words; ++w)
+    for (int c = 0; c < m; ++c) floats.insert(floats.end(), pq.centroid(w, c), pq.centroid(w, c) + dims);
+  floats[0] = 0.123456789f;
+  {
+    ModelWriter w(h);
+    w.section("QPAR", std::vector<uint32_t>{uint32_t{words}, uint32_t{dims}, uint32_t{m}});
+    w.section("QCBK", floats);
+    w.save((dir / "old.bin"));
+  }
+  ModelReader old((dir / "old.bin"));
+  EXPECT_EQ(PqCodebooks::read(old).centroid(0, 0)[0], 0.123456789f);
+
+  {
+    ModelWriter w(h);
+    w.section("QPAR", std::vector<uint32_t>{uint32_t{words}, uint32_t{dims}, uint32_t{m}, 7});
+    w.save((dir / "bad.bin"));
+  }
+  ModelReader bad((dir / "bad.bin"));
+  EXPECT_THROW_WITH(PqCodebooks::read(bad), PlaceError, "PQ parameter section malformed");
 }
