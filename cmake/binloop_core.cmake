@@ -31,8 +31,11 @@ endforeach()
 file(GLOB_RECURSE BINLOOP_CORE_SOURCES CONFIGURE_DEPENDS ${BINLOOP_ROOT}/src/core/*.cpp)
 add_library(binloop_core SHARED ${BINLOOP_CORE_SOURCES})
 target_include_directories(binloop_core PUBLIC ${BINLOOP_ROOT}/include ${OpenCV_INCLUDE_DIRS})
-target_link_libraries(binloop_core PUBLIC Eigen3::Eigen ${OpenCV_LIBS} Threads::Threads Ceres::ceres)
+target_link_libraries(binloop_core PUBLIC Eigen3::Eigen ${OpenCV_LIBS} Threads::Threads Ceres::ceres PRIVATE ${CMAKE_DL_LIBS})
 target_compile_options(binloop_core PRIVATE ${BINLOOP_WARNINGS})
+# The last place packageDir() looks for vocab/ and config/ (util/package_paths.h).
+set_source_files_properties(${BINLOOP_ROOT}/src/core/util/package_paths.cpp PROPERTIES
+                            COMPILE_DEFINITIONS BINLOOP_SOURCE_DIR="${BINLOOP_ROOT}")
 # Hamming distances are four popcounts; without the POPCNT instruction GCC calls a bit-twiddling
 # helper instead, which made the vocabulary-tree descent ~3x slower. Every x86-64 CPU since 2008 has
 # it; other architectures (arm64) have their own and ignore this.

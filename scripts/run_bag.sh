@@ -1,8 +1,10 @@
 #!/usr/bin/env bash
 # run-bag: plays a bag (kitti2bag's topics) through the binloop nodelet graph and writes the offline runner's
 # files (trajectory, loops.csv, summary.json) into --out, so the ROS path and `scripts/binloop run` can be
-# compared. Starts a master if none runs; stops everything it started.
-#   scripts/binloop run-bag <bag> --out <dir> [--detector hbow] [--rate 1.0] [--split] [--lockstep]
+# compared. Starts a master if none runs (on ROS_MASTER_URI's port); stops everything it started. The graph and
+# the recorder come from whichever space is sourced (scripts/binloop: the build's devel space; a test sources
+# an install space instead).
+#   scripts/binloop run-bag <bag> --out <dir> [--detector hmvlad] [--rate 1.0] [--split] [--lockstep]
 #                           [--launch-args "arg:=value ..."] [--screenshot shot.png]
 # --lockstep: tracking waits for local mapping after each keyframe, as `run --lockstep` (for comparisons).
 # --screenshot: also runs rviz (under Xvfb when there is no display) and saves its window after the bag.
@@ -10,7 +12,7 @@ set -euo pipefail
 source "$(dirname "${BASH_SOURCE[0]}")/env.sh"
 
 usage() { sed -n '2,9p' "$0" | sed 's/^# \{0,1\}//'; }
-bag="" out="" detector="hbow" rate="1.0" launch="kitti_stereo.launch" extra="" shot=""
+bag="" out="" detector="hmvlad" rate="1.0" launch="kitti_stereo.launch" extra="" shot=""
 while [ $# -gt 0 ]; do
   case "$1" in
     --out) out="$2"; shift 2 ;;
@@ -49,7 +51,8 @@ if [ -n "$shot" ]; then
   extra="$extra rviz:=true"
 fi
 if ! rosnode list >/dev/null 2>&1; then
-  roscore >"$out/roscore.log" 2>&1 &
+  port="${ROS_MASTER_URI:-http://localhost:11311}"; port="${port##*:}"; port="${port%%/*}"
+  roscore -p "$port" >"$out/roscore.log" 2>&1 &
   pids+=($!)
   for _ in $(seq 100); do rosnode list >/dev/null 2>&1 && break; sleep 0.1; done
 fi
@@ -57,7 +60,7 @@ rosparam set /use_sim_time true
 # shellcheck disable=SC2086
 roslaunch binloop "$launch" detector:="$detector" use_sim_time:=true $extra >"$out/graph.log" 2>&1 &
 graph=$!
-"$BINLOOP_WS/devel/lib/binloop/record-run" --out "$out" >"$out/record.log" 2>&1 &
+rosrun binloop record-run --out "$out" >"$out/record.log" 2>&1 &
 recorder=$!
 # Wait for the Tracking nodelet to subscribe before playing.
 for _ in $(seq 300); do

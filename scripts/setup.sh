@@ -12,6 +12,8 @@ PACKAGES=(
   libsensor-msgs-dev libgeometry-msgs-dev libnav-msgs-dev libvisualization-msgs-dev libstd-msgs-dev
   libdiagnostic-msgs-dev libdiagnostic-updater-dev
   python3-rostest python3-nose rosout python3-roslaunch rosbash python3-catkin-pkg
+  # the robot-style rostest's URDF
+  ros-robot-state-publisher
   # rviz (launch files' rviz:=true) and a virtual display + screenshots for looking at it headless
   rviz xvfb imagemagick
   # numerics and vision

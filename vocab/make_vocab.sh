@@ -9,6 +9,8 @@
 #   vocab/kitti08/<model>.bin  — every model, trained on rendered KITTI route 08 only (every 8th frame, full
 #                                size 1241x376, as the SLAM sees its keyframes), as the thesis trained on
 #                                KITTI 08.
+#   vocab/kitti08/hbow_k8l5.bin — a small hbow vocabulary (k=8, L=5, 1.6 MB) from the same images: what
+#                                relocalisation uses by default, tracked so that a plain clone has it.
 #   vocab/photos/<model>.bin   — every model for real images: the Debian photos (opencv-doc, python3-skimage,
 #                                one image per plasma-workspace-wallpapers wallpaper) except those of the
 #                                real-image loop sets (data/loop_sets/*.txt), plus every 16th frame of
@@ -52,6 +54,9 @@ for m in $kitti_models; do
   extra=$(vlad_words "$m")
   bl train "$m" --images "$seq08" --every 8 --seed 1 $extra --out "$out/kitti08/$m.bin"
 done
+if [ -n "$kitti_models" ] && [ "${1:-}" != hbow ]; then
+  bl train hbow --images "$seq08" --every 8 --seed 1 --k 8 --levels 5 --out "$out/kitti08/hbow_k8l5.bin"
+fi
 stage="$work/photos"
 rm -rf "$stage" && mkdir -p "$stage"
 i=0

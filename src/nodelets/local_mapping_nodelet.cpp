@@ -36,7 +36,7 @@ class LocalMappingNodelet : public nodelet::Nodelet {
   std::unique_ptr<StageServices> services_;
   CallbackGuard guard_{"LocalMapping"};
   std::string counts() const;
-  std::string map_frame_;
+  std::string slam_frame_;
   int cloud_every_ = 5;
   ros::Subscriber keyframe_sub_, correction_sub_;
   ros::WallTimer merge_timer_;
@@ -52,7 +52,7 @@ void LocalMappingNodelet::onInit() {
   ros::NodeHandle& nh = getNodeHandle();
   ros::NodeHandle& pnh = getPrivateNodeHandle();
   try {
-    requireKnownParams(pnh, {"config", "map_frame", "cloud_every"});
+    requireKnownParams(pnh, {"config", "slam_frame", "cloud_every"});
     params_ = slamConfigFrom(pnh).mapper;
     params_.global_ba_in_background = true;  // mapping goes on while it runs (when global_ba_after_loop is on)
     mapper_ = std::make_unique<binloop::LocalMapper>(params_);
@@ -60,7 +60,7 @@ void LocalMappingNodelet::onInit() {
     NODELET_FATAL("binloop/LocalMapping: %s", e.what());
     throw;
   }
-  map_frame_ = stringParam(pnh, "map_frame", "map");
+  slam_frame_ = stringParam(pnh, "slam_frame", "slam");  // the SLAM's own frame (tracking publishes map -> slam)
   cloud_every_ = std::max(1, static_cast<int>(numberParam(pnh, "cloud_every", 5)));
   refined_pub_ = nh.advertise<binloop::KeyFrame>("refined_keyframe", 100);
   update_pub_ = nh.advertise<binloop::LocalMapUpdate>("local_map_update", 100);
@@ -117,7 +117,7 @@ void LocalMappingNodelet::mergeGlobalBa() {
   if (!u) return;
   std_msgs::Header header;
   header.stamp = ros::Time::now();
-  header.frame_id = map_frame_;
+  header.frame_id = slam_frame_;
   update_pub_.publish(boost::make_shared<binloop::LocalMapUpdate>(toRos(*u, header)));
   publishMap(header.stamp);
   NODELET_INFO("binloop/LocalMapping: global BA merged (%.0f ms over %d keyframes, %d added meanwhile)",
@@ -138,9 +138,9 @@ void LocalMappingNodelet::onKeyframe(const binloop::KeyFrameConstPtr& m) {
   last_ms_ = out.update->total_ms;
   last_ba_ms_ = out.update->ba_ms;
   std_msgs::Header header = m->header;
-  header.frame_id = map_frame_;
+  header.frame_id = slam_frame_;
   // The refined keyframe first: loop closing must know it before the update that names it.
-  refined_pub_.publish(boost::make_shared<binloop::KeyFrame>(toRos(*out.refined, map_frame_)));
+  refined_pub_.publish(boost::make_shared<binloop::KeyFrame>(toRos(*out.refined, slam_frame_)));
   update_pub_.publish(boost::make_shared<binloop::LocalMapUpdate>(toRos(*out.update, header)));
   if (keyframes_ % cloud_every_ == 0) publishMap(m->header.stamp);
 }
@@ -155,7 +155,7 @@ void LocalMappingNodelet::onCorrection(const binloop::CorrectionConstPtr& m) {
   }
   ++corrections_;
   std_msgs::Header header = m->header;
-  header.frame_id = map_frame_;
+  header.frame_id = slam_frame_;
   update_pub_.publish(boost::make_shared<binloop::LocalMapUpdate>(toRos(*u, header)));
   publishMap(m->header.stamp);
 }
@@ -165,7 +165,7 @@ void LocalMappingNodelet::publishMap(const ros::Time& stamp) {
     const auto pts = mapper_->pointPositions();
     sensor_msgs::PointCloud2 cloud;
     cloud.header.stamp = stamp;
-    cloud.header.frame_id = map_frame_;
+    cloud.header.frame_id = slam_frame_;
     sensor_msgs::PointCloud2Modifier mod(cloud);
     mod.setPointCloud2FieldsByString(1, "xyz");
     mod.resize(pts.size());
@@ -180,7 +180,7 @@ void LocalMappingNodelet::publishMap(const ros::Time& stamp) {
   }
   geometry_msgs::PoseArray kfs;
   kfs.header.stamp = stamp;
-  kfs.header.frame_id = map_frame_;
+  kfs.header.frame_id = slam_frame_;
   for (const auto& k : mapper_->keyframes()) kfs.poses.push_back(toPoseMsg(k.T_w_c));
   keyframes_pub_.publish(kfs);
 }

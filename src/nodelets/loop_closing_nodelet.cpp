@@ -47,7 +47,7 @@ class LoopClosingNodelet : public nodelet::Nodelet {
   std::unique_ptr<binloop::LoopCloser> closer_;
   std::unique_ptr<StageServices> services_;
   CallbackGuard guard_{"LoopClosing"};
-  std::string map_frame_;
+  std::string slam_frame_;
   ros::Subscriber keyframe_sub_, update_sub_, candidates_sub_;
   ros::Publisher correction_pub_, closure_pub_, path_pub_, edges_pub_;
   ros::ServiceServer external_srv_;
@@ -69,7 +69,7 @@ void LoopClosingNodelet::onInit() {
   ros::NodeHandle& nh = getNodeHandle();
   ros::NodeHandle& pnh = getPrivateNodeHandle();
   try {
-    requireKnownParams(pnh, {"config", "map_frame", "seed"});
+    requireKnownParams(pnh, {"config", "slam_frame", "seed"});
     binloop::SlamConfig config = slamConfigFrom(pnh);
     config.closer.verify.seed = static_cast<uint64_t>(numberParam(pnh, "seed", 1));
     params_ = config.closer;
@@ -78,7 +78,7 @@ void LoopClosingNodelet::onInit() {
     NODELET_FATAL("binloop/LoopClosing: %s", e.what());
     throw;
   }
-  map_frame_ = stringParam(pnh, "map_frame", "map");
+  slam_frame_ = stringParam(pnh, "slam_frame", "slam");  // the SLAM's own frame (tracking publishes map -> slam)
   correction_pub_ = nh.advertise<binloop::Correction>("correction", 10);
   closure_pub_ = nh.advertise<binloop::LoopClosure>("loop_closure", 100);
   path_pub_ = nh.advertise<nav_msgs::Path>("corrected_path", 1, true);
@@ -185,7 +185,7 @@ void LoopClosingNodelet::runPending() {
 
 void LoopClosingNodelet::handle(const binloop::LoopCloser::Output& out, const std_msgs::Header& header) {
   std_msgs::Header h = header;
-  h.frame_id = map_frame_;
+  h.frame_id = slam_frame_;
   for (const auto& c : out.closures) {
     ++verified_;
     ++by_status_[c->status];
@@ -222,12 +222,12 @@ bool LoopClosingNodelet::onExternalLoop(binloop::AddExternalLoop::Request& req,
 void LoopClosingNodelet::publishPathAndEdges(const ros::Time& stamp) {
   nav_msgs::Path path;
   path.header.stamp = stamp;
-  path.header.frame_id = map_frame_;
+  path.header.frame_id = slam_frame_;
   std::unordered_map<binloop::SlamKeyframeId, Eigen::Vector3d> where;
   for (const auto& k : closer_->keyframePoses()) {
     geometry_msgs::PoseStamped p;
     p.header.stamp = stamp;
-    p.header.frame_id = map_frame_;
+    p.header.frame_id = slam_frame_;
     p.pose = toPoseMsg(k.T_w_c);
     path.poses.push_back(p);
     where[k.id] = k.T_w_c.translation();

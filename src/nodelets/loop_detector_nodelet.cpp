@@ -13,6 +13,7 @@
 
 #include "binloop/loop/loop_detector.h"
 #include "binloop/pipeline/model_files.h"
+#include "binloop/util/package_paths.h"
 #include "binloop_ros/callback_guard.h"
 #include "binloop_ros/cpu_meter.h"
 #include "binloop_ros/stage_diagnostics.h"
@@ -68,7 +69,7 @@ void LoopDetectorNodelet::onInit() {
     NODELET_FATAL("binloop/LoopDetector: %s", e.what());
     throw;
   }
-  vocab_dir_ = stringParam(pnh, "vocab_dir", "vocab/kitti08");
+  vocab_dir_ = stringParam(pnh, "vocab_dir", binloop::packagePath(binloop::kShippedModelDir));
   force_ = boolParam(pnh, "force_extractor", false);
   // The file's loop_detection section gives the starting rules unless the parameters say otherwise.
   if (!pnh.hasParam("consistency")) pnh.setParam("consistency", config_.detector.consistency);

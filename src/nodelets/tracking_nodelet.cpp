@@ -6,13 +6,10 @@
 #include <message_filters/sync_policies/approximate_time.h>
 #include <message_filters/sync_policies/exact_time.h>
 #include <message_filters/synchronizer.h>
-#include <nav_msgs/Odometry.h>
 #include <nav_msgs/Path.h>
 #include <nodelet/nodelet.h>
 #include <opencv2/imgproc.hpp>
 #include <pluginlib/class_list_macros.hpp>
-#include <tf2_ros/static_transform_broadcaster.h>
-#include <tf2_ros/transform_broadcaster.h>
 
 #include <deque>
 #include <memory>
@@ -20,7 +17,9 @@
 
 #include "binloop/pipeline/model_files.h"
 #include "binloop/tracking/tracker.h"
+#include "binloop/util/package_paths.h"
 #include "binloop_ros/callback_guard.h"
+#include "binloop_ros/frame_publisher.h"
 #include "binloop_ros/cpu_meter.h"
 #include "binloop_ros/stage_diagnostics.h"
 #include "binloop_ros/node_params.h"
@@ -70,7 +69,8 @@ class TrackingNodelet : public nodelet::Nodelet {
   std::unique_ptr<binloop::Tracker> tracker_;
   std::optional<binloop::StereoCamera> fixed_camera_;  // from parameters, instead of camera_info
   sensor_msgs::CameraInfoConstPtr left_info_, right_info_;
-  std::string map_frame_, odom_frame_, camera_frame_;
+  std::string camera_frame_;
+  std::unique_ptr<FramePublisher> frames_out_;  // tf, odom
   double max_stamp_diff_ = 0;
   // ~lockstep: a pair waits until local mapping has answered every keyframe sent, as `run --lockstep` does
   // (for comparing the two paths; live, tracking never waits). Pairs also wait for the first camera_info.
@@ -80,9 +80,7 @@ class TrackingNodelet : public nodelet::Nodelet {
   std::unique_ptr<mf::Synchronizer<Exact>> exact_;
   std::unique_ptr<mf::Synchronizer<Approx>> approx_;
   ros::Subscriber left_info_sub_, right_info_sub_, update_sub_;
-  ros::Publisher keyframe_pub_, frame_pub_, pose_pub_, odom_pub_, path_pub_, debug_pub_;
-  std::unique_ptr<tf2_ros::TransformBroadcaster> tf_;
-  std::unique_ptr<tf2_ros::StaticTransformBroadcaster> static_tf_;
+  ros::Publisher keyframe_pub_, frame_pub_, pose_pub_, path_pub_, debug_pub_;
   std::unique_ptr<StageDiagnostics> diag_;
   CpuMeter cpu_;
   nav_msgs::Path path_;
@@ -94,27 +92,21 @@ class TrackingNodelet : public nodelet::Nodelet {
   ros::WallTime last_mapping_contact_;  // the last keyframe sent or update received
   uint64_t keyframes_given_up_ = 0;
   size_t max_waiting_ = 100;            // lock-step pairs held for mapping at most (the oldest are dropped)
-  uint64_t corrections_ = 0;    // corrected maps applied: the map-frame pose may jump then, odom must not
+  uint64_t corrections_ = 0;    // corrected maps applied: the slam-frame pose may jump then, odom must not
   uint64_t corrections_at_last_ = 0;
   std::string last_problem_;
   double last_stamp_diff_ = 0, last_latency_ms_ = 0;
-  binloop::Pose3 T_odom_c_ = binloop::Pose3::Identity(), T_w_c_last_ = binloop::Pose3::Identity();
-  // ~base_frame with ~camera_in_base [x y z qx qy qz qw]: the robot's frame, whose pose odom then publishes
-  // (odom starts where the base starts); empty: odom publishes the camera's pose.
-  std::string base_frame_;
-  binloop::Pose3 T_base_c_ = binloop::Pose3::Identity();
-  binloop::Pose3 last_motion_ = binloop::Pose3::Identity();
-  bool have_last_ = false;
 };
 
 void TrackingNodelet::onInit() {
   ros::NodeHandle& nh = getNodeHandle();
   ros::NodeHandle& pnh = getPrivateNodeHandle();
   try {
-    requireKnownParams(pnh, {"config", "reloc_vocab", "force_extractor", "sync", "queue_size", "max_stamp_diff",
-                             "map_frame", "odom_frame", "camera_frame", "camera", "seed", "lockstep",
-                             "view_frame", "ground_truth_frame", "base_frame", "camera_in_base", "max_time_jump",
-                             "time_jump_confirm_pairs", "stale_after_s", "path_max_poses", "keyframe_timeout_s"});
+    std::vector<std::string> known = {"config", "reloc_vocab", "force_extractor", "sync", "queue_size", "max_stamp_diff",
+                                      "camera_frame", "camera", "seed", "lockstep", "max_time_jump",
+                                      "time_jump_confirm_pairs", "stale_after_s", "path_max_poses", "keyframe_timeout_s"};
+    known.insert(known.end(), FramePublisher::parameterNames().begin(), FramePublisher::parameterNames().end());
+    requireKnownParams(pnh, known);
     keyframe_timeout_s_ = numberParam(pnh, "keyframe_timeout_s", 5);
     stamps_ = std::make_unique<StampGate>(StampGateParams{numberParam(pnh, "max_time_jump", 5),
                                                           static_cast<int>(numberParam(pnh, "time_jump_confirm_pairs", 3))});
@@ -122,11 +114,13 @@ void TrackingNodelet::onInit() {
     path_max_poses_ = static_cast<size_t>(std::max(1.0, numberParam(pnh, "path_max_poses", 1000)));
     config_ = slamConfigFrom(pnh);
     config_.tracker.seed = static_cast<uint64_t>(numberParam(pnh, "seed", 1));
-    const std::string reloc = stringParam(pnh, "reloc_vocab", "");
-    if (!reloc.empty())
+    // "" or "none": relocalisation tries only the most recent keyframes.
+    const std::string reloc = stringParam(pnh, "reloc_vocab", binloop::packagePath(binloop::kRelocVocab));
+    if (!reloc.empty() && reloc != "none") {
       config_.tracker.vocabulary =
           binloop::loadRelocalisationVocabulary(reloc, config_.tracker.orb, boolParam(pnh, "force_extractor", false));
-    if (!reloc.empty()) config_.tracker.vocabulary_identity = binloop::modelFileIdentity(reloc);
+      config_.tracker.vocabulary_identity = binloop::modelFileIdentity(reloc);
+    }
     if (pnh.hasParam("camera")) {  // calibration from YAML (rosparam) instead of camera_info
       binloop::StereoCamera cam;
       cam.fx = numberParam(pnh, "camera/fx", 0);
@@ -143,25 +137,12 @@ void TrackingNodelet::onInit() {
     NODELET_FATAL("binloop/Tracking: %s", e.what());
     throw;  // the manager reports the nodelet as failed to load; it does not take the manager down
   }
-  map_frame_ = stringParam(pnh, "map_frame", "map");
-  odom_frame_ = stringParam(pnh, "odom_frame", "odom");
   camera_frame_ = stringParam(pnh, "camera_frame", "");  // "": the left image's frame_id
-  base_frame_ = stringParam(pnh, "base_frame", "");
-  if (!base_frame_.empty()) {
-    std::vector<double> v;
-    if (!pnh.getParam("camera_in_base", v) || v.size() != 7) {
-      NODELET_FATAL("binloop/Tracking: ~base_frame needs ~camera_in_base: [x, y, z, qx, qy, qz, qw], the camera's pose in it");
-      throw ConversionError("~camera_in_base must be a list of 7 numbers");
-    }
-    geometry_msgs::Pose p;
-    p.position.x = v[0];
-    p.position.y = v[1];
-    p.position.z = v[2];
-    p.orientation.x = v[3];
-    p.orientation.y = v[4];
-    p.orientation.z = v[5];
-    p.orientation.w = v[6];
-    T_base_c_ = toPose3(p);
+  try {
+    frames_out_ = std::make_unique<FramePublisher>(nh, pnh);
+  } catch (const std::exception& e) {
+    NODELET_FATAL("binloop/Tracking: %s", e.what());
+    throw;
   }
   max_stamp_diff_ = numberParam(pnh, "max_stamp_diff", 0.002);
   lockstep_ = boolParam(pnh, "lockstep", false);
@@ -173,37 +154,8 @@ void TrackingNodelet::onInit() {
   keyframe_pub_ = nh.advertise<binloop::KeyFrame>("keyframe", 10);
   frame_pub_ = nh.advertise<binloop::TrackedFrame>("tracked_frame", 100);
   pose_pub_ = nh.advertise<geometry_msgs::PoseStamped>("pose", 10);
-  odom_pub_ = nh.advertise<nav_msgs::Odometry>("odom", 10);
   path_pub_ = nh.advertise<nav_msgs::Path>("live_path", 1, true);
   debug_pub_ = nh.advertise<sensor_msgs::Image>("debug_image", 1);
-  tf_ = std::make_unique<tf2_ros::TransformBroadcaster>();
-  // The map frame is the first camera's optical frame (z forward, y down). ~view_frame: a z-up frame over it
-  // (x forward, y left) for rviz's top views. ~ground_truth_frame: a frame that coincides with the map (KITTI's
-  // ground truth starts at the first camera as the map does), so a bag's ground truth shows beside the path.
-  std::vector<geometry_msgs::TransformStamped> statics;
-  auto fixed = [&](const std::string& parent, const std::string& child, const Eigen::Matrix3d& R) {
-    binloop::Pose3 T = binloop::Pose3::Identity();
-    T.linear() = R;
-    const geometry_msgs::Pose p = toPoseMsg(T);
-    geometry_msgs::TransformStamped t;
-    t.header.stamp = ros::Time(0);
-    t.header.frame_id = parent;
-    t.child_frame_id = child;
-    t.transform.rotation = p.orientation;
-    statics.push_back(t);
-  };
-  const std::string view = stringParam(pnh, "view_frame", "map_view");
-  const std::string truth = stringParam(pnh, "ground_truth_frame", "");
-  if (!view.empty()) {
-    Eigen::Matrix3d R;  // columns: the map's x (right), y (down), z (forward) in the view frame
-    R << 0, 0, 1, -1, 0, 0, 0, -1, 0;
-    fixed(view, map_frame_, R);
-  }
-  if (!truth.empty()) fixed(map_frame_, truth, Eigen::Matrix3d::Identity());
-  if (!statics.empty()) {
-    static_tf_ = std::make_unique<tf2_ros::StaticTransformBroadcaster>();
-    static_tf_->sendTransform(statics);
-  }
   update_sub_ = guard_.subscribe(nh, "local_map_update", 100, &TrackingNodelet::onUpdate, this);
   left_info_sub_ = nh.subscribe<sensor_msgs::CameraInfo>(
       topics::kLeftInfo, 2, guard_.wrap("left camera_info", [this](const sensor_msgs::CameraInfoConstPtr& m) { onInfo(m, false); }));
@@ -250,14 +202,14 @@ void TrackingNodelet::onInit() {
   services_ = std::make_unique<StageServices>(pnh, "tracking", h);
   last_pair_wall_ = ros::WallTime::now();  // no pair at all for ~stale_after_s is reported too
   NODELET_INFO("binloop/Tracking: %s sync on %s + %s, map frame '%s'", sync.c_str(), topics::kLeftImage,
-               topics::kRightImage, map_frame_.c_str());
+               topics::kRightImage, frames_out_->slamFrame().c_str());
 }
 
 // A loaded map or a reset: the tracker is replaced, and what the nodelet kept of the old one's frames goes.
 void TrackingNodelet::startOver(std::unique_ptr<binloop::Tracker> t) {
   tracker_ = std::move(t);
   pending_ = 0;
-  have_last_ = false;
+  frames_out_->restart();
   stamps_->reset();
   path_.poses.clear();
 }
@@ -373,9 +325,9 @@ void TrackingNodelet::track(const sensor_msgs::ImageConstPtr& left, const sensor
     ++pending_;
     ++keyframes_sent_;
     last_mapping_contact_ = ros::WallTime::now();
-    keyframe_pub_.publish(boost::make_shared<binloop::KeyFrame>(toRos(*out.keyframe, map_frame_)));
+    keyframe_pub_.publish(boost::make_shared<binloop::KeyFrame>(toRos(*out.keyframe, frames_out_->slamFrame())));
   }
-  frame_pub_.publish(boost::make_shared<binloop::TrackedFrame>(toRos(out.frame, map_frame_)));
+  frame_pub_.publish(boost::make_shared<binloop::TrackedFrame>(toRos(out.frame, frames_out_->slamFrame())));
   std_msgs::Header header = left->header;
   if (!camera_frame_.empty()) header.frame_id = camera_frame_;
   publishPose(out.frame, header);
@@ -385,35 +337,24 @@ void TrackingNodelet::track(const sensor_msgs::ImageConstPtr& left, const sensor
 
 void TrackingNodelet::publishPose(const binloop::msg::TrackedFrame& f, const std_msgs::Header& header) {
   using binloop::msg::TrackingState;
-  if (f.state == TrackingState::kNotInitialized || f.state == TrackingState::kLost) return;
-  // odom: continuous by construction (REP-105). It integrates the frame-to-frame motion in the map frame,
-  // except across a loop correction, where the map-frame pose jumps: there the previous motion is repeated and
-  // map -> odom takes the jump.
-  if (have_last_) {
-    const binloop::Pose3 motion = corrections_ != corrections_at_last_ ? last_motion_ : T_w_c_last_.inverse() * f.T_w_c;
-    T_odom_c_ = T_odom_c_ * motion;
-    last_motion_ = motion;
-  } else {
-    T_odom_c_ = base_frame_.empty() ? f.T_w_c : T_base_c_;  // odom starts at the first camera / base pose
+  if (f.state == TrackingState::kNotInitialized || f.state == TrackingState::kLost) {
+    frames_out_->lost(header.stamp);
+    return;
   }
-  have_last_ = true;
+  frames_out_->tracked(f.T_w_c, header.stamp, header.frame_id, corrections_ != corrections_at_last_);
   corrections_at_last_ = corrections_;
-  T_w_c_last_ = f.T_w_c;
+  const std::string problem = frames_out_->takeProblem();
+  if (!problem.empty()) {
+    last_problem_ = problem;
+    NODELET_WARN_THROTTLE(5, "binloop/Tracking: %s", problem.c_str());
+  }
 
+  // The camera's pose in the slam frame, as the SLAM's other outputs.
   geometry_msgs::PoseStamped pose;
   pose.header.stamp = header.stamp;
-  pose.header.frame_id = map_frame_;
+  pose.header.frame_id = frames_out_->slamFrame();
   pose.pose = toPoseMsg(f.T_w_c);
   pose_pub_.publish(pose);
-
-  nav_msgs::Odometry odom;
-  odom.header.stamp = header.stamp;
-  odom.header.frame_id = odom_frame_;
-  const bool base = !base_frame_.empty();
-  const binloop::Pose3 T_odom_x = base ? binloop::Pose3(T_odom_c_ * T_base_c_.inverse()) : T_odom_c_;
-  odom.child_frame_id = base ? base_frame_ : header.frame_id;
-  odom.pose.pose = toPoseMsg(T_odom_x);
-  odom_pub_.publish(odom);
 
   // The live path: the last ~path_max_poses poses, serialised only for a subscriber (a whole drive's path
   // grew by a pose a frame and was re-sent every frame).
@@ -422,23 +363,6 @@ void TrackingNodelet::publishPose(const binloop::msg::TrackedFrame& f, const std
   if (path_.poses.size() > path_max_poses_)
     path_.poses.erase(path_.poses.begin(), path_.poses.begin() + static_cast<long>(path_.poses.size() - path_max_poses_));
   if (path_pub_.getNumSubscribers() > 0) path_pub_.publish(path_);
-
-  auto tf = [&](const binloop::Pose3& T, const std::string& parent, const std::string& child) {
-    geometry_msgs::TransformStamped t;
-    t.header.stamp = header.stamp;
-    t.header.frame_id = parent;
-    t.child_frame_id = child;
-    const geometry_msgs::Pose p = toPoseMsg(T);
-    t.transform.translation.x = p.position.x;
-    t.transform.translation.y = p.position.y;
-    t.transform.translation.z = p.position.z;
-    t.transform.rotation = p.orientation;
-    return t;
-  };
-  std::vector<geometry_msgs::TransformStamped> tfs = {tf(f.T_w_c * T_odom_c_.inverse(), map_frame_, odom_frame_),
-                                                      tf(T_odom_x, odom_frame_, odom.child_frame_id)};
-  if (base) tfs.push_back(tf(T_base_c_, base_frame_, header.frame_id));
-  tf_->sendTransform(tfs);
 }
 
 // The left image with its features: green tracked (matched to a map point and an inlier), orange matched but

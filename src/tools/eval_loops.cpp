@@ -22,6 +22,7 @@
 #include "binloop/io/trajectory_io.h"
 #include "binloop/place/place_recognizer.h"
 #include "binloop/util/cli_args.h"
+#include "binloop/util/package_paths.h"
 #include "binloop/util/percentile.h"
 #include "binloop/util/progress_bar.h"
 
@@ -48,7 +49,7 @@ int main(int argc, char** argv) {
       .option("gt", "ground-truth loop pairs, 'query ref' frame indices per line, # comments (default: from the poses)")
       .option("gt-radius", "without --gt: frames within this many metres (poses) are loops", "6")
       .option("models", "comma-separated models, or all", "all")
-      .option("vocab-dir", "folder holding <model>.bin for each model", "vocab/kitti08")
+      .option("vocab-dir", "folder holding <model>.bin for each model; default: the package's", packagePath(kShippedModelDir))
       .option("out", "folder for the results")
       .option("step", "keyframe every step-th frame", "1")
       .option("window", "frames before a query that are never candidates (temporal neighbours)", "300")

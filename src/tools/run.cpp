@@ -19,6 +19,7 @@
 #include "binloop/pipeline/model_files.h"
 #include "binloop/pipeline/slam_pipeline.h"
 #include "binloop/util/cli_args.h"
+#include "binloop/util/package_paths.h"
 #include "binloop/util/percentile.h"
 #include "binloop/util/progress_bar.h"
 
@@ -45,8 +46,8 @@ std::string jsonEscape(const std::string& s) {
 int main(int argc, char** argv) {
   CliArgs args("run",
                "scripts/binloop run <sequence_dir> --out <dir> [--config config/kitti.yaml]\n"
-               "    [--detector hbow|fabmap|vlad|hmvlad|vladpq|none] [--shadow all|M,M] [--switch-detector-at KF:M]\n"
-               "    [--lockstep | --rate R] [--seed N] [--start N] [--end N] [--reloc-vocab vocab/kitti08/hbow.bin|none]\n"
+               "    [--detector hmvlad|hbow|fabmap|vlad|vladpq|none] [--shadow all|M,M] [--switch-detector-at KF:M]\n"
+               "    [--lockstep | --rate R] [--seed N] [--start N] [--end N] [--reloc-vocab <hbow.bin>|none]\n"
                "    [--load-map <dir>] [--save-map <dir>]\n"
                "Tracks and maps a KITTI-layout stereo sequence (image_0/, image_1/, calib.txt, times.txt), closes loops,\n"
                "and writes trajectory.kitti.txt / .tum.txt (every frame, loop-corrected), keyframes.kitti.txt / .tum.txt,\n"
@@ -54,8 +55,8 @@ int main(int argc, char** argv) {
   args.positional("sequence_dir", "KITTI-layout sequence folder")
       .option("out", "output folder (created)")
       .option("config", "SLAM settings (YAML; see config/kitti.yaml); default: the built-in defaults, which that file repeats")
-      .option("detector", "loop detector: hbow, fabmap, vlad, hmvlad, vladpq, or none (no loop closing)", "hbow")
-      .option("vocab-dir", "where the detectors' model files are (<dir>/<model>.bin)", "vocab/kitti08")
+      .option("detector", "loop detector: hmvlad, hbow, fabmap, vlad, vladpq, or none (no loop closing)", "hmvlad")
+      .option("vocab-dir", "where the detectors' model files are (<dir>/<model>.bin); default: the package's", packagePath(kShippedModelDir))
       .option("shadow", "models run beside the active one and only logged: 'all' or a comma list")
       .option("switch-detector-at", "KF:model[,KF:model...]: switch the active detector when it has seen KF keyframes")
       .flag("lockstep", "map every keyframe before the next frame (bit-identical reruns); default: mapping on its own thread")
@@ -67,22 +68,15 @@ int main(int argc, char** argv) {
       .option("end", "one past the last frame (default: all)", "-1")
       .option("reloc-vocab",
               "hbow vocabulary that indexes the keyframes for relocalisation anywhere in the map; 'none': only the "
-              "most recent keyframes are tried (also when the default file is missing, with a warning)",
-              "vocab/kitti08/hbow.bin")
+              "most recent keyframes are tried; default: the package's shipped k=8 L=5 vocabulary",
+              packagePath(kRelocVocab))
       .option("load-map", "start in a map saved by --save-map or the ROS save_map service (tracking relocalises in it)")
       .option("save-map", "save the map at the end (one state file per stage, as the ROS save_map service)")
       .flag("force-extractor", "use a vocabulary trained with other extractor settings than config's orb section");
   return runTool("run", [&] {
     if (!args.parse(argc, argv)) return 0;
     if (!args.has("out")) throw CliError("--out is required");
-    std::string detector = args.str("detector");
-    const fs::path default_model = fs::path(args.str("vocab-dir")) / (detector + ".bin");
-    if (detector == "hbow" && !args.has("detector") && !fs::exists(default_model)) {
-      std::cerr << "warning: " << default_model.string()
-                << " not found (vocab/make_vocab.sh hbow makes it, about 6 minutes): running without loop closing; "
-                   "--detector fabmap|vlad|hmvlad|vladpq use the tracked model files\n";
-      detector = "none";
-    }
+    const std::string detector = args.str("detector");
     const auto& names = placeModelNames();
     auto checkName = [&](const std::string& n, const std::string& what) {
       if (std::find(names.begin(), names.end(), n) == names.end())
@@ -93,15 +87,9 @@ int main(int argc, char** argv) {
     config.tracker.seed = static_cast<uint64_t>(args.integer("seed"));
     const std::string reloc_vocab = args.str("reloc-vocab");
     if (reloc_vocab != "none") {
-      if (!fs::exists(reloc_vocab) && !args.has("reloc-vocab")) {
-        std::cerr << "warning: " << reloc_vocab
-                  << " not found (vocab/make_vocab.sh hbow makes it): relocalisation tries only the most recent "
-                     "keyframes\n";
-      } else {
-        config.tracker.vocabulary =
-            loadRelocalisationVocabulary(reloc_vocab, config.tracker.orb, args.has("force-extractor"));
-        config.tracker.vocabulary_identity = modelFileIdentity(reloc_vocab);
-      }
+      config.tracker.vocabulary =
+          loadRelocalisationVocabulary(reloc_vocab, config.tracker.orb, args.has("force-extractor"));
+      config.tracker.vocabulary_identity = modelFileIdentity(reloc_vocab);
     }
     const KittiSequence seq = KittiSequence::open(args.str("sequence_dir"));
     const long start = args.integer("start");

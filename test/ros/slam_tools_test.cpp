@@ -48,6 +48,27 @@ TEST(SlamTools, RunWithADetectorWritesTheLoopLogAndCounts) {
     EXPECT_NE(summary.find(key), std::string::npos) << key << " missing from\n" << summary;
 }
 
+// A user runs the tools from any folder: the default detector's model and the relocalisation vocabulary
+// are the package's shipped files, not paths relative to where the user stands.
+TEST(SlamTools, DefaultsAreThePackagesShippedFilesFromAnyFolder) {
+  const std::string seq = binloop::test::sharedData("kitti/sample_00");
+  BINLOOP_REQUIRE_DATA(seq);
+  binloop::test::TempDir tmp;
+  const auto r = binloop::test::runCommand("cd " + tmp.path() + " && " + std::string(BINLOOP_TOOL_DIR) + "/run " + seq +
+                                           " --out out --lockstep");
+  ASSERT_EQ(r.code, 0) << r.out;
+  const std::string summary = readAll(tmp / "out/summary.json");
+  EXPECT_NE(summary.find("\"detector\": \"hmvlad\""), std::string::npos) << summary;
+  EXPECT_NE(summary.find("\"reloc_vocab\": \"" + kVocab + "/hbow_k8l5.bin\""), std::string::npos) << summary;
+  // hbow's vocabulary is not shipped: the error says how to make it.
+  const auto hbow = tool("run", seq + " --out " + (tmp / "h") + " --detector hbow --vocab-dir " + (tmp / "empty"));
+  EXPECT_NE(hbow.code, 0);
+  EXPECT_NE(hbow.out.find((tmp / "empty") + "/hbow.bin: not found: the k=10, L=6 hbow vocabulary (26 MB) is not "
+                          "shipped; vocab/make_vocab.sh hbow makes it"),
+            std::string::npos)
+      << hbow.out;
+}
+
 TEST(SlamTools, BadLoopOptionsAreOneClearLine) {
   const std::string seq = binloop::test::sharedData("kitti/sample_00");
   BINLOOP_REQUIRE_DATA(seq);

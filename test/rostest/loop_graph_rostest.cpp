@@ -27,36 +27,16 @@
 #include "binloop/io/trajectory_io.h"
 #include "binloop/sim/builtin_route.h"
 #include "binloop_ros/topics.h"
+#include "rendered_drive.h"
 #include "support/test_support.h"
 
 namespace {
 
 namespace topics = binloop_ros::topics;
-
-struct Drive {
-  std::unique_ptr<binloop::test::TempDir> dir;
-  std::vector<binloop::Pose3> route;
-  std::string bag;
-  std::string problem;  // why the drive could not be made
-};
-
-const Drive& drive() {
-  static Drive d;
-  if (d.dir) return d;
-  d.dir = std::make_unique<binloop::test::TempDir>();
-  d.route = binloop::sim::loopRoute(50, 80, 12, 8, 10, 1.25);
-  binloop::writeKittiPoses(*d.dir / "route.txt", d.route);
-  const std::string tools = BINLOOP_TOOL_DIR;
-  auto r = binloop::test::runCommand(tools + "/render --route " + (*d.dir / "route.txt") + " --calib kitti04 --out " +
-                                     (*d.dir / "seq"));
-  if (r.code != 0) d.problem = "render failed: " + r.out;
-  d.bag = *d.dir / "drive.bag";
-  if (d.problem.empty()) {
-    r = binloop::test::runCommand(tools + "/kitti2bag " + (*d.dir / "seq") + " " + d.bag);
-    if (r.code != 0) d.problem = "kitti2bag failed: " + r.out;
-  }
-  return d;
-}
+using binloop::test::Drive;
+using binloop::test::drive;
+using binloop::test::Pair;
+using binloop::test::readPairs;
 
 // What the graph publishes, collected on the spinner's thread.
 struct Observed {
@@ -133,27 +113,6 @@ class LoopGraph : public ::testing::Test {
   std::vector<ros::Subscriber> subs_;
   Observed seen_;
 };
-
-struct Pair {
-  sensor_msgs::Image left, right;
-  sensor_msgs::CameraInfo left_info, right_info;
-};
-
-std::vector<Pair> readPairs(const std::string& path) {
-  rosbag::Bag bag(path, rosbag::bagmode::Read);
-  std::map<ros::Time, Pair> by_stamp;
-  for (const rosbag::MessageInstance& m : rosbag::View(bag)) {
-    if (auto img = m.instantiate<sensor_msgs::Image>()) {
-      (m.getTopic() == topics::kLeftImage ? by_stamp[img->header.stamp].left : by_stamp[img->header.stamp].right) = *img;
-    } else if (auto info = m.instantiate<sensor_msgs::CameraInfo>()) {
-      (m.getTopic() == topics::kLeftInfo ? by_stamp[info->header.stamp].left_info
-                                         : by_stamp[info->header.stamp].right_info) = *info;
-    }
-  }
-  std::vector<Pair> out;
-  for (auto& [stamp, p] : by_stamp) out.push_back(std::move(p));
-  return out;
-}
 
 }  // namespace
 

@@ -26,7 +26,7 @@ class StateWriter;
 class StateReader;
 
 struct LoopDetectorParams {
-  std::string model = "hbow";
+  std::string model = "hmvlad";  // the default model: its file is small enough to ship (README, "Loop models")
   int max_reference = 10;   // strongest covisible neighbours that set the bar
   int ignore_recent = 20;   // keyframes just before the query are never candidates (they are not loops)
   int consistency = 2;      // consecutive consistent queries before a candidate is accepted (ORB-SLAM2: 3;

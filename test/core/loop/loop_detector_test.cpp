@@ -54,6 +54,12 @@ class LoopDetectorTest : public ::testing::Test {
     static std::unique_ptr<test::TempDir> d;
     return d;
   }
+  // The test's vocabulary is an hbow one (the product's default model is another).
+  static LoopDetectorParams hbowParams() {
+    LoopDetectorParams p;
+    p.model = "hbow";
+    return p;
+  }
   static LoopDetector::ModelFactory factory() {
     return [](const std::string& name) {
       RecognizerOptions o;
@@ -81,7 +87,7 @@ class LoopDetectorTest : public ::testing::Test {
 TEST_F(LoopDetectorTest, ARevisitIsAcceptedAfterTheConsistencyCheckAndPointsAtThePlace) {
   // The shipped 2, and ORB-SLAM2's 3: accepted at the query after that many consistent ones.
   for (int consistency : {2, 3}) {
-    LoopDetectorParams p;
+    LoopDetectorParams p = hbowParams();
     p.consistency = consistency;
     LoopDetector d(p, factory());
     int accepted_at = -1;
@@ -112,7 +118,7 @@ TEST_F(LoopDetectorTest, ARevisitIsAcceptedAfterTheConsistencyCheckAndPointsAtTh
 }
 
 TEST_F(LoopDetectorTest, SwitchingModelsRebuildsTheIndexAndTakesOverAtTheNextKeyframe) {
-  LoopDetector d({}, factory());
+  LoopDetector d(hbowParams(), factory());
   for (int i = 0; i < 41; ++i) d.process(keyframe(i, i < 40 ? i : 10));
   d.switchModel("vlad");
   EXPECT_EQ(d.activeModel(), "hbow") << "not before the next keyframe";
@@ -125,7 +131,7 @@ TEST_F(LoopDetectorTest, SwitchingModelsRebuildsTheIndexAndTakesOverAtTheNextKey
 }
 
 TEST_F(LoopDetectorTest, ShadowModelsAreQueriedOnTheSameKeyframesAndOnlyLogged) {
-  LoopDetector d({}, factory());
+  LoopDetector d(hbowParams(), factory());
   for (int i = 0; i < 30; ++i) d.process(keyframe(i, i));
   d.setShadowModels({"vlad", "hbow"});  // the active one is not shadowed twice
   const auto out = d.process(keyframe(30, 5));
@@ -138,7 +144,7 @@ TEST_F(LoopDetectorTest, ShadowModelsAreQueriedOnTheSameKeyframesAndOnlyLogged) 
 }
 
 TEST_F(LoopDetectorTest, AnUnknownModelIsRefusedAndTheRunningOneStays) {
-  LoopDetector d({}, factory());
+  LoopDetector d(hbowParams(), factory());
   d.process(keyframe(0, 0));
   EXPECT_THROW(d.switchModel("nosuchmodel"), PlaceError);
   d.process(keyframe(1, 1));
@@ -149,7 +155,7 @@ TEST_F(LoopDetectorTest, AnUnknownModelIsRefusedAndTheRunningOneStays) {
 }
 
 TEST_F(LoopDetectorTest, RecentKeyframesAreNeverCandidates) {
-  LoopDetectorParams p;
+  LoopDetectorParams p = hbowParams();
   p.ignore_recent = 20;
   LoopDetector d(p, factory());
   for (int i = 0; i < 30; ++i) {

@@ -36,9 +36,7 @@ DriveRun runDrive(const LoopDrive& d, bool close_loops, PipelineMode mode = Pipe
                   LocalMapper::GlobalBaStats* global_ba = nullptr) {
   std::optional<LoopClosingSetup> loops;
   if (close_loops) {
-    LoopClosingSetup l;
-    l.make_model = test::tinyVocabularyFactory(d);
-    loops = l;
+    loops = test::tinyHbowLoopSetup(d);
   }
   SlamPipeline slam(d.cam, {}, mp, mode, 3, loops);
   std::vector<msg::TrackedFrame> tracked;

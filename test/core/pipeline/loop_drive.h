@@ -9,6 +9,7 @@
 
 #include "binloop/features/orb_slam_extractor.h"
 #include "binloop/loop/loop_detector.h"
+#include "binloop/pipeline/slam_pipeline.h"
 #include "binloop/place/model_training.h"
 #include "binloop/sim/builtin_route.h"
 #include "binloop/sim/stereo_renderer.h"
@@ -55,6 +56,14 @@ inline LoopDetector::ModelFactory tinyVocabularyFactory(const LoopDrive& d) {
     ro.model_file = voc;
     return makePlaceRecognizer(name, ro);
   };
+}
+
+/// Loop closing with the drive's tiny vocabulary as the hbow model (the product's default model is another).
+inline LoopClosingSetup tinyHbowLoopSetup(const LoopDrive& d) {
+  LoopClosingSetup l;
+  l.detector.model = "hbow";
+  l.make_model = tinyVocabularyFactory(d);
+  return l;
 }
 
 }  // namespace binloop::test

@@ -21,8 +21,7 @@ namespace {
 const char* const kStages[] = {"tracking", "local_mapping", "loop_detector", "loop_closing"};
 
 LoopClosingSetup loopSetup(const LoopDrive& d, const std::string& identity = "tiny hbow") {
-  LoopClosingSetup l;
-  l.make_model = test::tinyVocabularyFactory(d);
+  LoopClosingSetup l = test::tinyHbowLoopSetup(d);
   l.model_identity = [identity](const std::string&) { return identity; };
   return l;
 }

@@ -1,0 +1,55 @@
+#pragma once
+// The tracker's poses in a robot's frames (REP-103, REP-105), as plain transforms; the Tracking nodelet
+// publishes them. The SLAM works in its own frame, `slam`: the optical frame of the camera at the map's first
+// frame (z forward, y down). The robot's `map` and `odom` are z-up like its base (x forward, y left, z up);
+// the base carries the camera at T_base_cam (from the robot's TF, a parameter, or by default the camera's
+// optical axes on a base at the camera). `map` is where the base was when the SLAM's map began, so
+// T_map_slam = T_base_cam. `odom` is continuous: it integrates the base's frame-to-frame motion, except across a
+// loop correction, where the SLAM's pose jumps: there the previous motion is repeated and map -> odom takes the
+// jump.
+#include "binloop/types/pose.h"
+
+namespace binloop_ros {
+
+class RobotFrames {
+ public:
+  explicit RobotFrames(const binloop::Pose3& T_base_cam = opticalOnBase());
+
+  /// The camera's optical axes on a z-up, x-forward base at the same place: x forward = the camera's z,
+  /// y left = -x, z up = -y.
+  static binloop::Pose3 opticalOnBase();
+
+  /// A tracked frame's camera pose in the slam frame at `stamp_s`; `corrected`: a loop correction (or a new
+  /// map) moved the slam-frame poses since the last call.
+  void update(const binloop::Pose3& T_slam_cam, double stamp_s, bool corrected);
+  /// Forget the motion (a reset or a loaded map); odom goes on from where it is.
+  void restart() { have_last_ = false; }
+  bool started() const { return started_; }
+
+  const binloop::Pose3& baseInCamera() const { return T_cam_base_; }
+  const binloop::Pose3& cameraInBase() const { return T_base_cam_; }
+  /// The static map -> slam transform.
+  binloop::Pose3 slamInMap() const { return T_base_cam_; }
+  binloop::Pose3 baseInMap() const { return T_map_base_; }
+  /// binloop's own odometry: T_odom_base.
+  binloop::Pose3 baseInOdom() const { return T_odom_base_; }
+  /// map -> odom for binloop's own odometry.
+  binloop::Pose3 odomInMap() const { return binloop::Pose3(T_map_base_ * T_odom_base_.inverse()); }
+  /// map -> odom when the robot's own odometry publishes odom -> base (T_odom_base, at the same stamp).
+  binloop::Pose3 odomInMap(const binloop::Pose3& robot_T_odom_base) const {
+    return binloop::Pose3(T_map_base_ * robot_T_odom_base.inverse());
+  }
+  /// The base's velocity in its own frame over the last step (m/s, rad/s); zero before two frames.
+  const Eigen::Vector3d& linearVelocity() const { return v_; }
+  const Eigen::Vector3d& angularVelocity() const { return w_; }
+
+ private:
+  binloop::Pose3 T_base_cam_, T_cam_base_;
+  binloop::Pose3 T_map_base_ = binloop::Pose3::Identity(), T_odom_base_ = binloop::Pose3::Identity();
+  binloop::Pose3 last_motion_ = binloop::Pose3::Identity();  // base frame-to-frame
+  Eigen::Vector3d v_ = Eigen::Vector3d::Zero(), w_ = Eigen::Vector3d::Zero();
+  double last_stamp_s_ = 0;
+  bool have_last_ = false, started_ = false;
+};
+
+}  // namespace binloop_ros
