@@ -60,16 +60,24 @@ rosparam set /use_sim_time true
 # shellcheck disable=SC2086
 roslaunch binloop "$launch" detector:="$detector" use_sim_time:=true $extra >"$out/graph.log" 2>&1 &
 graph=$!
-rosrun binloop record-run --out "$out" >"$out/record.log" 2>&1 &
+# The recorder of the sourced space (the first prefix that has one); not rosrun, which in a devel space also
+# searches the source folder, where the checkout's own .build/ holds more copies.
+recorder_bin=""
+IFS=: read -r -a prefixes <<<"${CMAKE_PREFIX_PATH:-}"
+for p in "${prefixes[@]}"; do
+  [ -x "$p/lib/binloop/record-run" ] && { recorder_bin="$p/lib/binloop/record-run"; break; }
+done
+[ -n "$recorder_bin" ] || { echo "run-bag: no lib/binloop/record-run on CMAKE_PREFIX_PATH (source a setup.bash)" >&2; exit 1; }
+"$recorder_bin" --out "$out" >"$out/record.log" 2>&1 &
 recorder=$!
-# Wait for the Tracking nodelet to subscribe before playing.
+# Wait for the Tracking nodelet (it advertises tracked_frame once its inputs are subscribed, whatever their
+# namespace and transport), then give the subscriptions a second to connect to the bag's publishers.
 for _ in $(seq 300); do
-  rostopic info /stereo/left/image_rect 2>/dev/null | grep -q "Subscribers:" && \
-    rostopic info /stereo/left/image_rect 2>/dev/null | sed -n '/Subscribers:/,$p' | grep -q '\*' && break
+  rostopic list 2>/dev/null | grep -qx /binloop/tracked_frame && break
   sleep 0.1
 done
 echo "run-bag: playing $bag at rate $rate through $launch (detector $detector); graph log $out/graph.log"
-rosbag play --clock -q -r "$rate" "$bag"
+rosbag play --clock -q -d 1 -r "$rate" "$bag"
 # The recorder writes once the graph has been quiet for 3 s (it may still be working through queued pairs).
 kill -INT "$recorder"; wait "$recorder" || true
 if [ -n "$shot" ]; then

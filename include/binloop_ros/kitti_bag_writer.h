@@ -1,5 +1,6 @@
 #pragma once
-// Writes a KITTI sequence as a ROS 1 bag: mono8 left/right images and CameraInfo with identical stamps,
+// Writes a KITTI sequence as a ROS 1 bag: mono8 left/right images (or PNG-compressed ones) and CameraInfo with
+// identical stamps,
 // and ground truth as nav_msgs/Odometry when the sequence has poses.
 #include <functional>
 #include <limits>
@@ -14,6 +15,8 @@ struct KittiBagOptions {
   size_t end = std::numeric_limits<size_t>::max();   // last frame (inclusive), clipped to the sequence
   double stamp_offset_s = 1.0;  // stamp = times.txt + offset; ROS forbids time 0, where KITTI starts
   bool lz4 = false;             // compress chunks
+  bool png = false;             // images as PNG sensor_msgs/CompressedImage on <image topic>/compressed, as
+                                // image_transport's compressed transport records them (lossless)
   bool overwrite = false;       // refuse an existing output file unless set
 };
 

@@ -2,6 +2,7 @@
 // Every conversion between ROS messages and core types lives here (and is tested in
 // test/ros/msg_conversion_test.cpp), so the rest of the ROS layer never touches message fields.
 #include <geometry_msgs/Pose.h>
+#include <geometry_msgs/TransformStamped.h>
 #include <opencv2/core/mat.hpp>
 #include <ros/time.h>
 #include <sensor_msgs/CameraInfo.h>
@@ -32,9 +33,18 @@ sensor_msgs::CameraInfo toCameraInfo(const binloop::StereoCamera& cam, bool righ
 /// Builds the stereo camera from a left/right CameraInfo pair; throws ConversionError when they are not
 /// a rectified pair (different intrinsics or sizes, right Tx not negative).
 binloop::StereoCamera toStereoCamera(const sensor_msgs::CameraInfo& left, const sensor_msgs::CameraInfo& right);
+/// "" when `info` has no distortion, else a warning that says what binloop assumes: camera_info for
+/// image_rect carries the raw camera's D (image_proc passes it on), and binloop uses only P, which is right
+/// for rectified images and wrong for raw ones.
+std::string distortionWarning(const sensor_msgs::CameraInfo& info);
 
 geometry_msgs::Pose toPoseMsg(const binloop::Pose3& T);
 binloop::Pose3 toPose3(const geometry_msgs::Pose& msg);
+/// tf's form of the same: `T` as the transform from `parent` to `child` (child's pose in parent).
+geometry_msgs::TransformStamped toTransformMsg(const binloop::Pose3& T, const ros::Time& stamp, const std::string& parent,
+                                               const std::string& child);
+/// Throws ConversionError as toPose3 does.
+binloop::Pose3 toPose3(const geometry_msgs::Transform& t);
 
 /// Seconds from the start of a sequence to a ROS stamp; throws ConversionError outside ROS's range.
 ros::Time toRosTime(double seconds);

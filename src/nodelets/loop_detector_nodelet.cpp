@@ -15,6 +15,7 @@
 #include "binloop/pipeline/model_files.h"
 #include "binloop/util/package_paths.h"
 #include "binloop_ros/callback_guard.h"
+#include "binloop_ros/candidate_markers.h"
 #include "binloop_ros/cpu_meter.h"
 #include "binloop_ros/stage_diagnostics.h"
 #include "binloop_ros/node_params.h"
@@ -48,7 +49,8 @@ class LoopDetectorNodelet : public nodelet::Nodelet {
   std::unique_ptr<binloop::LoopDetector> detector_;
   std::unique_ptr<dynamic_reconfigure::Server<binloop::LoopDetectorConfig>> reconfigure_;
   ros::Subscriber keyframe_sub_;
-  ros::Publisher candidates_pub_;
+  ros::Publisher candidates_pub_, markers_pub_;
+  CandidateMarkers markers_;  // the live loop view (rviz)
   std::map<std::string, ros::Publisher> shadow_pubs_;
   std::unique_ptr<StageDiagnostics> diag_;
   CpuMeter cpu_;
@@ -79,6 +81,7 @@ void LoopDetectorNodelet::onInit() {
   if (!pnh.hasParam("fabmap_l2_offset")) pnh.setParam("fabmap_l2_offset", config_.models.fabmap_l2_offset);
   if (!pnh.hasParam("vladpq_shared_slack")) pnh.setParam("vladpq_shared_slack", config_.models.vladpq_shared_slack);
   candidates_pub_ = nh.advertise<binloop::LoopCandidates>("loop_candidates", 100);
+  markers_pub_ = nh.advertise<visualization_msgs::MarkerArray>("loop_candidate_markers", 10);
   diag_ = std::make_unique<StageDiagnostics>(
       nh, pnh, "loop detector", [this](diagnostic_updater::DiagnosticStatusWrapper& s) { diagnose(s); });
   reconfigure_ = std::make_unique<dynamic_reconfigure::Server<binloop::LoopDetectorConfig>>(pnh);
@@ -197,7 +200,11 @@ void LoopDetectorNodelet::onKeyframe(const binloop::KeyFrameConstPtr& m) {
     if (out.active->accepted != binloop::kNoId) ++accepted_;
     last_status_ = out.active->status;
     last_ms_ = out.active->total_ms;
-    candidates_pub_.publish(boost::make_shared<binloop::LoopCandidates>(toRos(*out.active, header)));
+    auto msg = boost::make_shared<binloop::LoopCandidates>(toRos(*out.active, header));
+    candidates_pub_.publish(msg);
+    const auto& p = m->state.pose.position;
+    markers_.keyframe(m->id, Eigen::Vector3d(p.x, p.y, p.z), m->header.frame_id);
+    if (markers_pub_.getNumSubscribers() > 0) markers_pub_.publish(markers_.markers(*msg));
   }
   for (const auto& s : out.shadow)
     shadowPublisher(s->model).publish(boost::make_shared<binloop::LoopCandidates>(toRos(*s, header)));

@@ -2,10 +2,6 @@
 // mapping; local mapping's updates back in. A short onInit() over binloop::Tracker; every message check is
 // here, so a bad message is reported (log + diagnostics) and dropped, and the nodelet goes on.
 #include <geometry_msgs/PoseStamped.h>
-#include <message_filters/subscriber.h>
-#include <message_filters/sync_policies/approximate_time.h>
-#include <message_filters/sync_policies/exact_time.h>
-#include <message_filters/synchronizer.h>
 #include <nav_msgs/Path.h>
 #include <nodelet/nodelet.h>
 #include <opencv2/imgproc.hpp>
@@ -20,6 +16,7 @@
 #include "binloop/util/package_paths.h"
 #include "binloop_ros/callback_guard.h"
 #include "binloop_ros/frame_publisher.h"
+#include "binloop_ros/stereo_input.h"
 #include "binloop_ros/cpu_meter.h"
 #include "binloop_ros/stage_diagnostics.h"
 #include "binloop_ros/node_params.h"
@@ -30,7 +27,6 @@
 
 namespace binloop_ros {
 
-namespace mf = message_filters;
 using sensor_msgs::Image;
 
 class TrackingNodelet : public nodelet::Nodelet {
@@ -38,11 +34,6 @@ class TrackingNodelet : public nodelet::Nodelet {
   void onInit() override;
 
  private:
-  using Exact = mf::sync_policies::ExactTime<Image, Image>;
-  using Approx = mf::sync_policies::ApproximateTime<Image, Image>;
-
-  // message_filters' synchronizers bind a member function with nine arguments, not a generic callable, so the
-  // pair goes through the guard here.
   void onPair(const sensor_msgs::ImageConstPtr& left, const sensor_msgs::ImageConstPtr& right) {
     guard_.run("stereo pair", [&] { onImages(left, right); });
   }
@@ -76,9 +67,8 @@ class TrackingNodelet : public nodelet::Nodelet {
   // (for comparing the two paths; live, tracking never waits). Pairs also wait for the first camera_info.
   bool lockstep_ = false;
   std::deque<std::pair<sensor_msgs::ImageConstPtr, sensor_msgs::ImageConstPtr>> waiting_;
-  mf::Subscriber<Image> left_sub_, right_sub_;
-  std::unique_ptr<mf::Synchronizer<Exact>> exact_;
-  std::unique_ptr<mf::Synchronizer<Approx>> approx_;
+  topics::StereoTopics in_{topics::kStereoNamespace};  // ~stereo: the input topics' namespace
+  std::unique_ptr<StereoInput> input_;
   ros::Subscriber left_info_sub_, right_info_sub_, update_sub_;
   ros::Publisher keyframe_pub_, frame_pub_, pose_pub_, path_pub_, debug_pub_;
   std::unique_ptr<StageDiagnostics> diag_;
@@ -103,7 +93,7 @@ void TrackingNodelet::onInit() {
   ros::NodeHandle& pnh = getPrivateNodeHandle();
   try {
     std::vector<std::string> known = {"config", "reloc_vocab", "force_extractor", "sync", "queue_size", "max_stamp_diff",
-                                      "camera_frame", "camera", "seed", "lockstep", "max_time_jump",
+                                      "camera_frame", "camera", "seed", "lockstep", "max_time_jump", "transport", "stereo",
                                       "time_jump_confirm_pairs", "stale_after_s", "path_max_poses", "keyframe_timeout_s"};
     known.insert(known.end(), FramePublisher::parameterNames().begin(), FramePublisher::parameterNames().end());
     requireKnownParams(pnh, known);
@@ -148,8 +138,7 @@ void TrackingNodelet::onInit() {
   lockstep_ = boolParam(pnh, "lockstep", false);
   const int queue = static_cast<int>(numberParam(pnh, "queue_size", 5));
   const std::string sync = stringParam(pnh, "sync", "exact");
-  if (sync != "exact" && sync != "approximate")
-    NODELET_ERROR("~sync '%s' is not exact or approximate; using exact", sync.c_str());
+  in_ = topics::StereoTopics(stringParam(pnh, "stereo", topics::kStereoNamespace));
 
   keyframe_pub_ = nh.advertise<binloop::KeyFrame>("keyframe", 10);
   frame_pub_ = nh.advertise<binloop::TrackedFrame>("tracked_frame", 100);
@@ -158,17 +147,17 @@ void TrackingNodelet::onInit() {
   debug_pub_ = nh.advertise<sensor_msgs::Image>("debug_image", 1);
   update_sub_ = guard_.subscribe(nh, "local_map_update", 100, &TrackingNodelet::onUpdate, this);
   left_info_sub_ = nh.subscribe<sensor_msgs::CameraInfo>(
-      topics::kLeftInfo, 2, guard_.wrap("left camera_info", [this](const sensor_msgs::CameraInfoConstPtr& m) { onInfo(m, false); }));
+      in_.left_info, 2, guard_.wrap("left camera_info", [this](const sensor_msgs::CameraInfoConstPtr& m) { onInfo(m, false); }));
   right_info_sub_ = nh.subscribe<sensor_msgs::CameraInfo>(
-      topics::kRightInfo, 2, guard_.wrap("right camera_info", [this](const sensor_msgs::CameraInfoConstPtr& m) { onInfo(m, true); }));
-  left_sub_.subscribe(nh, topics::kLeftImage, queue);
-  right_sub_.subscribe(nh, topics::kRightImage, queue);
-  if (sync == "approximate") {
-    approx_ = std::make_unique<mf::Synchronizer<Approx>>(Approx(queue), left_sub_, right_sub_);
-    approx_->registerCallback(&TrackingNodelet::onPair, this);
-  } else {
-    exact_ = std::make_unique<mf::Synchronizer<Exact>>(Exact(queue), left_sub_, right_sub_);
-    exact_->registerCallback(&TrackingNodelet::onPair, this);
+      in_.right_info, 2, guard_.wrap("right camera_info", [this](const sensor_msgs::CameraInfoConstPtr& m) { onInfo(m, true); }));
+  try {
+    input_ = std::make_unique<StereoInput>(
+        nh, in_.left_image, in_.right_image, stringParam(pnh, "transport", "raw"), sync, queue,
+        [this](const sensor_msgs::ImageConstPtr& l, const sensor_msgs::ImageConstPtr& r) { onPair(l, r); },
+        [this](const std::string& why) { guard_.run("stereo pair", [&] { reject(why); }); });
+  } catch (const std::invalid_argument& e) {
+    NODELET_FATAL("binloop/Tracking: %s", e.what());
+    throw;
   }
   diag_ = std::make_unique<StageDiagnostics>(
       nh, pnh, "tracking", [this](diagnostic_updater::DiagnosticStatusWrapper& s) { diagnose(s); });
@@ -201,8 +190,8 @@ void TrackingNodelet::onInit() {
   };
   services_ = std::make_unique<StageServices>(pnh, "tracking", h);
   last_pair_wall_ = ros::WallTime::now();  // no pair at all for ~stale_after_s is reported too
-  NODELET_INFO("binloop/Tracking: %s sync on %s + %s, map frame '%s'", sync.c_str(), topics::kLeftImage,
-               topics::kRightImage, frames_out_->slamFrame().c_str());
+  NODELET_INFO("binloop/Tracking: %s sync on %s + %s, map frame '%s'", sync.c_str(), in_.left_image.c_str(),
+               in_.right_image.c_str(), frames_out_->slamFrame().c_str());
 }
 
 // A loaded map or a reset: the tracker is replaced, and what the nodelet kept of the old one's frames goes.
@@ -236,11 +225,13 @@ std::string TrackingNodelet::check(const Image& left, const Image& right) {
            std::to_string(right.width) + "x" + std::to_string(right.height);
   if (!tracker_) {
     if (!left_info_ || !right_info_)
-      return std::string("no camera_info received yet on ") + (left_info_ ? topics::kRightInfo : topics::kLeftInfo) +
+      return std::string("no camera_info received yet on ") + (left_info_ ? in_.right_info : in_.left_info) +
              " (or give ~camera)";
     try {
       tracker_ = std::make_unique<binloop::Tracker>(toStereoCamera(*left_info_, *right_info_), config_.tracker);
       NODELET_INFO("binloop/Tracking: camera from camera_info:\n%s", toStereoCamera(*left_info_, *right_info_).describe().c_str());
+      const std::string distortion = distortionWarning(*left_info_);
+      if (!distortion.empty()) NODELET_WARN("binloop/Tracking: %s", distortion.c_str());
     } catch (const std::exception& e) {
       left_info_.reset();  // wait for a usable pair
       return std::string("camera_info: ") + e.what();
@@ -284,7 +275,7 @@ void TrackingNodelet::onImages(const sensor_msgs::ImageConstPtr& left, const sen
     waiting_.emplace_back(left, right);
     if (no_camera && waiting_.size() > 10) {
       waiting_.pop_front();
-      reject(std::string("no camera_info received on ") + (left_info_ ? topics::kRightInfo : topics::kLeftInfo) +
+      reject(std::string("no camera_info received on ") + (left_info_ ? in_.right_info : in_.left_info) +
              " (or give ~camera)");
     } else if (waiting_.size() > max_waiting_) {
       waiting_.pop_front();

@@ -7,18 +7,6 @@
 
 namespace binloop_ros {
 
-namespace {
-
-binloop::Pose3 toPose3(const geometry_msgs::Transform& t) {
-  geometry_msgs::Pose p;
-  p.position.x = t.translation.x;
-  p.position.y = t.translation.y;
-  p.position.z = t.translation.z;
-  p.orientation = t.rotation;
-  return binloop_ros::toPose3(p);
-}
-
-}  // namespace
 
 const std::vector<std::string>& FramePublisher::parameterNames() {
   static const std::vector<std::string> names = {"map_frame",       "odom_frame",  "base_frame",
@@ -87,15 +75,7 @@ void FramePublisher::mountCamera(const std::string& camera_frame) {
 
 void FramePublisher::send(const binloop::Pose3& T, const ros::Time& stamp, const std::string& parent,
                           const std::string& child, bool is_static) {
-  geometry_msgs::TransformStamped t;
-  t.header.stamp = stamp;
-  t.header.frame_id = parent;
-  t.child_frame_id = child;
-  const geometry_msgs::Pose p = toPoseMsg(T);
-  t.transform.translation.x = p.position.x;
-  t.transform.translation.y = p.position.y;
-  t.transform.translation.z = p.position.z;
-  t.transform.rotation = p.orientation;
+  const geometry_msgs::TransformStamped t = toTransformMsg(T, stamp, parent, child);
   if (is_static) {
     statics_.push_back(t);
   } else if (tf_) {

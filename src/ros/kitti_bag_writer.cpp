@@ -2,7 +2,9 @@
 
 #include <filesystem>
 #include <nav_msgs/Odometry.h>
+#include <opencv2/imgcodecs.hpp>
 #include <rosbag/bag.h>
+#include <sensor_msgs/CompressedImage.h>
 
 #include "binloop_ros/msg_conversion.h"
 #include "binloop_ros/topics.h"
@@ -10,6 +12,19 @@
 namespace fs = std::filesystem;
 
 namespace binloop_ros {
+
+namespace {
+
+sensor_msgs::CompressedImage pngMsg(const cv::Mat& img, const ros::Time& stamp, const std::string& frame) {
+  sensor_msgs::CompressedImage m;
+  m.header.stamp = stamp;
+  m.header.frame_id = frame;
+  m.format = "mono8; png compressed ";  // image_transport's compressed transport's format string
+  if (!cv::imencode(".png", img, m.data)) throw std::runtime_error("PNG encoding failed");
+  return m;
+}
+
+}  // namespace
 
 KittiBagSummary writeKittiBag(const binloop::KittiSequence& seq, const std::string& out,
                               const KittiBagOptions& opt,
@@ -33,7 +48,12 @@ KittiBagSummary writeKittiBag(const binloop::KittiSequence& seq, const std::stri
     for (size_t i = opt.start; i <= last; ++i) {
       const auto frame = seq.load(i);
       const ros::Time stamp = toRosTime(frame.stamp_s + opt.stamp_offset_s);
-      bag.write(topics::kLeftImage, stamp, toImageMsg(frame.left, stamp, topics::kLeftFrame));
+      if (opt.png) {
+        bag.write(std::string(topics::kLeftImage) + "/compressed", stamp, pngMsg(frame.left, stamp, topics::kLeftFrame));
+        bag.write(std::string(topics::kRightImage) + "/compressed", stamp, pngMsg(frame.right, stamp, topics::kRightFrame));
+      } else {
+        bag.write(topics::kLeftImage, stamp, toImageMsg(frame.left, stamp, topics::kLeftFrame));
+        }
       left_info.header.stamp = right_info.header.stamp = stamp;
       bag.write(topics::kLeftInfo, stamp, left_info);
       bag.write(topics::kRightImage, stamp, toImageMsg(frame.right, stamp, topics::kRightFrame));

@@ -76,6 +76,19 @@ sensor_msgs::CameraInfo toCameraInfo(const binloop::StereoCamera& cam, bool righ
   return info;
 }
 
+std::string distortionWarning(const sensor_msgs::CameraInfo& info) {
+  bool distorted = false;
+  std::string d;
+  for (double v : info.D) {
+    distorted = distorted || v != 0;
+    d += (d.empty() ? "" : ", ") + std::to_string(v);
+  }
+  if (!distorted) return "";
+  return "camera_info of '" + info.header.frame_id + "' has distortion (" + info.distortion_model + " D = [" + d +
+         "]): binloop uses only its P and takes the images as rectified (image_rect); raw, distorted images would "
+         "give wrong poses";
+}
+
 binloop::StereoCamera toStereoCamera(const sensor_msgs::CameraInfo& left, const sensor_msgs::CameraInfo& right) {
   if (left.width != right.width || left.height != right.height)
     throw ConversionError("left and right camera_info sizes differ");
@@ -119,6 +132,29 @@ binloop::Pose3 toPose3(const geometry_msgs::Pose& msg) {
   T.linear() = q.normalized().toRotationMatrix();
   T.translation() = Eigen::Vector3d(msg.position.x, msg.position.y, msg.position.z);
   return T;
+}
+
+geometry_msgs::TransformStamped toTransformMsg(const binloop::Pose3& T, const ros::Time& stamp, const std::string& parent,
+                                               const std::string& child) {
+  geometry_msgs::TransformStamped t;
+  t.header.stamp = stamp;
+  t.header.frame_id = parent;
+  t.child_frame_id = child;
+  const geometry_msgs::Pose p = toPoseMsg(T);
+  t.transform.translation.x = p.position.x;
+  t.transform.translation.y = p.position.y;
+  t.transform.translation.z = p.position.z;
+  t.transform.rotation = p.orientation;
+  return t;
+}
+
+binloop::Pose3 toPose3(const geometry_msgs::Transform& t) {
+  geometry_msgs::Pose p;
+  p.position.x = t.translation.x;
+  p.position.y = t.translation.y;
+  p.position.z = t.translation.z;
+  p.orientation = t.rotation;
+  return toPose3(p);
 }
 
 ros::Time toRosTime(double seconds) {

@@ -17,6 +17,7 @@ int main(int argc, char** argv) {
       .option("end", "last frame (inclusive); default the last one")
       .option("stamp-offset", "seconds added to times.txt (ROS time cannot be 0)", "1.0")
       .flag("lz4", "compress the bag with LZ4")
+      .flag("png", "images as PNG CompressedImage on <topic>/compressed (play with transport:=compressed)")
       .flag("force", "overwrite an existing bag");
   return binloop::runTool("kitti2bag", [&] {
     if (!args.parse(argc, argv)) return 0;
@@ -26,6 +27,7 @@ int main(int argc, char** argv) {
     if (args.has("end")) opt.end = static_cast<size_t>(args.integer("end"));
     opt.stamp_offset_s = args.number("stamp-offset");
     opt.lz4 = args.has("lz4");
+    opt.png = args.has("png");
     opt.overwrite = args.has("force");
     std::cout << "kitti2bag: " << seq.directory() << ": " << seq.size() << " frames, camera "
               << seq.camera().describe() << (seq.hasPoses() ? ", with ground truth" : ", no ground truth") << "\n";

@@ -14,12 +14,6 @@ binloop::test::CommandResult trainVlad(const std::string& images, const std::str
   return binloop::test::runCommand(std::string(BINLOOP_TOOL_DIR) + "/train vlad --images " + images + " " + options +
                                    " --out " + out);
 }
-std::string readAll(const std::string& path) {
-  std::ifstream f(path);
-  std::stringstream s;
-  s << f.rdbuf();
-  return s.str();
-}
 }  // namespace
 
 // TUM desk 1 and 10 (indices 0 and 9) view the same desk. The tracked kitti08 VLAD-family models are
@@ -35,14 +29,14 @@ TEST(EvalLoopsTool, WritesSummaryCurvesAndQueriesForAPlainImageFolder) {
                      " --window 0 --reference 1 --consistency 2 --out " + (tmp / "out"));
   ASSERT_EQ(r.code, 0) << r.out;
   EXPECT_NE(r.out.find("10 images, 10 keyframes (step 1), 1 keyframes with a findable loop in 1 segments"), std::string::npos) << r.out;
-  const std::string summary = readAll(tmp / "out/summary.csv");
+  const std::string summary = binloop::test::readText(tmp / "out/summary.csv");
   EXPECT_EQ(summary.rfind("model,r_at_100p,auc,signature_ms_median,query_ms_median,bytes_per_kf,", 0), 0u) << summary;
   for (const char* row : {"\nvlad,", "\nvlad+c2,", "\nvladpq,", "\nvladpq+c2,"})
     EXPECT_NE(summary.find(row), std::string::npos) << row << " missing from\n" << summary;
   for (const char* f : {"pr.png", "pr_vlad.csv", "pr_vlad+c2.csv", "queries_vlad.csv", "queries_vladpq.csv"})
     EXPECT_TRUE(binloop::test::exists(tmp / ("out/" + std::string(f)))) << f;
   // Ten queries, one line each, after the header.
-  const std::string q = readAll(tmp / "out/queries_vlad.csv");
+  const std::string q = binloop::test::readText(tmp / "out/queries_vlad.csv");
   EXPECT_EQ(std::count(q.begin(), q.end(), '\n'), 11) << q;
 }
 

@@ -15,12 +15,6 @@ namespace {
 
 const std::string kPrefix = BINLOOP_INSTALL_PREFIX;
 
-std::string readAll(const std::string& path) {
-  std::ifstream f(path);
-  std::stringstream s;
-  s << f.rdbuf();
-  return s.str();
-}
 
 /// `command` in bash with a clean environment but for the install space's setup (no devel space, no
 /// checkout on ROS_PACKAGE_PATH or LD_LIBRARY_PATH). `command` must not contain single quotes.
@@ -50,7 +44,7 @@ TEST(InstalledPackage, ToolsFindTheShippedFilesFromTheInstallSpace) {
   EXPECT_EQ(where.out, kPrefix + "/share/binloop\n");
   const auto r = inInstallSpace("cd " + tmp.path() + " && rosrun binloop run " + seq + " --out out --lockstep");
   ASSERT_EQ(r.code, 0) << r.out;
-  const std::string summary = readAll(tmp / "out/summary.json");
+  const std::string summary = binloop::test::readText(tmp / "out/summary.json");
   EXPECT_NE(summary.find("\"detector\": \"hmvlad\""), std::string::npos) << summary;
   EXPECT_NE(summary.find("\"reloc_vocab\": \"" + kPrefix + "/share/binloop/vocab/kitti08/hbow_k8l5.bin\""),
             std::string::npos)
@@ -118,9 +112,9 @@ TEST(InstalledPackage, TheLaunchFileWithItsDefaultsClosesTheLoopOfABag) {
                                 BINLOOP_ROOT_DIR + "/scripts/run_bag.sh " + (tmp / "drive.bag") + " --out out --rate 2");
   ASSERT_EQ(r.code, 0) << r.out;
   // Only the install space is sourced, so roslaunch's $(find binloop) and the nodelets are the installed ones.
-  const std::string summary = readAll(tmp / "out/summary.json");
+  const std::string summary = binloop::test::readText(tmp / "out/summary.json");
   const auto at = summary.find("\"accepted\": ");
   ASSERT_NE(at, std::string::npos) << "no loop accepted:\n" << summary << "\n" << r.out;
   EXPECT_GE(std::stoi(summary.substr(at + 12)), 1) << summary;
-  EXPECT_NE(readAll(tmp / "out/loops.csv").find(",hmvlad,0,"), std::string::npos) << "the active model was not hmvlad";
+  EXPECT_NE(binloop::test::readText(tmp / "out/loops.csv").find(",hmvlad,0,"), std::string::npos) << "the active model was not hmvlad";
 }

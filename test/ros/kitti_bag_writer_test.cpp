@@ -8,10 +8,12 @@
 #include <rosbag/bag.h>
 #include <rosbag/view.h>
 #include <sensor_msgs/CameraInfo.h>
+#include <sensor_msgs/CompressedImage.h>
 #include <sensor_msgs/Image.h>
 
 #include "binloop/io/data_error.h"
 #include "binloop_ros/msg_conversion.h"
+#include "binloop_ros/stereo_input.h"
 #include "binloop_ros/topics.h"
 #include "support/test_support.h"
 
@@ -64,6 +66,33 @@ TEST(KittiBagWriter, BagHoldsTheSourceFrames) {
   EXPECT_EQ(counts[t::kLeftInfo], 11);
   EXPECT_EQ(counts[t::kRightInfo], 11);
   EXPECT_EQ(counts[t::kGroundTruth], 11);
+}
+
+// --png: the images as image_transport's compressed transport records them, which the Tracking nodelet
+// decodes with transport:=compressed back to the same pixels.
+TEST(KittiBagWriter, PngImagesDecodeToTheSourcePixels) {
+  BINLOOP_REQUIRE_DATA(sample());
+  TempDir tmp;
+  const auto seq = binloop::KittiSequence::open(sample());
+  binloop_ros::KittiBagOptions o;
+  o.png = true;
+  o.end = 2;
+  binloop_ros::writeKittiBag(seq, tmp / "p.bag", o);
+  rosbag::Bag bag(tmp / "p.bag");
+  std::map<std::string, int> counts;
+  for (const auto& m : rosbag::View(bag)) {
+    ++counts[m.getTopic()];
+    if (m.getTopic() != std::string(t::kLeftImage) + "/compressed") continue;
+    auto c = m.instantiate<sensor_msgs::CompressedImage>();
+    ASSERT_TRUE(c);
+    const int i = counts[m.getTopic()] - 1;
+    const cv::Mat got = binloop_ros::toGray(*binloop_ros::decompress(*c));
+    const cv::Mat src = cv::imread(seq.leftPath(i), cv::IMREAD_UNCHANGED);
+    EXPECT_EQ(cv::norm(got, src, cv::NORM_INF), 0.0) << "frame " << i;
+  }
+  EXPECT_EQ(counts[std::string(t::kLeftImage) + "/compressed"], 3);
+  EXPECT_EQ(counts[std::string(t::kRightImage) + "/compressed"], 3);
+  EXPECT_EQ(counts[t::kLeftImage], 0);
 }
 
 TEST(KittiBagWriter, RangeAndNoOverwrite) {

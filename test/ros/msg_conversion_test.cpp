@@ -48,6 +48,16 @@ TEST(MsgConversion, CameraInfoPairRoundTrip) {
   EXPECT_THROW_WITH(binloop_ros::toStereoCamera(l, l), ConversionError, "must be -fx*baseline");
 }
 
+// image_proc passes the raw camera's distortion on with image_rect: binloop says what it assumes.
+TEST(MsgConversion, DistortionInCameraInfoIsNamedInAWarning) {
+  auto info = binloop_ros::toCameraInfo(binloop::kitti00Camera(), false, ros::Time(1), "cam");
+  EXPECT_EQ(binloop_ros::distortionWarning(info), "");
+  info.D = {-0.28, 0.07, 0, 0, 0};
+  const std::string w = binloop_ros::distortionWarning(info);
+  EXPECT_NE(w.find("camera_info of 'cam' has distortion (plumb_bob D = [-0.280000, 0.070000, 0.000000"), std::string::npos) << w;
+  EXPECT_NE(w.find("takes the images as rectified (image_rect)"), std::string::npos) << w;
+}
+
 TEST(MsgConversion, PoseRoundTrip) {
   binloop::Pose3 T = binloop::Pose3::Identity();
   T.linear() = Eigen::AngleAxisd(0.7, Eigen::Vector3d::UnitY()).toRotationMatrix();

@@ -12,20 +12,16 @@
 #include <set>
 #include <sstream>
 
+#include "support/test_support.h"
+
 namespace fs = std::filesystem;
 
 namespace {
 
-std::string readAll(const fs::path& p) {
-  std::ifstream f(p);
-  std::stringstream s;
-  s << f.rdbuf();
-  return s.str();
-}
 
 /// Every <depend>, <build_depend>, <exec_depend>, <test_depend>, <buildtool_depend> and the like.
 std::set<std::string> declared() {
-  const std::string xml = readAll(fs::path(BINLOOP_ROOT_DIR) / "package.xml");
+  const std::string xml = binloop::test::readText((fs::path(BINLOOP_ROOT_DIR) / "package.xml").string());
   std::set<std::string> names;
   const std::regex dep(R"(<(\w*depend)>\s*([^<\s]+)\s*</\1>)");
   for (std::sregex_iterator it(xml.begin(), xml.end(), dep), end; it != end; ++it) names.insert((*it)[2]);
@@ -70,7 +66,7 @@ TEST(PackageManifest, EveryIncludedLibraryIsDeclared) {
   const std::regex inc(R"(#include\s*<([A-Za-z0-9_]+)/)");
   std::set<std::string> checked;
   for (const auto& f : filesUnder({"src", "include", "test", "bench"}, {".cpp", ".h", ".hpp"})) {
-    const std::string text = readAll(f);
+    const std::string text = binloop::test::readText(f.string());
     for (std::sregex_iterator it(text.begin(), text.end(), inc), end; it != end; ++it) {
       const std::string family = (*it)[1];
       const auto known = kIncludeFamilies.find(family);
@@ -87,8 +83,8 @@ TEST(PackageManifest, EveryIncludedLibraryIsDeclared) {
 TEST(PackageManifest, EveryFindPackageAndCatkinComponentIsDeclared) {
   const auto deps = declared();
   std::string cmake;
-  for (const auto& f : filesUnder({"cmake"}, {".cmake"})) cmake += readAll(f);
-  cmake += readAll(fs::path(BINLOOP_ROOT_DIR) / "CMakeLists.txt");
+  for (const auto& f : filesUnder({"cmake"}, {".cmake"})) cmake += binloop::test::readText(f.string());
+  cmake += binloop::test::readText((fs::path(BINLOOP_ROOT_DIR) / "CMakeLists.txt").string());
   const std::regex fp(R"(find_package\(\s*([A-Za-z0-9_]+))");
   int found = 0;
   for (std::sregex_iterator it(cmake.begin(), cmake.end(), fp), end; it != end; ++it, ++found) {
@@ -117,7 +113,7 @@ TEST(PackageManifest, EveryLaunchedPackageIsDeclared) {
   const std::regex pkg(R"(pkg="([^"]+)\")");
   int found = 0;
   for (const auto& f : filesUnder({"launch", "test"}, {".launch", ".test"})) {
-    const std::string text = readAll(f);
+    const std::string text = binloop::test::readText(f.string());
     for (std::sregex_iterator it(text.begin(), text.end(), pkg), end; it != end; ++it, ++found) {
       const std::string p = (*it)[1];
       if (p != "binloop") EXPECT_TRUE(deps.count(p)) << f.string() << " launches a node of '" << p << "', not in package.xml";

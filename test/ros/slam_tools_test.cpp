@@ -10,12 +10,6 @@ namespace {
 binloop::test::CommandResult tool(const std::string& name, const std::string& args) {
   return binloop::test::runCommand(std::string(BINLOOP_TOOL_DIR) + "/" + name + " " + args);
 }
-std::string readAll(const std::string& path) {
-  std::ifstream f(path);
-  std::stringstream s;
-  s << f.rdbuf();
-  return s.str();
-}
 int lines(const std::string& s) {
   int n = 0;
   for (char c : s) n += c == '\n';
@@ -32,9 +26,9 @@ TEST(SlamTools, RunWithADetectorWritesTheLoopLogAndCounts) {
   const auto r = tool("run", seq + " --out " + (tmp / "out") + " --lockstep --detector vladpq --vocab-dir " + kVocab +
                                  " --shadow vlad --reloc-vocab none");
   ASSERT_EQ(r.code, 0) << r.out;
-  const std::string log = readAll(tmp / "out/loops.csv");
+  const std::string log = binloop::test::readText(tmp / "out/loops.csv");
   ASSERT_EQ(log.rfind("keyframe,frame,model,shadow,status,candidates,", 0), 0u) << log;
-  const std::string summary = readAll(tmp / "out/summary.json");
+  const std::string summary = binloop::test::readText(tmp / "out/summary.json");
   // One active and one shadow row per keyframe.
   const auto pos = summary.find("\"keyframes_made\": ");
   ASSERT_NE(pos, std::string::npos) << summary;
@@ -57,7 +51,7 @@ TEST(SlamTools, DefaultsAreThePackagesShippedFilesFromAnyFolder) {
   const auto r = binloop::test::runCommand("cd " + tmp.path() + " && " + std::string(BINLOOP_TOOL_DIR) + "/run " + seq +
                                            " --out out --lockstep");
   ASSERT_EQ(r.code, 0) << r.out;
-  const std::string summary = readAll(tmp / "out/summary.json");
+  const std::string summary = binloop::test::readText(tmp / "out/summary.json");
   EXPECT_NE(summary.find("\"detector\": \"hmvlad\""), std::string::npos) << summary;
   EXPECT_NE(summary.find("\"reloc_vocab\": \"" + kVocab + "/hbow_k8l5.bin\""), std::string::npos) << summary;
   // hbow's vocabulary is not shipped: the error says how to make it.
@@ -99,7 +93,7 @@ TEST(SlamTools, EvalSlamScoresEveryDetectorInOneTable) {
                                        " --lockstep --loop-gt " + (tmp / "gt.txt") + " --run-args \"--reloc-vocab none --vocab-dir " +
                                        kVocab + "\"");
   ASSERT_EQ(r.code, 0) << r.out;
-  const std::string table = readAll(tmp / "out/summary.csv");
+  const std::string table = binloop::test::readText(tmp / "out/summary.csv");
   EXPECT_EQ(table.rfind("model,ate_m,t_rel_pct,r_rel_deg_100m,loops_accepted,loops_correct,loops_wrong_pose,segments_closed,", 0), 0u)
       << table;
   EXPECT_NE(table.find("\nvladpq,"), std::string::npos) << table;
@@ -117,7 +111,7 @@ TEST(SlamTools, RunAtARatePacesFramesByTheSequenceClock) {
   binloop::test::TempDir tmp;
   const auto r = tool("run", seq + " --out " + (tmp / "out") + " --detector none --rate 1 --reloc-vocab none");
   ASSERT_EQ(r.code, 0) << r.out;
-  const std::string summary = readAll(tmp / "out/summary.json");
+  const std::string summary = binloop::test::readText(tmp / "out/summary.json");
   EXPECT_NE(summary.find("\"rate\": 1,"), std::string::npos) << summary;
   EXPECT_NE(summary.find("\"max_lag_s\": "), std::string::npos) << summary;
   const auto wall = summary.find("\"wall_s\": ");

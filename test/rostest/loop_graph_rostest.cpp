@@ -28,6 +28,7 @@
 #include "binloop/sim/builtin_route.h"
 #include "binloop_ros/topics.h"
 #include "rendered_drive.h"
+#include "rostest_main.h"
 #include "support/test_support.h"
 
 namespace {
@@ -406,13 +407,4 @@ TEST_F(LoopGraph, PairsWithoutCameraInfoAreReportedThenTrackingStarts) {
       << "tracking did not start once camera_info came";
 }
 
-int main(int argc, char** argv) {
-  testing::InitGoogleTest(&argc, argv);
-  ros::init(argc, argv, "loop_graph_rostest");
-  ros::AsyncSpinner spinner(2);
-  spinner.start();
-  const int rc = RUN_ALL_TESTS();
-  spinner.stop();
-  ros::shutdown();
-  return rc;
-}
+int main(int argc, char** argv) { return binloop::test::runRostest(argc, argv, "loop_graph_rostest"); }

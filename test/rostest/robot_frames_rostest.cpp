@@ -18,6 +18,7 @@
 #include "binloop_ros/msg_conversion.h"
 #include "binloop_ros/topics.h"
 #include "rendered_drive.h"
+#include "rostest_main.h"
 
 namespace {
 
@@ -31,29 +32,6 @@ Pose3 cameraInBase() {
   T.linear() << 0, 0, 1, -1, 0, 0, 0, -1, 0;
   T.translation() = Eigen::Vector3d(1.2, 0, 1.6);
   return T;
-}
-
-geometry_msgs::TransformStamped transform(const Pose3& T, const ros::Time& stamp, const std::string& parent,
-                                          const std::string& child) {
-  geometry_msgs::TransformStamped t;
-  t.header.stamp = stamp;
-  t.header.frame_id = parent;
-  t.child_frame_id = child;
-  const geometry_msgs::Pose p = binloop_ros::toPoseMsg(T);
-  t.transform.translation.x = p.position.x;
-  t.transform.translation.y = p.position.y;
-  t.transform.translation.z = p.position.z;
-  t.transform.rotation = p.orientation;
-  return t;
-}
-
-Pose3 toPose3(const geometry_msgs::Transform& t) {
-  geometry_msgs::Pose p;
-  p.position.x = t.translation.x;
-  p.position.y = t.translation.y;
-  p.position.z = t.translation.z;
-  p.orientation = t.rotation;
-  return binloop_ros::toPose3(p);
 }
 
 }  // namespace
@@ -102,7 +80,7 @@ TEST(RobotFrames, MapToOdomAgainstDriftingWheelOdometryPutsTheBaseWhereItIs) {
       wheel = wheel * step;
     }
     const ros::Time stamp = pairs[i].left.header.stamp;
-    wheels.sendTransform(transform(wheel, stamp, "odom", "base_link"));
+    wheels.sendTransform(binloop_ros::toTransformMsg(wheel, stamp, "odom", "base_link"));
     left_info.publish(pairs[i].left_info);
     right_info.publish(pairs[i].right_info);
     left.publish(pairs[i].left);
@@ -137,7 +115,7 @@ TEST(RobotFrames, MapToOdomAgainstDriftingWheelOdometryPutsTheBaseWhereItIs) {
         << "binloop published the camera's mounting though the robot's TF has it";
     EXPECT_GT(sent["map -> odom"], pairs.size() * 9 / 10);
   }
-  const Pose3 T_map_base = toPose3(buffer.lookupTransform("map", "base_link", last).transform);
+  const Pose3 T_map_base = binloop_ros::toPose3(buffer.lookupTransform("map", "base_link", last).transform);
   const double wheel_err = (wheel.translation() - truth(pairs.size() - 1).translation()).norm();
   const double err = (T_map_base.translation() - truth(pairs.size() - 1).translation()).norm();
   // In the test's XML result (rostest keeps no stdout of a test node).
@@ -149,13 +127,4 @@ TEST(RobotFrames, MapToOdomAgainstDriftingWheelOdometryPutsTheBaseWhereItIs) {
   EXPECT_GT((T_map_base.linear() * Eigen::Vector3d::UnitZ()).z(), 0.99);
 }
 
-int main(int argc, char** argv) {
-  testing::InitGoogleTest(&argc, argv);
-  ros::init(argc, argv, "robot_frames_rostest");
-  ros::AsyncSpinner spinner(2);
-  spinner.start();
-  const int rc = RUN_ALL_TESTS();
-  spinner.stop();
-  ros::shutdown();
-  return rc;
-}
+int main(int argc, char** argv) { return binloop::test::runRostest(argc, argv, "robot_frames_rostest"); }

@@ -25,6 +25,8 @@ std::string sharedData(const std::string& rel = "");
 bool exists(const std::string& path);
 /// Writes `text` to `path` (creating parent folders).
 void writeText(const std::string& path, const std::string& text);
+/// The whole file; "" when it cannot be read.
+std::string readText(const std::string& path);
 /// Copies a file or a folder tree.
 void copyTree(const std::string& from, const std::string& to);
 

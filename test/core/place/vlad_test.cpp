@@ -20,6 +20,15 @@ Desc256 bits(int from, int to) {
   return d;
 }
 
+// `n` VLADs of `words` × `dims` standard normal floats.
+std::vector<std::vector<float>> randomVlads(int n, int words, int dims, uint64_t seed) {
+  HashRng rng(seed);
+  std::vector<std::vector<float>> vlads(n, std::vector<float>(static_cast<size_t>(words) * dims));
+  for (auto& v : vlads)
+    for (auto& x : v) x = static_cast<float>(rng.normal());
+  return vlads;
+}
+
 }  // namespace
 
 TEST(Vlad, TwoDescriptorsByHand) {
@@ -106,11 +115,8 @@ TEST(Vlad, LcsPcaWhitensResiduals) {
 }
 
 TEST(ProductQuantization, SdcAndAdcMatchBruteForce) {
-  HashRng rng(11);
   const int words = 3, dims = 5, m = 4;
-  std::vector<std::vector<float>> vlads(60, std::vector<float>(words * dims));
-  for (auto& v : vlads)
-    for (auto& x : v) x = static_cast<float>(rng.normal());
+  const auto vlads = randomVlads(60, words, dims, 11);
   const PqCodebooks pq = PqCodebooks::train(vlads, words, dims, m, 1);
   for (int t = 0; t < 10; ++t) {
     const auto& a = vlads[t];
@@ -139,11 +145,8 @@ TEST(ProductQuantization, SdcAndAdcMatchBruteForce) {
 }
 
 TEST(ProductQuantization, SixteenBitFileGivesTheTrainedCodesAndOldFloatFilesStillLoad) {
-  HashRng rng(12);
   const int words = 2, dims = 6, m = 4;
-  std::vector<std::vector<float>> vlads(40, std::vector<float>(words * dims));
-  for (auto& v : vlads)
-    for (auto& x : v) x = static_cast<float>(rng.normal());
+  const auto vlads = randomVlads(40, words, dims, 12);
   const PqCodebooks pq = PqCodebooks::train(vlads, words, dims, m, 3);
   TempDir dir;
   ModelHeader h;
