@@ -39,6 +39,10 @@ class FramePublisher {
   void lost(const ros::Time& stamp);
   /// A reset or a loaded map.
   void restart() { frames_.restart(); }
+  /// A pose hint (/initialpose) as the camera's pose in the slam frame: a pose in map is the base's, a pose
+  /// in slam the camera's. Throws ConversionError for another frame, or before the first tracked frame (the
+  /// camera's mounting is not known yet).
+  binloop::Pose3 hintInSlam(const std::string& frame, const binloop::Pose3& T) const;
   /// The last problem (a failed TF lookup), "" if none since the last call.
   std::string takeProblem();
 

@@ -28,6 +28,10 @@ class RobotFrames {
 
   const binloop::Pose3& baseInCamera() const { return T_cam_base_; }
   const binloop::Pose3& cameraInBase() const { return T_base_cam_; }
+  /// Where the camera is in the slam frame when the base is at T_map_base (a pose given in map).
+  binloop::Pose3 cameraInSlam(const binloop::Pose3& T_map_base) const {
+    return binloop::Pose3(T_cam_base_ * T_map_base * T_base_cam_);  // T_slam_map = T_cam_base (map -> slam = mounting)
+  }
   /// The static map -> slam transform.
   binloop::Pose3 slamInMap() const { return T_base_cam_; }
   binloop::Pose3 baseInMap() const { return T_map_base_; }

@@ -2,6 +2,7 @@
 // mapping; local mapping's updates back in. A short onInit() over binloop::Tracker; every message check is
 // here, so a bad message is reported (log + diagnostics) and dropped, and the nodelet goes on.
 #include <geometry_msgs/PoseStamped.h>
+#include <geometry_msgs/PoseWithCovarianceStamped.h>
 #include <nav_msgs/Path.h>
 #include <nodelet/nodelet.h>
 #include <opencv2/imgproc.hpp>
@@ -41,6 +42,7 @@ class TrackingNodelet : public nodelet::Nodelet {
   void track(const sensor_msgs::ImageConstPtr& left, const sensor_msgs::ImageConstPtr& right);
   void trackWaiting();
   void onUpdate(const binloop::LocalMapUpdateConstPtr& u);
+  void onInitialPose(const geometry_msgs::PoseWithCovarianceStampedConstPtr& m);
   void onInfo(const sensor_msgs::CameraInfoConstPtr& info, bool right);
   std::string check(const Image& left, const Image& right);
   void publishPose(const binloop::msg::TrackedFrame& f, const std_msgs::Header& header);
@@ -69,7 +71,7 @@ class TrackingNodelet : public nodelet::Nodelet {
   std::deque<std::pair<sensor_msgs::ImageConstPtr, sensor_msgs::ImageConstPtr>> waiting_;
   topics::StereoTopics in_{topics::kStereoNamespace};  // ~stereo: the input topics' namespace
   std::unique_ptr<StereoInput> input_;
-  ros::Subscriber left_info_sub_, right_info_sub_, update_sub_;
+  ros::Subscriber left_info_sub_, right_info_sub_, update_sub_, initial_pose_sub_;
   ros::Publisher keyframe_pub_, frame_pub_, pose_pub_, path_pub_, debug_pub_;
   std::unique_ptr<StageDiagnostics> diag_;
   CpuMeter cpu_;
@@ -146,6 +148,8 @@ void TrackingNodelet::onInit() {
   path_pub_ = nh.advertise<nav_msgs::Path>("live_path", 1, true);
   debug_pub_ = nh.advertise<sensor_msgs::Image>("debug_image", 1);
   update_sub_ = guard_.subscribe(nh, "local_map_update", 100, &TrackingNodelet::onUpdate, this);
+  // rviz's 2D Pose Estimate (and a robot's own fix): where to relocalise while lost.
+  initial_pose_sub_ = guard_.subscribe(nh, "/initialpose", 2, &TrackingNodelet::onInitialPose, this);
   left_info_sub_ = nh.subscribe<sensor_msgs::CameraInfo>(
       in_.left_info, 2, guard_.wrap("left camera_info", [this](const sensor_msgs::CameraInfoConstPtr& m) { onInfo(m, false); }));
   right_info_sub_ = nh.subscribe<sensor_msgs::CameraInfo>(
@@ -383,6 +387,26 @@ void TrackingNodelet::publishDebugImage(const cv::Mat& gray, const binloop::msg:
   msg->step = img.cols * 3;
   msg->data.assign(img.data, img.data + img.total() * 3);
   debug_pub_.publish(msg);
+}
+
+// The hint's radius is three standard deviations of its position (rviz sends 0.5 m), at least 5 m, as an
+// operator clicks roughly, and at most 50 m.
+void TrackingNodelet::onInitialPose(const geometry_msgs::PoseWithCovarianceStampedConstPtr& m) {
+  if (!tracker_) return;
+  const double var = std::max(m->pose.covariance[0], m->pose.covariance[7]);
+  const double radius = std::clamp(3 * std::sqrt(std::max(var, 0.0)), 5.0, 50.0);
+  try {
+    const binloop::Pose3 T = frames_out_->hintInSlam(m->header.frame_id, toPose3(m->pose.pose));
+    if (tracker_->state() != binloop::msg::TrackingState::kLost) {
+      NODELET_INFO("binloop/Tracking: pose hint ignored: tracking is not lost");
+      return;
+    }
+    tracker_->hintPose(T, radius);
+    NODELET_INFO("binloop/Tracking: relocalising within %.1f m of the pose hint", radius);
+  } catch (const std::exception& e) {
+    last_problem_ = std::string("pose hint refused: ") + e.what();
+    NODELET_WARN("binloop/Tracking: %s", last_problem_.c_str());
+  }
 }
 
 void TrackingNodelet::onUpdate(const binloop::LocalMapUpdateConstPtr& m) {

@@ -119,6 +119,15 @@ void FramePublisher::tracked(const binloop::Pose3& T_slam_cam, const ros::Time& 
   if (last_map_odom_) send(*last_map_odom_, stamp, map_frame_, odom_frame_);
 }
 
+binloop::Pose3 FramePublisher::hintInSlam(const std::string& frame, const binloop::Pose3& T) const {
+  if (!mounted_) throw ConversionError("a pose hint before the first tracked frame: nothing to relocalise in yet");
+  const std::string f = !frame.empty() && frame[0] == '/' ? frame.substr(1) : frame;
+  if (f == map_frame_) return frames_.cameraInSlam(T);
+  if (f == slam_frame_) return T;
+  throw ConversionError("a pose hint in frame '" + frame + "': give it in '" + map_frame_ + "' (the base's pose) or '" +
+                        slam_frame_ + "' (the camera's)");
+}
+
 void FramePublisher::lost(const ros::Time& stamp) {
   if (tf_ && last_map_odom_) send(*last_map_odom_, stamp, map_frame_, odom_frame_);
 }

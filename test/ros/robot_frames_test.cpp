@@ -54,6 +54,8 @@ TEST(RobotFrames, OdomStaysContinuousAcrossACorrectionAndMapToOdomTakesTheJump) 
   EXPECT_NEAR((f.baseInOdom().translation() - odom_before.translation()).norm(), 1, 1e-9);
   EXPECT_NEAR(f.baseInMap().translation().x(), 8, 1e-9);
   expectNear(f.odomInMap() * f.baseInOdom(), f.baseInMap());
+  // A pose hint given for the base in map is the camera's pose in slam that gives that base pose.
+  expectNear(f.cameraInSlam(f.baseInMap()), cameraAt(8));
   // The robot's own odometry: map -> odom puts its base where binloop's map has it.
   Pose3 wheel = Pose3::Identity();
   wheel.translation() = Eigen::Vector3d(10.4, -0.3, 0);

@@ -42,6 +42,8 @@ class MapReplica {
 
   /// The n most recently made keyframes still in the map, newest first.
   std::vector<SlamKeyframeId> recentKeyframes(size_t n) const;
+  /// Keyframes whose camera lies within radius_m of `centre`, nearest first (ties: newer first), at most n.
+  std::vector<SlamKeyframeId> keyframesNear(const Eigen::Vector3d& centre, double radius_m, size_t n) const;
 
   size_t pointCount() const { return points_.size(); }
   size_t keyframeCount() const { return keyframes_.size(); }

@@ -52,6 +52,8 @@ class SlamPipeline {
 
   /// The input's clock started again (a bag replayed): Tracker::restartClock. From the caller of process().
   void restartClock() { tracker_.restartClock(); }
+  /// Where the camera is, from outside (Tracker::hintPose). From the caller of process().
+  void hintPose(const Pose3& T_w_c, double radius_m) { tracker_.hintPose(T_w_c, radius_m); }
 
   /// The model loop detection uses from its next keyframe on (any thread). Throws PlaceError for a model
   /// that cannot be made; the running one stays.

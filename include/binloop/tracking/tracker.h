@@ -4,6 +4,7 @@
 // made and the LocalMapUpdate messages it is given (loop corrections arrive as one). It never waits for another stage, so the
 // pipeline can run it in lock-step or on its own thread.
 #include <memory>
+#include <optional>
 #include <string>
 #include <unordered_set>
 
@@ -104,6 +105,12 @@ class Tracker {
   /// keyframe and then relocalised anywhere, as after a load. Before the first frame it changes nothing.
   void restartClock();
 
+  /// Someone knows where the camera is (an operator's 2D Pose Estimate in rviz, a robot's own fix): while
+  /// tracking is lost, the next frames are searched for within `radius_m` of `T_w_c` (map frame) first, the
+  /// keyframes nearest it are tried by relocalisation, and a pose found elsewhere is refused. The hint holds
+  /// until a frame is tracked (or `frames` frames have been tried); a tracker that is not lost ignores it.
+  void hintPose(const Pose3& T_w_c, double radius_m, int frames = 50);
+
   msg::TrackingState state() const { return state_; }
   const MapReplica& map() const { return map_; }
   const TrackerParams& params() const { return p_; }
@@ -171,6 +178,14 @@ class Tracker {
   uint64_t reloc_attempts_ = 0;
   uint64_t corrections_seen_ = 0;  // loop corrections applied (through local mapping's updates)
   std::unique_ptr<KeyframeDatabase> keyframe_db_;  // with a vocabulary only
+  struct PoseHint {
+    Pose3 T_w_c;
+    double radius_m = 0;
+    int frames_left = 0;
+  };
+  std::optional<PoseHint> hint_;  // hintPose()
+  /// Keyframes within the hint's radius, nearest first, at most `n`.
+  std::vector<SlamKeyframeId> keyframesNearHint(size_t n) const;
 };
 
 }  // namespace binloop

@@ -181,6 +181,21 @@ std::vector<SlamKeyframeId> MapReplica::recentKeyframes(size_t n) const {
   return ids;
 }
 
+std::vector<SlamKeyframeId> MapReplica::keyframesNear(const Eigen::Vector3d& centre, double radius_m, size_t n) const {
+  std::vector<std::pair<double, SlamKeyframeId>> near;
+  for (const auto& [id, kf] : keyframes_) {
+    const double d = (kf.T_w_c.translation() - centre).norm();
+    if (d <= radius_m) near.emplace_back(d, id);
+  }
+  std::sort(near.begin(), near.end(), [](const auto& a, const auto& b) {
+    if (a.first != b.first) return a.first < b.first;
+    return counterOf(a.second) != counterOf(b.second) ? counterOf(a.second) > counterOf(b.second) : a.second > b.second;
+  });
+  std::vector<SlamKeyframeId> ids;
+  for (size_t i = 0; i < near.size() && i < n; ++i) ids.push_back(near[i].second);
+  return ids;
+}
+
 const std::vector<SlamKeyframeId>& MapReplica::observers(MapPointId id) const {
   auto it = observers_.find(id);
   return it == observers_.end() ? kNone : it->second;

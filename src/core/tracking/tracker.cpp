@@ -96,11 +96,17 @@ Tracker::Output Tracker::track(const StereoFrame& in, int mapping_queue) {
     // message, a skipped bad image) do not leave the prediction behind.
     const double dt = f.stamp_s - last_->stamp_s;
     const bool predict = have_velocity_ && dt <= p_.predict_through_loss_s;
+    // A pose hint while lost stands in for the prediction: the frame is searched for there and must be found
+    // within its radius.
+    const bool hinted = hint_ && state_ == msg::TrackingState::kLost;
     const Pose3 predicted =
-        predict ? orthonormalized(last_pose * scaledMotion(velocity_, dt / velocity_dt_)) : last_pose;
+        hinted  ? hint_->T_w_c
+        : predict ? orthonormalized(last_pose * scaledMotion(velocity_, dt / velocity_dt_))
+                  : last_pose;
     f.T_w_c = predicted;
     MotionReach reach;
-    if (predict) reach = MotionReach(predicted.translation(), p_.recovery_min_gate_m, p_.recovery_max_accel_mps2, dt);
+    if (hinted) reach = MotionReach(predicted.translation(), hint_->radius_m, 0, 0);
+    else if (predict) reach = MotionReach(predicted.translation(), p_.recovery_min_gate_m, p_.recovery_max_accel_mps2, dt);
     bool ok = false;
     bool relocalized = false;  // found from scratch, not near the prediction
     if (state_ == msg::TrackingState::kOk) {
@@ -155,14 +161,15 @@ Tracker::Output Tracker::track(const StereoFrame& in, int mapping_queue) {
         state_ = msg::TrackingState::kRelocalized;
       }
     }
+    if (hinted && (ok || --hint_->frames_left <= 0)) hint_.reset();
     if (!ok) {
       state_ = msg::TrackingState::kLost;
       tf.state = state_;
       tf.problem = "lost: " + std::to_string(inliers_) + " inliers";
       if (reach.nearestRefusedM() >= 0)
-        tf.problem += "; a pose " + fixedDecimals(reach.nearestRefusedM(), 1) +
-                      " m from the motion model's prediction after " + fixedDecimals(reach.dtS(), 1) +
-                      " s was rejected (at most " + fixedDecimals(reach.radiusM(), 1) + " m)";
+        tf.problem += "; a pose " + fixedDecimals(reach.nearestRefusedM(), 1) + " m from the " +
+                      (hinted ? std::string("pose hint") : "motion model's prediction after " + fixedDecimals(reach.dtS(), 1) + " s") +
+                      " was rejected (at most " + fixedDecimals(reach.radiusM(), 1) + " m)";
       tf.T_w_c = predicted;  // not what a failed attempt left in f
       tf.track_ms = msSinceT(t0);
       return out;
@@ -390,6 +397,17 @@ bool Tracker::recoverRotationFirst(Frame& f, const Pose3& predicted) {
   return true;
 }
 
+void Tracker::hintPose(const Pose3& T_w_c, double radius_m, int frames) {
+  if (!(radius_m > 0) || frames < 1 || !T_w_c.matrix().allFinite())
+    throw std::invalid_argument("pose hint: a finite pose, a radius > 0 and at least one frame");
+  if (state_ != msg::TrackingState::kLost) return;  // tracking knows better than the hint
+  hint_ = PoseHint{orthonormalized(T_w_c), radius_m, frames};
+}
+
+std::vector<SlamKeyframeId> Tracker::keyframesNearHint(size_t n) const {
+  return hint_ ? map_.keyframesNear(hint_->T_w_c.translation(), hint_->radius_m, n) : std::vector<SlamKeyframeId>{};
+}
+
 bool Tracker::relocalize(Frame& f, MotionReach& reach) {
   std::unique_ptr<Frame> best;
   int best_inliers = 0;
@@ -407,6 +425,13 @@ bool Tracker::relocalize(Frame& f, MotionReach& reach) {
     });
   } else {
     tries = map_.recentKeyframes(static_cast<size_t>(p_.reloc_keyframes));
+  }
+  // A hint's nearest keyframes go first (the vocabulary may not rank them: the view may have changed).
+  if (hint_ && state_ == msg::TrackingState::kLost) {
+    std::vector<SlamKeyframeId> near = keyframesNearHint(static_cast<size_t>(p_.reloc_keyframes));
+    for (SlamKeyframeId k : tries)
+      if (std::find(near.begin(), near.end(), k) == near.end()) near.push_back(k);
+    tries = std::move(near);
   }
   for (SlamKeyframeId k : tries) {
     if (!map_.keyframe(k)) continue;

@@ -284,6 +284,48 @@ TEST(SlamPipeline, TwentyMissingFramesOnASlowStretchAreFoundWithinThirtyCentimet
   expectFoundAfterGap(*s, 450, 20, 0.3, 0.3);
 }
 
+// An operator's 2D Pose Estimate (Tracker::hintPose, the nodelet's /initialpose): the camera carried back
+// 160 frames (about 190 m, 10 s later) to a place the map saw long ago. Without a vocabulary relocalisation
+// tries only the most recent keyframes, and the frames stay lost; with a hint 1 m off the truth, the next
+// frame is found near it.
+TEST(SlamPipeline, APoseHintFindsAFrameCarriedFarFromTheRecentKeyframes) {
+  const RenderedStretch* s = renderedStretch(340, true);
+  if (!s) GTEST_SKIP() << "needs " << test::sharedData("kitti/poses/06.txt");
+  SlamPipeline slam(s->cam, {}, {}, PipelineMode::kLockStep);
+  Pose3 last;
+  for (int i = 0; i < 200; ++i) {
+    const msg::TrackedFrame tf = slam.process(s->frames[i]);
+    ASSERT_NE(tf.state, msg::TrackingState::kLost) << i;
+    last = tf.T_w_c;
+  }
+  const Pose3 drift = last * s->route[199].inverse();
+  int next_index = 200;
+  const double t0 = s->frames[199].stamp_s + 10;
+  auto carried = [&](int i) {
+    StereoFrame f = s->frames[i];
+    f.index = next_index++;
+    f.stamp_s = t0 + 0.1 * (i - 40);
+    return f;
+  };
+  for (int i = 40; i < 43; ++i)
+    EXPECT_EQ(slam.process(carried(i)).state, msg::TrackingState::kLost) << "frame " << i << " found without a hint";
+  Pose3 hint = drift * s->route[43];
+  hint.translation() += Eigen::Vector3d(0.8, 0, 0.6);  // 1 m off
+  slam.hintPose(hint, 10);
+  int found = 0;
+  double worst = 0;
+  for (int i = 43; i < 53; ++i) {
+    const msg::TrackedFrame tf = slam.process(carried(i));
+    if (tf.state == msg::TrackingState::kLost) continue;
+    ++found;
+    const double off = ((drift * s->route[i]).translation() - tf.T_w_c.translation()).norm();
+    worst = std::max(worst, off);
+    EXPECT_LT(off, 0.5) << "frame " << i;
+  }
+  std::cout << "with the hint: " << found << " of 10 frames found, at most " << worst << " m off\n";
+  EXPECT_GE(found, 9);
+}
+
 // Frame 309 of route 06 comes out of a bend: after 10 missing frames the ordinary tracking (the motion
 // model, then matching without a prediction) put the frame 8 m behind the truth and 7 degrees off, with
 // enough inliers to call it tracked. A pose the camera could not have reached since the last tracked
