@@ -39,6 +39,7 @@ binloop::StereoCamera toStereoCamera(const sensor_msgs::CameraInfo& left, const 
 std::string distortionWarning(const sensor_msgs::CameraInfo& info);
 
 geometry_msgs::Pose toPoseMsg(const binloop::Pose3& T);
+geometry_msgs::Point toPoint(const Eigen::Vector3d& p);
 binloop::Pose3 toPose3(const geometry_msgs::Pose& msg);
 /// tf's form of the same: `T` as the transform from `parent` to `child` (child's pose in parent).
 geometry_msgs::TransformStamped toTransformMsg(const binloop::Pose3& T, const ros::Time& stamp, const std::string& parent,

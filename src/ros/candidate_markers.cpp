@@ -2,17 +2,11 @@
 
 #include <cstdio>
 
+#include "binloop_ros/msg_conversion.h"
+
 namespace binloop_ros {
 
 namespace {
-
-geometry_msgs::Point point(const Eigen::Vector3d& p) {
-  geometry_msgs::Point g;
-  g.x = p.x();
-  g.y = p.y();
-  g.z = p.z();
-  return g;
-}
 
 std_msgs::ColorRGBA colour(float r, float g, float b, float a = 1.f) {
   std_msgs::ColorRGBA c;
@@ -49,15 +43,15 @@ visualization_msgs::MarkerArray CandidateMarkers::markers(const binloop::LoopCan
 
   const auto query = positions_.find(q.query);
   if (query != positions_.end()) {
-    label.pose.position = point(query->second + Eigen::Vector3d(0, -3, 0));  // above it (y points down in slam)
+    label.pose.position = toPoint(query->second + Eigen::Vector3d(0, -3, 0));  // above it (y points down in slam)
     for (size_t i = 0; i < q.candidates.size() && i < kMaxLines; ++i) {
       const auto c = positions_.find(q.candidates[i].id);
       if (c == positions_.end()) continue;
       const bool accepted = q.candidates[i].id == q.accepted;
       const float fade = 1.f - 0.15f * static_cast<float>(i);
       const std_msgs::ColorRGBA col = accepted ? colour(0.1f, 0.9f, 0.1f) : colour(fade, 0.55f * fade, 0.1f, 0.8f);
-      lines.points.push_back(point(query->second));
-      lines.points.push_back(point(c->second));
+      lines.points.push_back(toPoint(query->second));
+      lines.points.push_back(toPoint(c->second));
       lines.colors.push_back(col);
       lines.colors.push_back(col);
     }

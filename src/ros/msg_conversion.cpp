@@ -109,6 +109,14 @@ binloop::StereoCamera toStereoCamera(const sensor_msgs::CameraInfo& left, const 
   return cam;
 }
 
+geometry_msgs::Point toPoint(const Eigen::Vector3d& p) {
+  geometry_msgs::Point m;
+  m.x = p.x();
+  m.y = p.y();
+  m.z = p.z();
+  return m;
+}
+
 geometry_msgs::Pose toPoseMsg(const binloop::Pose3& T) {
   geometry_msgs::Pose p;
   const Eigen::Quaterniond q(T.rotation());

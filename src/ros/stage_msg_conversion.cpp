@@ -31,14 +31,6 @@ void checkSize(size_t got, size_t want, const std::string& what) {
     throw ConversionError(what + " has " + std::to_string(got) + " entries, expected " + std::to_string(want));
 }
 
-geometry_msgs::Point toPoint(const Eigen::Vector3d& p) {
-  geometry_msgs::Point m;
-  m.x = p.x();
-  m.y = p.y();
-  m.z = p.z();
-  return m;
-}
-
 binloop::MapPoint toRos(const core::MapPoint& p) {
   binloop::MapPoint m;
   m.id = p.id;

@@ -5,16 +5,23 @@
 #include "binloop/sim/builtin_route.h"
 #include "support/test_support.h"
 
+namespace {
+/// `scripts/binloop run-bag <bag> --out <out> <args>` with its own master on `port`, so that no other
+/// master on the machine is used.
+binloop::test::CommandResult runBag(const std::string& bag, const std::string& out, const std::string& args, int port) {
+  return binloop::test::runCommand("export ROS_MASTER_URI=http://localhost:" + std::to_string(port) + " && " +
+                                   std::string(BINLOOP_ROOT_DIR) + "/scripts/binloop run-bag " + bag + " --out " + out +
+                                   " " + args);
+}
+}  // namespace
+
 TEST(RunBag, ABagOfCompressedImagesIsTrackedWithTransportCompressed) {
   const std::string seq = binloop::test::sharedData("kitti/sample_00");
   BINLOOP_REQUIRE_DATA(seq);
   binloop::test::TempDir tmp;
   const auto bag = binloop::test::runCommand(std::string(BINLOOP_TOOL_DIR) + "/kitti2bag " + seq + " " + (tmp / "png.bag") + " --png");
   ASSERT_EQ(bag.code, 0) << bag.out;
-  // Its own master port, so that no other master on the machine is used.
-  const auto r = binloop::test::runCommand("export ROS_MASTER_URI=http://localhost:11392 && " + std::string(BINLOOP_ROOT_DIR) +
-                                           "/scripts/binloop run-bag " + (tmp / "png.bag") + " --out " + (tmp / "out") +
-                                           " --launch-args transport:=compressed");
+  const auto r = runBag(tmp / "png.bag", tmp / "out", "--launch-args transport:=compressed", 11392);
   ASSERT_EQ(r.code, 0) << r.out;
   const std::string summary = binloop::test::readText(tmp / "out/summary.json");
   EXPECT_NE(summary.find("\"frames\": 11,"), std::string::npos) << summary << "\n" << binloop::test::readText(tmp / "out/graph.log");
@@ -29,9 +36,7 @@ TEST(RunBag, TheStereoNamespaceArgumentMovesTheInputs) {
   binloop::test::TempDir tmp;
   const auto bag = binloop::test::runCommand(std::string(BINLOOP_TOOL_DIR) + "/kitti2bag " + seq + " " + (tmp / "raw.bag") + " --end 3");
   ASSERT_EQ(bag.code, 0) << bag.out;
-  const auto r = binloop::test::runCommand("export ROS_MASTER_URI=http://localhost:11393 && " + std::string(BINLOOP_ROOT_DIR) +
-                                           "/scripts/binloop run-bag " + (tmp / "raw.bag") + " --out " + (tmp / "out") +
-                                           " --launch-args stereo:=/elsewhere");
+  const auto r = runBag(tmp / "raw.bag", tmp / "out", "--launch-args stereo:=/elsewhere", 11393);
   ASSERT_EQ(r.code, 0) << r.out;
   const std::string log = binloop::test::readText(tmp / "out/graph.log");
   EXPECT_NE(log.find("sync on /elsewhere/left/image_rect + /elsewhere/right/image_rect"), std::string::npos) << log;
@@ -56,9 +61,7 @@ TEST_P(RunBagModels, TheRenderedLoopIsClosed) {
   ASSERT_FALSE(bag.empty()) << "the drive could not be rendered into a bag";
   const std::string model = GetParam();
   binloop::test::TempDir tmp;
-  const auto r = binloop::test::runCommand("export ROS_MASTER_URI=http://localhost:11394 && " + std::string(BINLOOP_ROOT_DIR) +
-                                           "/scripts/binloop run-bag " + bag + " --out " + (tmp / "out") +
-                                           " --rate 2 --detector " + model);
+  const auto r = runBag(bag, tmp / "out", "--rate 2 --detector " + model, 11394);
   ASSERT_EQ(r.code, 0) << r.out;
   const std::string summary = binloop::test::readText(tmp / "out/summary.json");
   const auto at = summary.find("\"accepted\": ");
