@@ -57,6 +57,7 @@ class FramePublisher {
   bool mounted_ = false;
   RobotFrames frames_;
   std::optional<binloop::Pose3> last_map_odom_;
+  ros::Time last_robot_odom_;  // stamp of the last image the robot's odometry had a pose for
   ros::Publisher odom_pub_;
   std::unique_ptr<tf2_ros::TransformBroadcaster> tf_;
   std::unique_ptr<tf2_ros::StaticTransformBroadcaster> static_tf_;

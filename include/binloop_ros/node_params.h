@@ -5,9 +5,11 @@
 #include <ros/node_handle.h>
 #include <ros/param.h>
 
+#include <optional>
 #include <string>
 #include <vector>
 
+#include "binloop/types/pose.h"
 #include "binloop/pipeline/slam_config.h"
 
 namespace binloop_ros {
@@ -25,5 +27,8 @@ binloop::SlamConfig slamConfigFrom(const ros::NodeHandle& pnh);
 std::string stringParam(const ros::NodeHandle& pnh, const std::string& name, const std::string& fallback);
 double numberParam(const ros::NodeHandle& pnh, const std::string& name, double fallback);
 bool boolParam(const ros::NodeHandle& pnh, const std::string& name, bool fallback);
+/// ~name as a pose [x, y, z, qx, qy, qz, qw], or nothing when unset; another shape or a zero quaternion is a
+/// ConversionError.
+std::optional<binloop::Pose3> poseParam(const ros::NodeHandle& pnh, const std::string& name);
 
 }  // namespace binloop_ros

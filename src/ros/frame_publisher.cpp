@@ -23,20 +23,7 @@ FramePublisher::FramePublisher(ros::NodeHandle& nh, ros::NodeHandle& pnh) {
   truth_frame_ = stringParam(pnh, "ground_truth_frame", "");
   publish_tf_ = boolParam(pnh, "publish_tf", true);
   publish_odom_tf_ = boolParam(pnh, "publish_odom_tf", true);
-  if (pnh.hasParam("camera_in_base")) {
-    std::vector<double> v;
-    if (!pnh.getParam("camera_in_base", v) || v.size() != 7)
-      throw ConversionError("~camera_in_base must be a list of 7 numbers: x, y, z, qx, qy, qz, qw");
-    geometry_msgs::Pose p;
-    p.position.x = v[0];
-    p.position.y = v[1];
-    p.position.z = v[2];
-    p.orientation.x = v[3];
-    p.orientation.y = v[4];
-    p.orientation.z = v[5];
-    p.orientation.w = v[6];
-    mounting_param_ = toPose3(p);  // throws for a zero quaternion
-  }
+  mounting_param_ = poseParam(pnh, "camera_in_base");
   odom_pub_ = nh.advertise<nav_msgs::Odometry>("odom", 10);
   if (publish_tf_) {
     tf_ = std::make_unique<tf2_ros::TransformBroadcaster>();
@@ -108,13 +95,17 @@ void FramePublisher::tracked(const binloop::Pose3& T_slam_cam, const ros::Time& 
     send(frames_.baseInOdom(), stamp, odom_frame_, base_frame_);
     return;
   }
+  // No waiting on the tracking callback: when the robot's odometry has not reached the image's stamp yet,
+  // the last map -> odom stands, and only a second without any is a problem worth reporting.
   try {
     const binloop::Pose3 robot_T_odom_base =
-        toPose3(buffer_->lookupTransform(odom_frame_, base_frame_, stamp, ros::Duration(0.05)).transform);
+        toPose3(buffer_->lookupTransform(odom_frame_, base_frame_, stamp).transform);
     last_map_odom_ = frames_.odomInMap(robot_T_odom_base);
+    last_robot_odom_ = stamp;
   } catch (const tf2::TransformException& e) {
-    problem_ = std::string("no ") + odom_frame_ + " -> " + base_frame_ + " from the robot's odometry at the image's stamp (" +
-               e.what() + "): map -> " + odom_frame_ + " kept";
+    if (!last_map_odom_ || (stamp - last_robot_odom_).toSec() > 1.0)
+      problem_ = std::string("no ") + odom_frame_ + " -> " + base_frame_ +
+                 " from the robot's odometry at the image's stamp (" + e.what() + "): map -> " + odom_frame_ + " kept";
   }
   if (last_map_odom_) send(*last_map_odom_, stamp, map_frame_, odom_frame_);
 }

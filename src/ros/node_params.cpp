@@ -60,4 +60,20 @@ bool boolParam(const ros::NodeHandle& pnh, const std::string& name, bool fallbac
   return v;
 }
 
+std::optional<binloop::Pose3> poseParam(const ros::NodeHandle& pnh, const std::string& name) {
+  if (!pnh.hasParam(name)) return std::nullopt;
+  std::vector<double> v;
+  if (!pnh.getParam(name, v) || v.size() != 7)
+    throw ConversionError("~" + name + " must be a list of 7 numbers: x, y, z, qx, qy, qz, qw");
+  geometry_msgs::Pose p;
+  p.position.x = v[0];
+  p.position.y = v[1];
+  p.position.z = v[2];
+  p.orientation.x = v[3];
+  p.orientation.y = v[4];
+  p.orientation.z = v[5];
+  p.orientation.w = v[6];
+  return toPose3(p);
+}
+
 }  // namespace binloop_ros

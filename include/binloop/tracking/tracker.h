@@ -145,8 +145,9 @@ class Tracker {
   /// The frame's matched keypoints with stereo depth, each with up to three of its point's keyframes.
   std::vector<FarMatch> farMatches(const Frame& f, std::vector<int>* keypoint_of) const;
   /// Relocalisation from scratch against the vocabulary's (or the most recent) keyframes: the candidate
-  /// that explains most of the local map among those the camera could have reached (`reach`).
-  bool relocalize(Frame& f, MotionReach& reach);
+  /// that explains most of the local map among those the camera could have reached (`reach`); with
+  /// `hinted`, the keyframes nearest the pose hint are tried first.
+  bool relocalize(Frame& f, MotionReach& reach, bool hinted);
   /// PnP RANSAC on the matches in f.points, pose optimisation, a wide search for `pts`, then the local map.
   bool poseFromScratch(Frame& f, const std::vector<const msg::MapPoint*>& pts);
   bool trackLocalMap(Frame& f, float radius, int min_inliers);

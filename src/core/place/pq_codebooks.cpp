@@ -91,10 +91,9 @@ float PqCodebooks::adc(const std::vector<float>& vlad, const PqCodes& b) const {
 void PqCodebooks::write(ModelWriter& w) const {
   w.section("QPAR", std::vector<uint32_t>{static_cast<uint32_t>(words_), static_cast<uint32_t>(dims_),
                                           static_cast<uint32_t>(m_), kFixed16});
-  const std::vector<float> scales = scales_.empty() ? fixedPointScales(codebooks_, words_, static_cast<size_t>(m_) * dims_) : scales_;
   std::vector<int16_t> steps(codebooks_.size());
-  for (size_t i = 0; i < steps.size(); ++i) steps[i] = toFixed(codebooks_[i], scales[i / (static_cast<size_t>(m_) * dims_)]);
-  w.section("QSCL", scales);
+  for (size_t i = 0; i < steps.size(); ++i) steps[i] = toFixed(codebooks_[i], scales_[i / (static_cast<size_t>(m_) * dims_)]);
+  w.section("QSCL", scales_);
   w.section("QC16", steps);
 }
 
@@ -123,6 +122,7 @@ PqCodebooks PqCodebooks::read(ModelReader& r) {
   if (pq.m_ < 1 || pq.codebooks_.size() != static_cast<size_t>(pq.words_) * pq.m_ * pq.dims_)
     throw PlaceError(r.path() + ": PQ codebooks hold " + std::to_string(pq.codebooks_.size()) + " floats, expected " +
                      std::to_string(static_cast<size_t>(pq.words_) * pq.m_ * pq.dims_));
+  if (pq.scales_.empty()) pq.scales_ = fixedPointScales(pq.codebooks_, pq.words_, static_cast<size_t>(pq.m_) * pq.dims_);
   pq.buildTable();
   return pq;
 }

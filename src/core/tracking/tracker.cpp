@@ -155,7 +155,7 @@ Tracker::Output Tracker::track(const StereoFrame& in, int mapping_queue) {
       ok = trackLocalMap(f, p_.lost_radius, p_.min_inliers_after_loss) && reach.admits(f.T_w_c);
       if (!ok && predict && p_.recover_rotation_first) ok = recoverRotationFirst(f, predicted) && reach.admits(f.T_w_c);
       // Still nothing: the pose is unknown; find it from scratch against recent keyframes.
-      if (!ok) ok = relocalized = relocalize(f, reach);
+      if (!ok) ok = relocalized = relocalize(f, reach, hinted);
       if (!ok) reference_ = reference_before;
       if (ok && (relocalized || state_ != msg::TrackingState::kOk)) {
         state_ = msg::TrackingState::kRelocalized;
@@ -408,7 +408,7 @@ std::vector<SlamKeyframeId> Tracker::keyframesNearHint(size_t n) const {
   return hint_ ? map_.keyframesNear(hint_->T_w_c.translation(), hint_->radius_m, n) : std::vector<SlamKeyframeId>{};
 }
 
-bool Tracker::relocalize(Frame& f, MotionReach& reach) {
+bool Tracker::relocalize(Frame& f, MotionReach& reach, bool hinted) {
   std::unique_ptr<Frame> best;
   int best_inliers = 0;
   std::vector<SlamKeyframeId> best_local;
@@ -427,7 +427,7 @@ bool Tracker::relocalize(Frame& f, MotionReach& reach) {
     tries = map_.recentKeyframes(static_cast<size_t>(p_.reloc_keyframes));
   }
   // A hint's nearest keyframes go first (the vocabulary may not rank them: the view may have changed).
-  if (hint_ && state_ == msg::TrackingState::kLost) {
+  if (hinted) {
     std::vector<SlamKeyframeId> near = keyframesNearHint(static_cast<size_t>(p_.reloc_keyframes));
     for (SlamKeyframeId k : tries)
       if (std::find(near.begin(), near.end(), k) == near.end()) near.push_back(k);
