@@ -4,9 +4,11 @@
 #   scripts/bench.sh render     only bench/render_bench.cpp
 #   scripts/bench.sh place vocab   only bench/place_bench.cpp, passing it "vocab"
 #   scripts/bench.sh accuracy [...]   the SLAM at 1x beside ORB-SLAM2's runs (scripts/bench_accuracy.sh; hours)
+#   scripts/bench.sh soak [...]       a bag looped at 1x through the graph for an hour (scripts/bench_soak.sh)
 set -euo pipefail
 source "$(dirname "${BASH_SOURCE[0]}")/env.sh"
 if [ "${1:-}" = accuracy ]; then exec "$BINLOOP_ROOT/scripts/bench_accuracy.sh" "${@:2}"; fi
+if [ "${1:-}" = soak ]; then exec "$BINLOOP_ROOT/scripts/bench_soak.sh" "${@:2}"; fi
 "$BINLOOP_ROOT/scripts/build.sh" --ros >/dev/null
 cd "$BINLOOP_ROOT"  # benchmarks find vocab/ and ../shared/data from the repository root
 for b in "$BINLOOP_WS"/devel/lib/binloop/bench/bench_*; do

@@ -2,15 +2,18 @@
 // The map services each stage nodelet offers in its private namespace: ~save_state, ~load_state, ~reset and
 // ~statistics (srv/). The nodelet gives what its stage does for each; this class owns the service servers,
 // turns exceptions into an answer (success false, the reason), and logs. /binloop/save_map and the other
-// graph-wide services (src/nodes/map_services.cpp) call these, one stage after another.
+// graph-wide services (src/nodes/map_services.cpp) call these, one stage after another; a graph-wide load
+// is a transaction, so this class holds a load prepared aside until it is committed or aborted.
 #include <binloop/LoadMap.h>
 #include <binloop/Reset.h>
 #include <binloop/SaveMap.h>
 #include <binloop/Statistics.h>
 #include <ros/node_handle.h>
 
+#include <cstdint>
 #include <functional>
 #include <memory>
+#include <optional>
 #include <string>
 #include <utility>
 #include <vector>
@@ -21,12 +24,18 @@ namespace binloop_ros {
 
 using StageStatistics = std::vector<std::pair<std::string, std::string>>;
 
+/// A stage loaded from its file but not yet in place: `commit` puts it in place of the running one and says
+/// what it holds.
+struct PreparedLoad {
+  std::function<std::string()> commit;
+};
+
 struct StageServiceHandlers {
-  /// Writes the stage's file at the path given; returns a one-line summary (the file's size is added to it).
-  /// Throws on failure.
-  std::function<std::string(const std::string& path)> save;
-  /// Loads the stage's file into a new stage and, only when that worked, puts it in place of the running one.
-  std::function<std::string(const std::string& path)> load;
+  /// Writes the stage's file at the path given, for map save `map_id`; returns a one-line summary (the
+  /// file's size is added to it). Throws on failure.
+  std::function<std::string(const std::string& path, uint64_t map_id)> save;
+  /// Loads the stage's file into a new stage, changing nothing that runs (throws when it cannot).
+  std::function<PreparedLoad(const std::string& path)> prepare;
   std::function<void()> reset;
   std::function<StageStatistics()> statistics;
 };
@@ -54,8 +63,14 @@ class StageServices {
   bool onReset(binloop::Reset::Request& req, binloop::Reset::Response& res);
   bool onStatistics(binloop::Statistics::Request& req, binloop::Statistics::Response& res);
 
+  struct Pending {
+    uint64_t map_id;
+    PreparedLoad load;
+  };
+
   std::string stage_;
   StageServiceHandlers h_;
+  std::optional<Pending> pending_;  // a load prepared aside (phase "prepare")
   ros::ServiceServer save_, load_, reset_, statistics_;
 };
 

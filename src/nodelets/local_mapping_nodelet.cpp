@@ -27,6 +27,7 @@ class LocalMappingNodelet : public nodelet::Nodelet {
   void onKeyframe(const binloop::KeyFrameConstPtr& m);
   void onCorrection(const binloop::CorrectionConstPtr& m);
   void mergeGlobalBa();
+  void resendMap(const ros::SingleSubscriberPublisher& to);
   void publishMap(const ros::Time& stamp);
   void problem(const std::string& what);
   void diagnose(diagnostic_updater::DiagnosticStatusWrapper& s);
@@ -43,7 +44,7 @@ class LocalMappingNodelet : public nodelet::Nodelet {
   ros::Publisher refined_pub_, update_pub_, cloud_pub_, keyframes_pub_;
   std::unique_ptr<StageDiagnostics> diag_;
   CpuMeter cpu_;
-  uint64_t keyframes_ = 0, corrections_ = 0, rejected_ = 0;
+  uint64_t keyframes_ = 0, corrections_ = 0, rejected_ = 0, resends_ = 0;
   double last_ms_ = 0, last_ba_ms_ = 0;
   std::string last_problem_;
 };
@@ -62,7 +63,11 @@ void LocalMappingNodelet::onInit() {
   }
   slam_frame_ = stringParam(pnh, "slam_frame", "slam");  // the SLAM's own frame (tracking publishes map -> slam)
   cloud_every_ = std::max(1, static_cast<int>(numberParam(pnh, "cloud_every", 5)));
-  refined_pub_ = nh.advertise<binloop::KeyFrame>("refined_keyframe", 100);
+  // A loop stage that subscribes after keyframes were made (a restarted process of the split graph) gets the
+  // whole map from here, to it alone; a deep queue, since all of them go at once.
+  refined_pub_ = nh.advertise<binloop::KeyFrame>(
+      "refined_keyframe", 10000,
+      guard_.wrap("resending the map", [this](const ros::SingleSubscriberPublisher& to) { resendMap(to); }));
   update_pub_ = nh.advertise<binloop::LocalMapUpdate>("local_map_update", 100);
   cloud_pub_ = nh.advertise<sensor_msgs::PointCloud2>("map_points", 1, true);
   keyframes_pub_ = nh.advertise<geometry_msgs::PoseArray>("keyframes", 1, true);
@@ -78,14 +83,18 @@ void LocalMappingNodelet::onInit() {
   diag_ = std::make_unique<StageDiagnostics>(
       nh, pnh, "local mapping", [this](diagnostic_updater::DiagnosticStatusWrapper& s) { diagnose(s); });
   StageServiceHandlers h;
-  h.save = [this](const std::string& path) {
-    binloop::saveStateFile(*mapper_, path, "local_mapping");
+  h.save = [this](const std::string& path, uint64_t map_id) {
+    binloop::saveStateFile(*mapper_, path, "local_mapping", map_id);
     return counts();
   };
-  h.load = [this](const std::string& path) {
-    mapper_ = loadStage(std::make_unique<binloop::LocalMapper>(params_), path, "local_mapping");
-    publishMap(ros::Time::now());
-    return counts();
+  h.prepare = [this](const std::string& path) {
+    auto fresh = std::make_shared<std::unique_ptr<binloop::LocalMapper>>(
+        loadStage(std::make_unique<binloop::LocalMapper>(params_), path, "local_mapping"));
+    return PreparedLoad{[this, fresh] {
+      mapper_ = std::move(*fresh);
+      publishMap(ros::Time::now());
+      return counts();
+    }};
   };
   h.reset = [this] {
     mapper_ = std::make_unique<binloop::LocalMapper>(params_);
@@ -145,6 +154,15 @@ void LocalMappingNodelet::onKeyframe(const binloop::KeyFrameConstPtr& m) {
   if (keyframes_ % cloud_every_ == 0) publishMap(m->header.stamp);
 }
 
+void LocalMappingNodelet::resendMap(const ros::SingleSubscriberPublisher& to) {
+  const std::vector<binloop::msg::KeyFramePtr> kfs = mapper_->keyframeMessages();
+  if (kfs.empty()) return;
+  for (const auto& kf : kfs) to.publish(toRos(*kf, slam_frame_));
+  ++resends_;
+  NODELET_INFO("binloop/LocalMapping: %s subscribed after %zu keyframes: sent them again (%lu corrections applied)",
+               to.getSubscriberName().c_str(), kfs.size(), static_cast<unsigned long>(mapper_->correctionsApplied()));
+}
+
 void LocalMappingNodelet::onCorrection(const binloop::CorrectionConstPtr& m) {
   CpuMeter::Scope cpu(cpu_);
   binloop::msg::LocalMapUpdatePtr u;
@@ -192,6 +210,7 @@ void LocalMappingNodelet::diagnose(diagnostic_updater::DiagnosticStatusWrapper& 
   s.add("keyframes in map", mapper_->keyframeCount());
   s.add("map points", mapper_->pointCount());
   s.add("corrections applied", corrections_);
+  s.add("map sent again to a new subscriber", resends_);
   s.add("input dropped", rejected_);
   s.add("last problem", last_problem_);
   s.add("callbacks failed", guard_.failures());

@@ -93,13 +93,17 @@ void LoopClosingNodelet::onInit() {
   diag_ = std::make_unique<StageDiagnostics>(
       nh, pnh, "loop closing", [this](diagnostic_updater::DiagnosticStatusWrapper& s) { diagnose(s); });
   StageServiceHandlers h;
-  h.save = [this](const std::string& path) {
-    binloop::saveStateFile(*closer_, path, "loop_closing");
+  h.save = [this](const std::string& path, uint64_t map_id) {
+    binloop::saveStateFile(*closer_, path, "loop_closing", map_id);
     return counts();
   };
-  h.load = [this](const std::string& path) {
-    startOver(loadStage(std::make_unique<binloop::LoopCloser>(params_), path, "loop_closing"));
-    return counts();
+  h.prepare = [this](const std::string& path) {
+    auto fresh = std::make_shared<std::unique_ptr<binloop::LoopCloser>>(
+        loadStage(std::make_unique<binloop::LoopCloser>(params_), path, "loop_closing"));
+    return PreparedLoad{[this, fresh] {
+      startOver(std::move(*fresh));
+      return counts();
+    }};
   };
   h.reset = [this] { startOver(std::make_unique<binloop::LoopCloser>(params_)); };
   h.statistics = [this] {

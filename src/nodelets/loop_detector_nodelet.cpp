@@ -93,15 +93,18 @@ void LoopDetectorNodelet::onInit() {
   auto need = [this] {
     if (!detector_) throw std::runtime_error("no usable loop model: " + last_problem_);
   };
-  h.save = [this, need](const std::string& path) {
+  h.save = [this, need](const std::string& path, uint64_t map_id) {
     need();
-    binloop::saveStateFile(*detector_, path, "loop_detector");
+    binloop::saveStateFile(*detector_, path, "loop_detector", map_id);
     return counts();
   };
-  h.load = [this, need](const std::string& path) {
+  h.prepare = [this, need](const std::string& path) {
     need();
-    detector_ = loadStage(makeDetector(), path, "loop_detector");
-    return counts() + " (index rebuilt from the map's keyframes)";
+    auto fresh = std::make_shared<decltype(detector_)>(loadStage(makeDetector(), path, "loop_detector"));
+    return PreparedLoad{[this, fresh] {
+      detector_ = std::move(*fresh);
+      return counts() + " (index rebuilt from the map's keyframes)";
+    }};
   };
   h.reset = [this, need] {
     need();

@@ -166,18 +166,22 @@ void TrackingNodelet::onInit() {
   diag_ = std::make_unique<StageDiagnostics>(
       nh, pnh, "tracking", [this](diagnostic_updater::DiagnosticStatusWrapper& s) { diagnose(s); });
   StageServiceHandlers h;
-  h.save = [this](const std::string& path) {
+  h.save = [this](const std::string& path, uint64_t map_id) {
     if (!tracker_) throw std::runtime_error("tracking has no camera yet, so no map");
-    binloop::saveStateFile(*tracker_, path, "tracking");
+    binloop::saveStateFile(*tracker_, path, "tracking", map_id);
     return std::to_string(tracker_->map().keyframeCount()) + " keyframes, " +
            std::to_string(tracker_->map().pointCount()) + " map points in its replica";
   };
-  h.load = [this](const std::string& path) {
+  h.prepare = [this](const std::string& path) {
     // Without a camera yet, the map's own: the first camera_info must then agree with it (image sizes are checked).
     const binloop::StereoCamera cam = tracker_ ? tracker_->camera() : binloop::Tracker::savedCamera(path);
-    startOver(loadStage(std::make_unique<binloop::Tracker>(cam, config_.tracker), path, "tracking"));
-    return std::to_string(tracker_->map().keyframeCount()) + " keyframes, " +
-           std::to_string(tracker_->map().pointCount()) + " map points; lost until the next frames are relocalised";
+    auto fresh = std::make_shared<std::unique_ptr<binloop::Tracker>>(
+        loadStage(std::make_unique<binloop::Tracker>(cam, config_.tracker), path, "tracking"));
+    return PreparedLoad{[this, fresh] {
+      startOver(std::move(*fresh));
+      return std::to_string(tracker_->map().keyframeCount()) + " keyframes, " +
+             std::to_string(tracker_->map().pointCount()) + " map points; lost until the next frames are relocalised";
+    }};
   };
   h.reset = [this] {
     startOver(fixed_camera_ ? std::make_unique<binloop::Tracker>(*fixed_camera_, config_.tracker) : nullptr);

@@ -1,8 +1,10 @@
 // map_services: the graph-wide map services, /binloop/save_map, load_map, reset and statistics. Each stage owns
 // its state and saves or loads only that (~save_state, ~load_state, ~reset, ~statistics of each nodelet,
 // include/binloop_ros/stage_services.h); this node asks the stages in pipeline order, whether they share one
-// manager or run in four processes, and answers with what each said. A stage that refuses a load keeps its
-// map, so the answer names the stages that did and did not load.
+// manager or run in four processes, and answers with what each said. Save and load are transactions
+// (binloop/io/map_folder.h): a save has every stage write into a new folder that replaces the old only when
+// all have written; a load has every stage check and load its file aside, and puts them in place only when
+// all could, so a refusal anywhere leaves the whole graph on its map.
 //
 // Parameters: ~stages (list, default [tracking, local_mapping, loop_detector, loop_closing]): the stages'
 // node names, resolved in this node's namespace; ~timeout_s (default 120): how long one stage may take.
@@ -11,6 +13,9 @@
 #include <binloop/SaveMap.h>
 #include <binloop/Statistics.h>
 #include <ros/ros.h>
+
+#include "binloop/io/data_error.h"
+#include "binloop/io/map_folder.h"
 
 #include <string>
 #include <type_traits>
@@ -63,6 +68,73 @@ auto forward(const std::string& what, const std::string& service) {
   };
 }
 
+// Every stage writes into the save's staging folder, which replaces `directory` only when all have.
+bool onSaveMap(binloop::SaveMap::Request& req, binloop::SaveMap::Response& res) {
+  bool ok = false;
+  try {
+    binloop::MapSave save(req.directory, req.map_id ? req.map_id : binloop::newMapId());
+    binloop::SaveMap::Request each;
+    each.directory = save.staging();
+    each.map_id = save.mapId();
+    callEach<binloop::SaveMap>("save_state", each, &ok, &res.message);
+    res.map_id = save.mapId();
+    if (ok) {
+      save.commit();
+    } else {
+      res.message += "\nnothing saved: " + req.directory + " is as it was";
+    }
+  } catch (const std::exception& e) {
+    ok = false;
+    res.message += (res.message.empty() ? "" : "\n") + std::string(e.what()) + "\nnothing saved: " + req.directory +
+                   " is as it was";
+  }
+  res.success = ok;
+  ROS_INFO("binloop/map_services: save_map %s (map save %s): %s\n%s", req.directory.c_str(),
+           binloop::mapIdText(res.map_id).c_str(), ok ? "done" : "FAILED", res.message.c_str());
+  return true;
+}
+
+// Every stage checks and loads its file aside (all of one save); then all commit, or all abort.
+bool onLoadMap(binloop::LoadMap::Request& req, binloop::LoadMap::Response& res) {
+  ros::NodeHandle nh;
+  std::vector<std::string> prepared;
+  bool ok = true;
+  auto say = [&](const std::string& line) { res.message += (res.message.empty() ? "" : "\n") + line; };
+  auto call = [&](const std::string& stage, binloop::LoadMap& srv) {
+    const std::string name = nh.resolveName(stage + "/load_state");
+    if (!ros::service::waitForService(name, ros::Duration(g_timeout_s)))
+      return say(stage + ": no service " + name + " (is the stage running?)"), false;
+    if (!nh.serviceClient<binloop::LoadMap>(name).call(srv)) return say(stage + ": " + name + " failed"), false;
+    say(srv.response.message);
+    return static_cast<bool>(srv.response.success);
+  };
+  uint64_t map_id = 0;
+  for (const std::string& stage : g_stages) {
+    binloop::LoadMap srv;
+    srv.request.directory = req.directory;
+    srv.request.phase = "prepare";
+    srv.request.map_id = map_id;  // the first stage's file names the save; the others must be of it too
+    if (!call(stage, srv)) {
+      ok = false;
+      break;
+    }
+    if (prepared.empty()) map_id = srv.response.map_id;
+    prepared.push_back(stage);
+  }
+  for (const std::string& stage : prepared) {
+    binloop::LoadMap srv;
+    srv.request.phase = ok ? "commit" : "abort";
+    srv.request.map_id = map_id;
+    if (!call(stage, srv) && ok) ok = false;  // a commit cannot fail but for a stage gone meanwhile
+  }
+  if (!ok && prepared.size() < g_stages.size()) say("nothing loaded: every stage keeps its map");
+  res.success = ok;
+  res.map_id = map_id;
+  ROS_INFO("binloop/map_services: load_map %s (map save %s): %s\n%s", req.directory.c_str(),
+           binloop::mapIdText(map_id).c_str(), ok ? "done" : "FAILED", res.message.c_str());
+  return true;
+}
+
 bool onStatistics(binloop::Statistics::Request& req, binloop::Statistics::Response& res) {
   bool ok = true;
   std::string message;
@@ -81,10 +153,8 @@ int main(int argc, char** argv) {
   g_stages = {"tracking", "local_mapping", "loop_detector", "loop_closing"};
   pnh.getParam("stages", g_stages);
   pnh.getParam("timeout_s", g_timeout_s);
-  ros::ServiceServer save = nh.advertiseService<binloop::SaveMap::Request, binloop::SaveMap::Response>(
-      "save_map", forward<binloop::SaveMap>("save_map", "save_state"));
-  ros::ServiceServer load = nh.advertiseService<binloop::LoadMap::Request, binloop::LoadMap::Response>(
-      "load_map", forward<binloop::LoadMap>("load_map", "load_state"));
+  ros::ServiceServer save = nh.advertiseService("save_map", onSaveMap);
+  ros::ServiceServer load = nh.advertiseService("load_map", onLoadMap);
   ros::ServiceServer reset = nh.advertiseService<binloop::Reset::Request, binloop::Reset::Response>(
       "reset", forward<binloop::Reset>("reset", "reset"));
   ros::ServiceServer stats = nh.advertiseService("statistics", onStatistics);

@@ -154,6 +154,7 @@ binloop::KeyFrame toRos(const core::KeyFrame& kf, const std::string& frame_id) {
   m.state = toRos(kf.state);
   convertAll(kf.new_points, &m.new_points);
   m.corrections_seen = kf.corrections_seen;
+  m.resent = kf.resent;
   return m;
 }
 
@@ -197,6 +198,7 @@ core::KeyFrame fromRos(const binloop::KeyFrame& m) {
   kf.state = fromRos(m.state);
   convertAllBack(m.new_points, &kf.new_points);
   kf.corrections_seen = m.corrections_seen;
+  kf.resent = m.resent;
   return kf;
 }
 

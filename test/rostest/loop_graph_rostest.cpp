@@ -21,9 +21,13 @@
 #include <sensor_msgs/CameraInfo.h>
 #include <sensor_msgs/Image.h>
 
+#include <filesystem>
+#include <fstream>
 #include <map>
 #include <mutex>
 
+#include "binloop/io/map_folder.h"
+#include "binloop/io/state_file.h"
 #include "binloop/io/trajectory_io.h"
 #include "binloop/sim/builtin_route.h"
 #include "binloop_ros/topics.h"
@@ -213,6 +217,15 @@ TEST_F(LoopGraph, TheMapIsSavedAndLoadedIntoAFreshGraphWithTheSameKeyframesAndIn
   ASSERT_TRUE(ros::service::call("/binloop/save_map", save));
   ASSERT_TRUE(save.response.success) << save.response.message;
   std::cout << "saved: " << save.response.message << "\n";
+  EXPECT_NE(save.response.map_id, 0u);
+  EXPECT_EQ(binloop::checkMapFolder(dir / "map", {"tracking", "local_mapping", "loop_detector", "loop_closing"}),
+            save.response.map_id);
+  const std::string again_dir = dir / "again";  // a second save of the same graph: another map id
+  binloop::SaveMap again;
+  again.request.directory = again_dir;
+  ASSERT_TRUE(ros::service::call("/binloop/save_map", again));
+  ASSERT_TRUE(again.response.success) << again.response.message;
+  EXPECT_NE(again.response.map_id, save.response.map_id);
 
   binloop::Reset reset;
   ASSERT_TRUE(ros::service::call("/binloop/reset", reset));
@@ -228,10 +241,42 @@ TEST_F(LoopGraph, TheMapIsSavedAndLoadedIntoAFreshGraphWithTheSameKeyframesAndIn
   EXPECT_FALSE(bad.response.success);
   EXPECT_NE(bad.response.message.find("no such state file"), std::string::npos) << bad.response.message;
 
+  // Transactions: a folder whose last stage's file is broken, or that mixes two saves, loads nowhere (before,
+  // the stages ahead of the refusal took the new map); a save that cannot replace its folder changes nothing.
+  namespace fs = std::filesystem;
+  auto refusedEverywhere = [&](const std::string& folder, const std::string& why) {
+    binloop::LoadMap l;
+    l.request.directory = folder;
+    ASSERT_TRUE(ros::service::call("/binloop/load_map", l));
+    EXPECT_FALSE(l.response.success);
+    EXPECT_NE(l.response.message.find(why), std::string::npos) << l.response.message;
+    EXPECT_NE(l.response.message.find("nothing loaded"), std::string::npos) << l.response.message;
+    const auto now = statistics();  // as empty as after the reset (tracking: no tracker until a camera comes)
+    for (const char* k : {"tracking/keyframes", "local_mapping/keyframes", "loop_detector/keyframes", "loop_closing/keyframes"})
+      EXPECT_EQ(now.count(k) ? now.at(k) : "missing", empty.count(k) ? empty.at(k) : "missing")
+          << k << " after refusing " << folder;
+  };
+  fs::copy(dir / "map", dir / "broken");
+  fs::resize_file(binloop::stageStatePath(dir / "broken", "loop_closing"), 100);
+  refusedEverywhere(dir / "broken", "truncated state file");
+  fs::copy(dir / "map", dir / "mixed");
+  fs::copy_file(binloop::stageStatePath(again_dir, "loop_detector"), binloop::stageStatePath(dir / "mixed", "loop_detector"),
+                fs::copy_options::overwrite_existing);
+  refusedEverywhere(dir / "mixed", "the folder mixes two saves");
+  fs::create_directories(dir / "home");
+  std::ofstream(dir / "home/notes.txt") << "mine";
+  binloop::SaveMap over;
+  over.request.directory = dir / "home";
+  ASSERT_TRUE(ros::service::call("/binloop/save_map", over));
+  EXPECT_FALSE(over.response.success);
+  EXPECT_NE(over.response.message.find("which is not a saved map's"), std::string::npos) << over.response.message;
+  EXPECT_TRUE(fs::exists(dir / "home/notes.txt"));
+
   binloop::LoadMap load;
   load.request.directory = dir / "map";
   ASSERT_TRUE(ros::service::call("/binloop/load_map", load));
   ASSERT_TRUE(load.response.success) << load.response.message;
+  EXPECT_EQ(load.response.map_id, save.response.map_id);
   std::cout << "loaded: " << load.response.message << "\n";
   const auto after = statistics();
   for (const char* k : {"tracking/keyframes", "tracking/map_points", "local_mapping/keyframes", "local_mapping/map_points",
@@ -408,3 +453,71 @@ TEST_F(LoopGraph, PairsWithoutCameraInfoAreReportedThenTrackingStarts) {
 }
 
 int main(int argc, char** argv) { return binloop::test::runRostest(argc, argv, "loop_graph_rostest"); }
+
+// Run alone by stage_restarts.test (the split graph with respawn on; the other .test files leave it out): the
+// loop stages' processes are killed during the drive and come back; local mapping sends them the map again,
+// so the revisit at the end is still closed against keyframes made before the restarts, and mapping applies
+// the correction (the sequences agree again).
+TEST_F(LoopGraph, RestartedLoopStagesGetTheMapAgainAndTheRevisitIsClosed) {
+  const Drive& d = drive();
+  ASSERT_TRUE(d.problem.empty()) << d.problem;
+  const std::vector<Pair> pairs = readPairs(d.bag);
+  ASSERT_TRUE(graphConnected());
+  const size_t lap = static_cast<size_t>(d.route.size() / 1.25);
+  struct Restart {
+    size_t at;
+    const char* stage;
+    bool back = false;
+    std::string holds;  // the restarted stage's keyframes and mapping's, once it is back
+  };
+  std::vector<Restart> restarts = {{40, "loop_closing"}, {lap / 2, "loop_detector"}};
+  for (size_t i = 0; i < pairs.size(); ++i) {
+    for (Restart& r : restarts) {
+      if (i != r.at) continue;
+      const std::string node = std::string("/binloop/") + r.stage;
+      ASSERT_EQ(binloop::test::runCommand("rosnode kill " + node).code, 0) << "could not kill " << node;
+      // Back when it answers and holds as many keyframes as mapping (the map sent again).
+      const ros::WallTime until = ros::WallTime::now() + ros::WallDuration(60);
+      ros::WallDuration(1.0).sleep();
+      while (!r.back && ros::WallTime::now() < until) {
+        const auto s = statistics();
+        auto mine = s.find(std::string(r.stage) + "/keyframes"), mapping = s.find("local_mapping/keyframes");
+        if (mine != s.end() && mapping != s.end() && std::stoi(mapping->second) > 5 &&
+            std::stoi(mine->second) >= std::stoi(mapping->second)) {
+          r.back = true;
+          r.holds = mine->second + " of " + mapping->second;
+        }
+        ros::WallDuration(0.5).sleep();
+      }
+      EXPECT_TRUE(r.back) << r.stage << " did not come back holding the map";
+      std::cout << r.stage << " restarted at pair " << i << ": holds " << r.holds << " keyframes\n";
+    }
+    publishPair(pairs[i].left, pairs[i].right, pairs[i].left_info, pairs[i].right_info);
+    const double stamp = pairs[i].left.header.stamp.toSec();
+    waitFor(1.0, [&] { return seen_.poses.count(stamp) > 0; });
+  }
+  const bool closed = waitFor(30, [&] {
+    for (const auto& c : seen_.closures)
+      if (c.status == binloop::LoopClosure::ACCEPTED) return true;
+    return false;
+  });
+  ASSERT_TRUE(closed) << "no loop accepted after the restarts";
+  {
+    std::lock_guard<std::mutex> lk(seen_.m);
+    for (const auto& c : seen_.closures) {
+      if (c.status != binloop::LoopClosure::ACCEPTED) continue;
+      EXPECT_LT(c.match_frame, restarts.front().at) << "the loop should reach keyframes made before the restarts";
+      EXPECT_LT((d.route[c.query_frame].translation() - d.route[c.match_frame].translation()).norm(), 10);
+    }
+  }
+  // Mapping applied it: its correction count follows loop closing's.
+  bool applied = false;
+  for (int tries = 0; tries < 20 && !applied; ++tries, ros::WallDuration(0.5).sleep()) {
+    const auto s = statistics();
+    applied = s.count("local_mapping/corrections") && std::stoi(s.at("local_mapping/corrections")) >= 1 &&
+              s.at("local_mapping/corrections") == s.at("loop_closing/corrections");
+  }
+  const auto s = statistics();
+  EXPECT_TRUE(applied) << "mapping applied " << (s.count("local_mapping/corrections") ? s.at("local_mapping/corrections") : "?")
+                       << " corrections, loop closing made " << (s.count("loop_closing/corrections") ? s.at("loop_closing/corrections") : "?");
+}

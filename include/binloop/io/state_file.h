@@ -1,13 +1,15 @@
 #pragma once
 // A stage's saved state (the map save/load services): one file per stage, so that each stage saves and loads
 // only what it owns, in whichever process it runs. Layout: a 32-byte header (magic "BLSTATE1", format
-// version, payload size, payload checksum, the stage's name length) and the stage's name, then the payload:
-// plain little-endian numbers, strings and arrays written field by field (never a struct's bytes, whose
-// padding would make two saves of one state differ).
+// version, payload size, payload checksum, the stage's name length), the stage's name, the id of the map save
+// it belongs to (io/map_folder.h: every stage's file of one save carries the same), then the payload: plain
+// little-endian numbers, strings and arrays written field by field (never a struct's bytes, whose padding
+// would make two saves of one state differ).
 //
-// Written to <path>.partial and renamed when complete, so an interrupted save never leaves a half file under
-// the real name. A reader checks magic, version, stage and checksum before the stage sees a byte, and names
-// the field it was reading when a file ends early; every error is a DataError naming the file.
+// Written to <path>.partial, flushed to disk (fsync) and renamed when complete, so an interrupted save never
+// leaves a half file under the real name. A reader checks magic, version, stage and checksum before the
+// stage sees a byte, and names the field it was reading when a file ends early; every error is a DataError
+// naming the file.
 #include <cstdint>
 #include <cstring>
 #include <string>
@@ -24,9 +26,11 @@ std::string stageStatePath(const std::string& directory, const std::string& stag
 
 class StateWriter {
  public:
-  static constexpr uint32_t kVersion = 2;  // 2: loop closing keeps its culled keyframes' parents
-  /// The stage name is checked on load ("tracking", "local_mapping", ...).
-  StateWriter(std::string path, std::string stage);
+  // 2: loop closing keeps its culled keyframes' parents; 3: the map id after the stage's name (the payload
+  // is version 2's, so version 2 files are read too, with map id 0).
+  static constexpr uint32_t kVersion = 3;
+  /// The stage name is checked on load ("tracking", "local_mapping", ...); `map_id` names the save.
+  StateWriter(std::string path, std::string stage, uint64_t map_id);
 
   template <class T>
   void put(T v) {
@@ -47,14 +51,20 @@ class StateWriter {
     if (!v.empty()) std::memcpy(bytes_.data() + at, v.data(), v.size() * sizeof(T));
   }
 
-  /// Writes <path>.partial and renames it to <path>. Throws DataError when the folder is not writable.
+  /// Writes <path>.partial, syncs it to disk and renames it to <path>. Throws DataError when the folder is
+  /// not writable or the disk is full.
   void finish();
   size_t size() const { return bytes_.size(); }
 
  private:
   std::string path_, stage_;
+  uint64_t map_id_;
   std::vector<uint8_t> bytes_;
 };
+
+/// The map id in the header of stage `stage`'s state file `path`, reading the header only (0 for a file
+/// from before map ids). Throws DataError as StateReader does for the header.
+uint64_t stateFileMapId(const std::string& path, const std::string& stage);
 
 class StateReader {
  public:
@@ -85,30 +95,34 @@ class StateReader {
   void expectEnd();
   [[noreturn]] void fail(const std::string& what) const;
   const std::string& path() const { return path_; }
+  uint64_t mapId() const { return map_id_; }
 
  private:
   const uint8_t* take(size_t n, const char* what);
 
   std::string path_;
+  uint64_t map_id_ = 0;
   std::vector<uint8_t> bytes_;
   size_t pos_ = 0;
 };
 
-/// Writes a stage (anything with save(StateWriter&)) into its state file `path` as stage `name`; returns the
-/// payload bytes written.
+/// Writes a stage (anything with save(StateWriter&)) into its state file `path` as stage `name` of map save
+/// `map_id`; returns the payload bytes written.
 template <class Stage>
-size_t saveStateFile(const Stage& s, const std::string& path, const std::string& name) {
-  StateWriter w(path, name);
+size_t saveStateFile(const Stage& s, const std::string& path, const std::string& name, uint64_t map_id) {
+  StateWriter w(path, name, map_id);
   s.save(w);
   w.finish();
   return w.size();
 }
 
-/// Loads the state file `path` of stage `name` into `s` (a newly made stage). Throws DataError.
+/// Loads the state file `path` of stage `name` into `s` (a newly made stage); returns the file's map id.
+/// Throws DataError.
 template <class Stage>
-void loadStateFile(Stage& s, const std::string& path, const std::string& name) {
+uint64_t loadStateFile(Stage& s, const std::string& path, const std::string& name) {
   StateReader r(path, name);
   s.load(r);
+  return r.mapId();
 }
 
 }  // namespace binloop

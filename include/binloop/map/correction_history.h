@@ -22,6 +22,10 @@ class CorrectionHistory {
   /// Keyframe `id` moved by `delta` (T_after * T_before^-1, world frame) in the current correction.
   void note(SlamKeyframeId id, const Pose3& delta);
   uint64_t applied() const { return static_cast<uint64_t>(deltas_.size()); }
+  /// Counts corrections up to `sequence` as applied without knowing what they did (they moved nothing this
+  /// history knows of): for a stage that started after them, so that its sequence agrees with the map's
+  /// again. Nothing happens when `sequence` is not ahead.
+  void catchUp(uint64_t sequence);
 
   /// The world-frame change, since its creator had applied `seen` corrections, of a pose that rides on
   /// keyframe `anchor`: the corrections after `seen`, composed in order. Identity when none is missing or

@@ -106,6 +106,11 @@ class LocalMapper {
   size_t keyframeCount() const { return kfs_.size(); }
   size_t pointCount() const { return pts_.size(); }
 
+  /// Every keyframe of the map as local mapping sends it to the loop stages, marked `resent`, in the order
+  /// they came: for a loop stage that started after them (a restarted process), so that it holds the map
+  /// again. Poses as they are now, corrections_seen = correctionsApplied().
+  std::vector<msg::KeyFramePtr> keyframeMessages() const;
+
   /// The whole map it owns (keyframes with keypoints and descriptors, points with their observations, the
   /// culled keyframes' anchors, corrections made), in id order: two saves of one map give the same bytes.
   void save(StateWriter& w) const;

@@ -34,6 +34,9 @@ struct KeyFrame {
   // Loop corrections its creator had applied when it made it (Correction::sequence). A receiver that has
   // applied more moves the pose and new points with the parent's correction (messages/correction.h).
   uint64_t corrections_seen = 0;
+  // Sent again by local mapping to a loop stage that (re)started (LocalMapper::keyframeMessages): a keyframe
+  // of the map to hold and index, not a new one to search for loops with.
+  bool resent = false;
 };
 
 using KeyFramePtr = std::shared_ptr<const KeyFrame>;

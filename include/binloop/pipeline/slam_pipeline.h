@@ -59,14 +59,18 @@ class SlamPipeline {
   /// that cannot be made; the running one stays.
   void switchDetector(const std::string& model);
 
-  /// Writes every stage's state into `directory` (made if missing), one file per stage as the ROS map services
-  /// do (io/state_file.h, stageStatePath). In lock-step, or after finish(). Throws DataError.
-  void saveMap(const std::string& directory) const;
+  /// Writes every stage's state into `directory`, one file per stage as the ROS map services do
+  /// (io/state_file.h, stageStatePath), as one transaction (io/map_folder.h: a new folder swapped in for the
+  /// old); returns the save's map id. In lock-step, or after finish(). Throws DataError, and `directory` is
+  /// then as it was.
+  uint64_t saveMap(const std::string& directory) const;
   /// Loads a map saved by saveMap (or the ROS save_map service) into this new pipeline, before its first
   /// frame: tracking then relocalises in it and the loop stages search and correct it. Throws DataError
   /// (a missing or broken file, another camera, extractor or vocabulary), and the pipeline must then be
-  /// discarded.
-  void loadMap(const std::string& directory);
+  /// discarded. Every stage's file is checked to be of one save before any is read; returns its map id.
+  uint64_t loadMap(const std::string& directory);
+  /// The stages that save state: tracking, local_mapping, and with loop closing loop_detector, loop_closing.
+  std::vector<std::string> stageNames() const;
 
   /// A loop between two keyframes from outside (another front end, a person), verified and guarded like a
   /// detected one by loop closing, on its thread, after what it has queued; the outcome appears in the loop

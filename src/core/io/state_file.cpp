@@ -1,9 +1,9 @@
 #include "binloop/io/state_file.h"
 
 #include <algorithm>
-#include <cstdio>
 #include <fstream>
 
+#include "binloop/io/durable_file.h"
 #include "binloop/util/checksum.h"
 
 namespace binloop {
@@ -29,7 +29,8 @@ std::string stageStatePath(const std::string& directory, const std::string& stag
   return directory + "/" + stage + ".state";
 }
 
-StateWriter::StateWriter(std::string path, std::string stage) : path_(std::move(path)), stage_(std::move(stage)) {}
+StateWriter::StateWriter(std::string path, std::string stage, uint64_t map_id)
+    : path_(std::move(path)), stage_(std::move(stage)), map_id_(map_id) {}
 
 void StateWriter::putString(const std::string& s) {
   put<uint64_t>(s.size());
@@ -37,58 +38,76 @@ void StateWriter::putString(const std::string& s) {
 }
 
 void StateWriter::finish() {
-  uint8_t header[kHeaderBytes] = {};
-  std::memcpy(header, kMagic, 8);
-  store<uint32_t>(header + 8, kVersion);
-  store<uint32_t>(header + 12, static_cast<uint32_t>(stage_.size()));
-  store<uint64_t>(header + 16, bytes_.size());
-  store<uint64_t>(header + 24, checksum64(bytes_.data(), bytes_.size()));
-  const std::string partial = path_ + ".partial";
-  {
-    std::ofstream out(partial, std::ios::binary | std::ios::trunc);
-    if (!out) throw dataError(path_, 0, "cannot write the state file (is the folder there and writable?)");
-    out.write(reinterpret_cast<const char*>(header), kHeaderBytes);
-    out.write(stage_.data(), static_cast<std::streamsize>(stage_.size()));
-    out.write(reinterpret_cast<const char*>(bytes_.data()), static_cast<std::streamsize>(bytes_.size()));
-    out.flush();
-    if (!out) {
-      std::remove(partial.c_str());
-      throw dataError(path_, 0, "writing the state file failed (disk full?)");
-    }
+  std::vector<uint8_t> head(kHeaderBytes + stage_.size() + sizeof(uint64_t));
+  std::memcpy(head.data(), kMagic, 8);
+  store<uint32_t>(head.data() + 8, kVersion);
+  store<uint32_t>(head.data() + 12, static_cast<uint32_t>(stage_.size()));
+  store<uint64_t>(head.data() + 16, bytes_.size());
+  store<uint64_t>(head.data() + 24, checksum64(bytes_.data(), bytes_.size()));
+  std::memcpy(head.data() + kHeaderBytes, stage_.data(), stage_.size());
+  store<uint64_t>(head.data() + kHeaderBytes + stage_.size(), map_id_);
+  writeDurably(path_, {{head.data(), head.size()}, {bytes_.data(), bytes_.size()}});
+}
+
+namespace {
+
+// The header, the stage's name and the map id of `path`, checked against `stage`; `in` is left at the payload.
+struct Preamble {
+  uint64_t payload = 0, checksum = 0, map_id = 0;
+};
+
+Preamble readPreamble(std::ifstream& in, const std::string& path, const std::string& stage) {
+  if (!in) throw dataError(path, 0, "no such state file");
+  in.seekg(0, std::ios::end);
+  const uint64_t size = static_cast<uint64_t>(in.tellg());
+  in.seekg(0);
+  if (size < kHeaderBytes)
+    throw dataError(path, 0, "not a binloop state file (" + std::to_string(size) + " bytes, shorter than a header)");
+  uint8_t header[kHeaderBytes];
+  in.read(reinterpret_cast<char*>(header), kHeaderBytes);
+  if (std::memcmp(header, kMagic, 8) != 0) throw dataError(path, 0, "not a binloop state file (no BLSTATE1 magic)");
+  const uint32_t version = load<uint32_t>(header + 8);
+  if (version != 2 && version != StateWriter::kVersion)
+    throw dataError(path, 0, "state file version " + std::to_string(version) + ", this binloop reads versions 2 and " +
+                                 std::to_string(StateWriter::kVersion));
+  const uint64_t name_bytes = load<uint32_t>(header + 12);
+  const uint64_t id_bytes = version >= 3 ? sizeof(uint64_t) : 0;
+  Preamble p;
+  p.payload = load<uint64_t>(header + 16);
+  p.checksum = load<uint64_t>(header + 24);
+  // Compared piece by piece: a corrupt size must not wrap the sum round to the file's size.
+  const uint64_t rest = size - kHeaderBytes;
+  if (name_bytes > rest || id_bytes > rest - name_bytes || p.payload != rest - name_bytes - id_bytes)
+    throw dataError(path, 0, "truncated state file (" + std::to_string(size) + " bytes, the header announces " +
+                                 std::to_string(name_bytes) + " of name and " + std::to_string(p.payload) +
+                                 " of payload after its " + std::to_string(kHeaderBytes) + ")");
+  std::string name(name_bytes, '\0');
+  in.read(name.data(), static_cast<std::streamsize>(name_bytes));
+  if (name != stage) throw dataError(path, 0, "this is the " + name + " stage's state, not the " + stage + " stage's");
+  if (id_bytes) {
+    uint8_t id[sizeof(uint64_t)];
+    in.read(reinterpret_cast<char*>(id), sizeof id);
+    p.map_id = load<uint64_t>(id);
   }
-  if (std::rename(partial.c_str(), path_.c_str()) != 0) {
-    std::remove(partial.c_str());
-    throw dataError(path_, 0, "cannot rename " + partial + " to it");
-  }
+  if (!in) throw dataError(path, 0, "reading the state file failed");
+  return p;
+}
+
+}  // namespace
+
+uint64_t stateFileMapId(const std::string& path, const std::string& stage) {
+  std::ifstream in(path, std::ios::binary);
+  return readPreamble(in, path, stage).map_id;
 }
 
 StateReader::StateReader(std::string path, const std::string& stage) : path_(std::move(path)) {
-  std::ifstream in(path_, std::ios::binary | std::ios::ate);
-  if (!in) throw dataError(path_, 0, "no such state file");
-  const std::streamoff size = in.tellg();
-  in.seekg(0);
-  if (size < static_cast<std::streamoff>(kHeaderBytes))
-    throw dataError(path_, 0, "not a binloop state file (" + std::to_string(size) + " bytes, shorter than a header)");
-  uint8_t header[kHeaderBytes];
-  in.read(reinterpret_cast<char*>(header), kHeaderBytes);
-  if (std::memcmp(header, kMagic, 8) != 0) throw dataError(path_, 0, "not a binloop state file (no BLSTATE1 magic)");
-  const uint32_t version = load<uint32_t>(header + 8);
-  if (version != StateWriter::kVersion)
-    throw dataError(path_, 0, "state file version " + std::to_string(version) + ", this binloop reads version " +
-                                  std::to_string(StateWriter::kVersion));
-  const uint32_t name_bytes = load<uint32_t>(header + 12);
-  const uint64_t payload = load<uint64_t>(header + 16);
-  const uint64_t checksum = load<uint64_t>(header + 24);
-  if (static_cast<uint64_t>(size) != kHeaderBytes + name_bytes + payload)
-    throw dataError(path_, 0, "truncated state file (" + std::to_string(size) + " bytes, the header announces " +
-                                  std::to_string(kHeaderBytes + name_bytes + payload) + ")");
-  std::string name(name_bytes, '\0');
-  in.read(name.data(), name_bytes);
-  if (name != stage) throw dataError(path_, 0, "this is the " + name + " stage's state, not the " + stage + " stage's");
-  bytes_.resize(payload);
-  in.read(reinterpret_cast<char*>(bytes_.data()), static_cast<std::streamsize>(payload));
+  std::ifstream in(path_, std::ios::binary);
+  const Preamble p = readPreamble(in, path_, stage);
+  map_id_ = p.map_id;
+  bytes_.resize(p.payload);
+  in.read(reinterpret_cast<char*>(bytes_.data()), static_cast<std::streamsize>(p.payload));
   if (!in) throw dataError(path_, 0, "reading the state file failed");
-  if (checksum64(bytes_.data(), bytes_.size()) != checksum)
+  if (checksum64(bytes_.data(), bytes_.size()) != p.checksum)
     throw dataError(path_, 0, "corrupt state file (payload checksum differs)");
 }
 

@@ -35,6 +35,12 @@ void LoopCloser::addKeyframe(const msg::KeyFramePtr& kf) {
                                 std::to_string(kf->state.point_ids.size()) + " point ids");
   const bool known = states_.count(kf->id) > 0;
   frames_[kf->id] = kf;
+  // The map has applied corrections this stage never made: it (re)started after them. Its next correction
+  // must follow the map's, or mapping refuses every one.
+  if (kf->corrections_seen > history_.applied()) {
+    history_.catchUp(kf->corrections_seen);
+    last_correction_at_ = order_.size();
+  }
   msg::KeyframeState s = kf->state;
   if (kf->corrections_seen < history_.applied())
     s.T_w_c = orthonormalized(history_.adopt(kf->corrections_seen, kf->id, s.parent) * s.T_w_c);

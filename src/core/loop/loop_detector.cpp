@@ -149,6 +149,7 @@ LoopDetector::Output LoopDetector::process(const msg::KeyFrame& kf) {
   dense_[kf.id] = dense;
   order_.push_back(kf.id);
   descriptors_.push_back(kf.descriptors);
+  if (kf.resent) return out;  // a keyframe of the map sent again: held and indexed, not a query
   auto withSignature = [](std::shared_ptr<msg::LoopCandidates> c, double ms) {
     c->timings.insert(c->timings.begin(), msg::LoopStepTime{"signature", ms});
     c->total_ms += ms;

@@ -15,6 +15,10 @@ void CorrectionHistory::begin(uint64_t sequence) {
   deltas_.emplace_back();
 }
 
+void CorrectionHistory::catchUp(uint64_t sequence) {
+  while (applied() < sequence) deltas_.emplace_back();
+}
+
 void CorrectionHistory::note(SlamKeyframeId id, const Pose3& delta) {
   if (deltas_.empty()) throw std::logic_error("CorrectionHistory::note before begin");
   deltas_.back()[id] = delta;

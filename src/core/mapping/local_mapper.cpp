@@ -546,6 +546,30 @@ bool LocalMapper::keyframePose(SlamKeyframeId id, Pose3* T_w_c) const {
   return false;
 }
 
+std::vector<msg::KeyFramePtr> LocalMapper::keyframeMessages() const {
+  std::vector<const KF*> kfs;
+  for (const auto& [id, kf] : kfs_) kfs.push_back(&kf);
+  std::sort(kfs.begin(), kfs.end(), [](const KF* a, const KF* b) { return a->seq < b->seq; });
+  std::vector<msg::KeyFramePtr> out;
+  for (const KF* kf : kfs) {
+    auto m = std::make_shared<msg::KeyFrame>();
+    m->id = kf->state.id;
+    m->revision = 1;
+    m->frame_index = kf->frame_index;
+    m->stamp_s = kf->stamp_s;
+    m->camera = camera_;
+    m->scale_factor = scales_.factor;
+    m->levels = static_cast<uint8_t>(scales_.levels());
+    m->keypoints = kf->keypoints;
+    m->descriptors = kf->descriptors;
+    m->state = kf->state;
+    m->corrections_seen = history_.applied();
+    m->resent = true;
+    out.push_back(std::move(m));
+  }
+  return out;
+}
+
 msg::LocalMapUpdatePtr LocalMapper::apply(const msg::Correction& c) {
   const auto t0 = std::chrono::steady_clock::now();
   history_.begin(c.sequence);  // throws for a correction out of order

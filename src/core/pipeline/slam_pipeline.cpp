@@ -4,6 +4,7 @@
 #include <filesystem>
 
 #include "binloop/io/filesystem.h"
+#include "binloop/io/map_folder.h"
 #include "binloop/io/state_file.h"
 
 namespace binloop {
@@ -42,25 +43,34 @@ SlamPipeline::SlamPipeline(const StereoCamera& cam, const TrackerParams& tp, con
 
 SlamPipeline::~SlamPipeline() { finish(); }
 
-void SlamPipeline::saveMap(const std::string& directory) const {
-  std::error_code ec;
-  std::filesystem::create_directories(directory, ec);
-  if (ec) throw dataError(directory, 0, "cannot make the map folder: " + ec.message());
-  saveStateFile(tracker_, stageStatePath(directory, "tracking"), "tracking");
-  saveStateFile(mapper_, stageStatePath(directory, "local_mapping"), "local_mapping");
-  if (detector_) saveStateFile(*detector_, stageStatePath(directory, "loop_detector"), "loop_detector");
-  if (closer_) saveStateFile(*closer_, stageStatePath(directory, "loop_closing"), "loop_closing");
+std::vector<std::string> SlamPipeline::stageNames() const {
+  std::vector<std::string> stages = {"tracking", "local_mapping"};
+  if (detector_) stages.push_back("loop_detector");
+  if (closer_) stages.push_back("loop_closing");
+  return stages;
 }
 
-void SlamPipeline::loadMap(const std::string& directory) {
+uint64_t SlamPipeline::saveMap(const std::string& directory) const {
+  MapSave save(directory);
+  saveStateFile(tracker_, stageStatePath(save.staging(), "tracking"), "tracking", save.mapId());
+  saveStateFile(mapper_, stageStatePath(save.staging(), "local_mapping"), "local_mapping", save.mapId());
+  if (detector_) saveStateFile(*detector_, stageStatePath(save.staging(), "loop_detector"), "loop_detector", save.mapId());
+  if (closer_) saveStateFile(*closer_, stageStatePath(save.staging(), "loop_closing"), "loop_closing", save.mapId());
+  save.commit();
+  return save.mapId();
+}
+
+uint64_t SlamPipeline::loadMap(const std::string& directory) {
   requireDirectory(directory);
   if (detector_ && !std::filesystem::exists(stageStatePath(directory, "loop_detector")))
     throw dataError(directory, 0, "the map has no loop_detector.state (saved without loop closing): load it with "
                                   "loop closing off (--detector none)");
+  const uint64_t map_id = checkMapFolder(directory, stageNames());
   loadStateFile(tracker_, stageStatePath(directory, "tracking"), "tracking");
   loadStateFile(mapper_, stageStatePath(directory, "local_mapping"), "local_mapping");
   if (detector_) loadStateFile(*detector_, stageStatePath(directory, "loop_detector"), "loop_detector");
   if (closer_) loadStateFile(*closer_, stageStatePath(directory, "loop_closing"), "loop_closing");
+  return map_id;
 }
 
 void SlamPipeline::switchDetector(const std::string& model) {

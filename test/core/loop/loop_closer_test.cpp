@@ -140,6 +140,27 @@ TEST_F(LoopCloserTest, ARevisitWithinTheDriftBoundIsAcceptedAndCorrectsTheQuery)
   EXPECT_EQ(lc.loops().size(), 1u);
 }
 
+// A loop closer restarted after mapping applied three corrections gets the map resent with that count: its
+// first correction is the fourth, the one mapping waits for (before, it sent the first and mapping refused it
+// and every later one).
+TEST_F(LoopCloserTest, AStageStartedAfterCorrectionsFollowsTheMapsSequence) {
+  LoopCloser lc;
+  for (int i = 0; i < kLap; ++i) {
+    auto kf = keyframe(i, truthOnCircle(i), i < 6 ? i : -1, truthOnCircle(i));
+    kf->corrections_seen = 3;
+    kf->resent = true;
+    lc.addKeyframe(kf);
+  }
+  Pose3 truth = truthOnCircle(0);
+  truth.translation().x() += 1.0;
+  lc.addKeyframe(keyframe(kLap, truth, 0, truthOnCircle(0)));  // a new one, made before it heard of any
+  const LoopCloser::Output out = lc.process(proposal(kLap, 0));
+  ASSERT_EQ(out.closures.size(), 1u);
+  ASSERT_EQ(out.closures[0]->status, "accepted") << out.closures[0]->detail;
+  ASSERT_TRUE(out.correction);
+  EXPECT_EQ(out.correction->sequence, 4u);
+}
+
 TEST_F(LoopCloserTest, ACandidateFromAnotherPlaceIsRejectedForTooFewMatches) {
   LoopCloser lc;
   driveLap(lc);

@@ -154,6 +154,24 @@ TEST_F(LoopDetectorTest, AnUnknownModelIsRefusedAndTheRunningOneStays) {
   EXPECT_THROW(d.process(empty), std::invalid_argument);
 }
 
+// A restarted detector gets the map's keyframes again from local mapping, marked resent: they are indexed,
+// never queried (no old revisit is proposed again), and the next new keyframe finds them.
+TEST_F(LoopDetectorTest, ResentKeyframesAreIndexedWithoutQueries) {
+  LoopDetector d(hbowParams(), factory());
+  for (int i = 0; i < 40; ++i) {
+    msg::KeyFrame kf = keyframe(i, i < 35 ? i : i - 30);  // 35-39 revisit places 5-9
+    kf.resent = true;
+    const auto out = d.process(kf);
+    EXPECT_FALSE(out.active) << "resent keyframe " << i << " was queried";
+    EXPECT_TRUE(out.shadow.empty());
+  }
+  EXPECT_EQ(d.keyframeCount(), 40u);
+  const auto out = d.process(keyframe(40, 12));
+  ASSERT_TRUE(out.active);
+  ASSERT_FALSE(out.active->candidates.empty()) << out.active->status << ": " << out.active->detail;
+  EXPECT_NEAR(indexOf(out.active->candidates.front().id), 12, 1) << "the resent keyframes are in the index";
+}
+
 TEST_F(LoopDetectorTest, RecentKeyframesAreNeverCandidates) {
   LoopDetectorParams p = hbowParams();
   p.ignore_recent = 20;

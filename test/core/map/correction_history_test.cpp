@@ -29,6 +29,20 @@ TEST(CorrectionHistory, CorrectionsComposeInOrderFromTheFirstOneMissed) {
   EXPECT_THROW(h.begin(4), std::invalid_argument);
 }
 
+// A stage that started after corrections 1-2 counts them as applied, moving nothing, and goes on with 3.
+TEST(CorrectionHistory, CatchingUpCountsCorrectionsMadeBeforeTheStageStarted) {
+  CorrectionHistory h;
+  h.catchUp(2);
+  EXPECT_EQ(h.applied(), 2u);
+  EXPECT_TRUE(h.since(0, 1).isApprox(Pose3::Identity()));
+  h.catchUp(1);  // not ahead: nothing
+  EXPECT_EQ(h.applied(), 2u);
+  EXPECT_THROW(h.begin(2), std::invalid_argument);
+  h.begin(3);
+  h.note(1, shift(1));
+  EXPECT_TRUE(h.since(2, 1).isApprox(shift(1)));
+}
+
 TEST(CorrectionHistory, ALateKeyframeIsRecordedSoThatKeyframesMadeOnItFollow) {
   CorrectionHistory h;
   h.begin(1);

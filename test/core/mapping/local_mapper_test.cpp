@@ -180,6 +180,31 @@ TEST_F(LocalMapperTest, AnIdItAlreadyHoldsIsRefusedAndTheMapStays) {
   EXPECT_EQ(m.pointCount(), points);
 }
 
+// What a restarted loop stage gets again: every keyframe in the order it came, with its keypoints,
+// descriptors and pose as the map has it now, marked resent, with the corrections the map has applied.
+TEST_F(LocalMapperTest, TheMapsKeyframesAreSentAgainInTheOrderTheyCame) {
+  for (int i = 0; i < 200; ++i) addPoint({rng.uniform(-6, 6), rng.uniform(-2, 1), rng.uniform(8, 18)});
+  LocalMapperParams p;
+  p.cull_keyframes = false;
+  LocalMapper m(p);
+  const std::vector<msg::KeyFrame> sent = {keyframe(0, range(0, 100), true), keyframe(0.5, range(50, 150), true),
+                                           keyframe(1.0, range(100, 200), true)};
+  for (const auto& k : sent) m.process(k);
+  const auto again = m.keyframeMessages();
+  ASSERT_EQ(again.size(), sent.size());
+  for (size_t i = 0; i < sent.size(); ++i) {
+    EXPECT_EQ(again[i]->id, sent[i].id);
+    EXPECT_TRUE(again[i]->resent);
+    EXPECT_EQ(again[i]->keypoints.size(), sent[i].keypoints.size());
+    EXPECT_TRUE(again[i]->descriptors == sent[i].descriptors);
+    EXPECT_EQ(again[i]->corrections_seen, m.correctionsApplied());
+    Pose3 T;
+    ASSERT_TRUE(m.keyframePose(sent[i].id, &T));
+    EXPECT_TRUE(again[i]->state.T_w_c.isApprox(T));
+    EXPECT_EQ(again[i]->camera.fx, sent[i].camera.fx);
+  }
+}
+
 // A loop correction names k1 (unchanged) and k2 (moved 1 m sideways and turned 2 degrees); k3, which loop
 // closing had not seen yet, follows its spanning-tree parent k2; each point moves with the keyframe that
 // created it. A keyframe tracking made before it heard of the correction arrives later and moves with its

@@ -3,6 +3,7 @@
 // drive had never stopped, and broken or mismatched files are refused with a reason.
 #include <gtest/gtest.h>
 
+#include <cstring>
 #include <fstream>
 #include <iterator>
 
@@ -59,8 +60,13 @@ TEST(MapSaveLoad, ARoundTripChangesNoByteAndTheLoadedMapIsTrackedAndClosed) {
   loaded.loadMap(first);
   loaded.saveMap(again);
   for (const char* s : kStages) {
-    const std::string a = bytesOf(stageStatePath(first, s)), b = bytesOf(stageStatePath(again, s));
+    std::string a = bytesOf(stageStatePath(first, s)), b = bytesOf(stageStatePath(again, s));
     EXPECT_GT(a.size(), 1000u) << s;
+    // Every byte but the map id after the stage's name, which names the save (a new one for every save).
+    const size_t id_at = 32 + std::strlen(s);
+    EXPECT_NE(a.substr(id_at, 8), b.substr(id_at, 8)) << s << ": two saves with one map id";
+    a.replace(id_at, 8, 8, '\0');
+    b.replace(id_at, 8, 8, '\0');
     EXPECT_TRUE(a == b) << s << ": a load and a save changed the state file";
   }
   const size_t keyframes = loaded.mapper().keyframeCount();
@@ -127,6 +133,14 @@ TEST(MapSaveLoad, BrokenOrMismatchedFilesAreRefusedWithTheReason) {
   EXPECT_THROW_WITH(loadInto(map), DataError, "this is the tracking stage's state, not the local_mapping stage's");
   rewrite("not a state file at all, just some text that is long enough");
   EXPECT_THROW_WITH(loadInto(map), DataError, "not a binloop state file");
+  rewrite(good);
+  EXPECT_NO_THROW(loadInto(map));
+
+  // A folder mixing two saves of the same map is refused before any stage reads a byte.
+  const std::string later = dir / "later";
+  saveFirstLap(*d, later);
+  rewrite(bytesOf(stageStatePath(later, "local_mapping")));
+  EXPECT_THROW_WITH(loadInto(map), DataError, "the folder mixes two saves");
   rewrite(good);
   EXPECT_NO_THROW(loadInto(map));
 
