@@ -25,6 +25,11 @@ mkdir -p "$out"
 out="$(cd "$out" && pwd)"
 seq="$out/r${route}_0_$end"
 bag="$out/r${route}_0_$end.bag"
+# The accuracy benchmark's render of the whole route is the same one (seed 7): no need to render it again.
+whole="$BINLOOP_BUILD/bench/renders/r$route"
+if [ ! -f "$seq/poses.txt" ] && [ -f "$whole/poses.txt" ] && [ "$(wc -l <"$whole/poses.txt")" -eq $((end + 1)) ]; then
+  seq="$whole"
+fi
 if [ ! -f "$seq/poses.txt" ]; then
   echo "bench soak: rendering route $route frames 0-$end (seed 7) into $seq"
   "$bl" render --route "$shared/data/kitti/poses/$route.txt" --start 0 --end "$end" --step 1 --seed 7 --out "$seq" \
@@ -32,7 +37,10 @@ if [ ! -f "$seq/poses.txt" ]; then
 fi
 [ -f "$bag" ] || "$bl" kitti2bag "$seq" "$bag" >/dev/null
 
-source "$BINLOOP_BUILD/ws/devel/setup.bash"
+set --  # catkin's setup.bash reads the positional arguments
+set +u
+source "$BINLOOP_WS/devel/setup.bash"
+set -u
 export PATH="/usr/bin:$PATH"
 pids=()
 cleanup() {

@@ -78,7 +78,8 @@ class Monitor:
     def subscribe_outputs(self):
         seen = {s.name for s in self.subs}
         for topic, _ in rospy.get_published_topics("/binloop"):
-            if topic not in seen and not topic.endswith(("/left/image_raw", "/right/image_raw", "/camera_info")):
+            # tracked_frame has its typed subscriber already (rospy keeps one type a topic)
+            if topic not in seen and topic != "/binloop/tracked_frame":
                 self.subs.append(rospy.Subscriber(topic, rospy.AnyMsg, self.on_any(topic), queue_size=5))
 
     def sample(self):
@@ -158,7 +159,7 @@ def main():
         return "-" if x is None else f"{x:.{d}f}"
     print(f"soak: {result['minutes']:.1f} min, {len(frames)} frames ({tracked} tracked), {len(wraps)} wraps, "
           f"{result['wraps_tracked_again']} tracked again (at most {result['frames_to_track_after_wrap_max']} frames after a wrap)")
-    print("| | first {0:.0f} min | last {0:.0f} min | last / first |".format(w / 60))
+    print("| | first {0:g} min | last {0:g} min | last / first |".format(round(w / 60, 1)))
     print("|---|---|---|---|")
     for name, f0, f1 in (("tracking work p95 (ms)", result["work_ms_p95_first"], result["work_ms_p95_last"]),
                          ("stamp-to-pose delay p95 (ms)", result["delay_ms_p95_first"], result["delay_ms_p95_last"])):

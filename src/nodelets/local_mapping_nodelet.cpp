@@ -68,7 +68,15 @@ void LocalMappingNodelet::onInit() {
   refined_pub_ = nh.advertise<binloop::KeyFrame>(
       "refined_keyframe", 10000,
       guard_.wrap("resending the map", [this](const ros::SingleSubscriberPublisher& to) { resendMap(to); }));
-  update_pub_ = nh.advertise<binloop::LocalMapUpdate>("local_map_update", 100);
+  // A tracking that subscribes after keyframes were made (restarted) gets the whole map, to it alone.
+  update_pub_ = nh.advertise<binloop::LocalMapUpdate>(
+      "local_map_update", 100, guard_.wrap("resending the map", [this](const ros::SingleSubscriberPublisher& to) {
+        if (mapper_->keyframeCount() == 0) return;
+        std_msgs::Header header;
+        header.stamp = ros::Time::now();
+        header.frame_id = slam_frame_;
+        to.publish(toRos(*mapper_->wholeMap(), header));
+      }));
   cloud_pub_ = nh.advertise<sensor_msgs::PointCloud2>("map_points", 1, true);
   keyframes_pub_ = nh.advertise<geometry_msgs::PoseArray>("keyframes", 1, true);
   // Deep queues: a keyframe or a correction dropped here would be lost for good.

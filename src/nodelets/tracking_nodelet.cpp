@@ -11,6 +11,7 @@
 #include <deque>
 #include <memory>
 #include <optional>
+#include <utility>
 
 #include "binloop/pipeline/model_files.h"
 #include "binloop/tracking/tracker.h"
@@ -50,6 +51,7 @@ class TrackingNodelet : public nodelet::Nodelet {
   void publishDebugImage(const cv::Mat& gray, const binloop::msg::TrackedFrame& f, const std_msgs::Header& header);
   void diagnose(diagnostic_updater::DiagnosticStatusWrapper& s);
   void startOver(std::unique_ptr<binloop::Tracker> t);
+  void adopt(binloop::msg::LocalMapUpdatePtr whole);
   std::unique_ptr<StageServices> services_;
   CallbackGuard guard_{"Tracking"};
   std::unique_ptr<StampGate> stamps_;
@@ -57,6 +59,8 @@ class TrackingNodelet : public nodelet::Nodelet {
   size_t path_max_poses_ = 1000;
   ros::WallTime last_pair_wall_;
   uint64_t clock_restarts_ = 0;
+  uint64_t maps_adopted_ = 0;
+  binloop::msg::LocalMapUpdatePtr adopt_;  // local mapping's map, until the camera is known
 
   binloop::SlamConfig config_;
   std::unique_ptr<binloop::Tracker> tracker_;
@@ -202,8 +206,28 @@ void TrackingNodelet::onInit() {
                in_.right_image.c_str(), frames_out_->slamFrame().c_str());
 }
 
+// The map local mapping sent this (restarted) tracking: adopted by a tracker that has not started, or kept
+// until the camera is known; a running tracker has its map already.
+void TrackingNodelet::adopt(binloop::msg::LocalMapUpdatePtr whole) {
+  if (!tracker_) {
+    adopt_ = std::move(whole);
+    return;
+  }
+  if (tracker_->state() != binloop::msg::TrackingState::kNotInitialized) {
+    // A pair that came before the map began a new one: given up for the graph's, while it is that young.
+    if (tracker_->map().keyframeCount() > 2 || whole->keyframes.size() <= tracker_->map().keyframeCount()) return;
+    startOver(std::make_unique<binloop::Tracker>(tracker_->camera(), config_.tracker));
+  }
+  tracker_->adoptMap(*whole);
+  ++maps_adopted_;
+  NODELET_INFO("binloop/Tracking: took local mapping's map (%zu keyframes, %zu points): lost until the next frames "
+               "are relocalised in it",
+               tracker_->map().keyframeCount(), tracker_->map().pointCount());
+}
+
 // A loaded map or a reset: the tracker is replaced, and what the nodelet kept of the old one's frames goes.
 void TrackingNodelet::startOver(std::unique_ptr<binloop::Tracker> t) {
+  adopt_.reset();
   tracker_ = std::move(t);
   pending_ = 0;
   frames_out_->restart();
@@ -238,6 +262,7 @@ std::string TrackingNodelet::check(const Image& left, const Image& right) {
     try {
       tracker_ = std::make_unique<binloop::Tracker>(toStereoCamera(*left_info_, *right_info_), config_.tracker);
       NODELET_INFO("binloop/Tracking: camera from camera_info:\n%s", toStereoCamera(*left_info_, *right_info_).describe().c_str());
+      if (adopt_) adopt(std::exchange(adopt_, nullptr));
       const std::string distortion = distortionWarning(*left_info_);
       if (!distortion.empty()) NODELET_WARN("binloop/Tracking: %s", distortion.c_str());
     } catch (const std::exception& e) {
@@ -416,7 +441,8 @@ void TrackingNodelet::onInitialPose(const geometry_msgs::PoseWithCovarianceStamp
 void TrackingNodelet::onUpdate(const binloop::LocalMapUpdateConstPtr& m) {
   CpuMeter::Scope cpu(cpu_);
   try {
-    const binloop::msg::LocalMapUpdate u = fromRos(*m);
+    binloop::msg::LocalMapUpdate u = fromRos(*m);
+    if (u.whole_map) return adopt(std::make_shared<const binloop::msg::LocalMapUpdate>(std::move(u)));
     if (!tracker_) return;
     tracker_->apply(u);
     if (u.correction) ++corrections_;
@@ -449,6 +475,7 @@ void TrackingNodelet::diagnose(diagnostic_updater::DiagnosticStatusWrapper& s) {
   s.add("callbacks failed", guard_.failures());
   s.add("last callback failure", guard_.lastFailure());
   s.add("clock restarts", clock_restarts_);
+  s.add("maps taken from local mapping", maps_adopted_);
   s.add("seconds since the last pair", quiet_s);
   s.add("keyframes sent", keyframes_sent_);
   s.add("mapping queue", pending_);

@@ -214,6 +214,9 @@ binloop::LocalMapUpdate toRos(const core::LocalMapUpdate& u, const std_msgs::Hea
   m.culled_keyframes = u.culled_keyframes;
   m.corrections_seen = u.corrections_seen;
   m.correction = u.correction;
+  m.whole_map = u.whole_map;
+  m.tracking_keyframe_ids = u.tracking_keyframe_ids;
+  m.tracking_point_ids = u.tracking_point_ids;
   m.total_ms = u.total_ms;
   m.ba_ms = u.ba_ms;
   m.triangulation_ms = u.triangulation_ms;
@@ -235,6 +238,9 @@ core::LocalMapUpdate fromRos(const binloop::LocalMapUpdate& m) {
   u.culled_keyframes = m.culled_keyframes;
   u.corrections_seen = m.corrections_seen;
   u.correction = m.correction;
+  u.whole_map = m.whole_map;
+  u.tracking_keyframe_ids = m.tracking_keyframe_ids;
+  u.tracking_point_ids = m.tracking_point_ids;
   u.total_ms = m.total_ms;
   u.ba_ms = m.ba_ms;
   u.triangulation_ms = m.triangulation_ms;

@@ -454,47 +454,74 @@ TEST_F(LoopGraph, PairsWithoutCameraInfoAreReportedThenTrackingStarts) {
 
 int main(int argc, char** argv) { return binloop::test::runRostest(argc, argv, "loop_graph_rostest"); }
 
-// Run alone by stage_restarts.test (the split graph with respawn on; the other .test files leave it out): the
-// loop stages' processes are killed during the drive and come back; local mapping sends them the map again,
-// so the revisit at the end is still closed against keyframes made before the restarts, and mapping applies
-// the correction (the sequences agree again).
-TEST_F(LoopGraph, RestartedLoopStagesGetTheMapAgainAndTheRevisitIsClosed) {
+// Run alone by stage_restarts.test (the split graph with respawn on; the other .test files leave it out):
+// each stage's process but local mapping's is killed during the drive and comes back; local mapping sends it
+// the map again (the loop stages every keyframe, tracking the whole map to relocalise in), so tracking goes on
+// in the same map, and the revisit at the end is still closed against keyframes made before the restarts and
+// applied by mapping (the correction sequences agree again).
+TEST_F(LoopGraph, RestartedStagesGetTheMapAgainAndTheRevisitIsClosed) {
   const Drive& d = drive();
   ASSERT_TRUE(d.problem.empty()) << d.problem;
   const std::vector<Pair> pairs = readPairs(d.bag);
   ASSERT_TRUE(graphConnected());
   const size_t lap = static_cast<size_t>(d.route.size() / 1.25);
+  std::map<double, size_t> index_of;  // a pair's stamp -> its index (tracking counts frames from 0 again)
+  for (size_t i = 0; i < pairs.size(); ++i) index_of[pairs[i].left.header.stamp.toSec()] = i;
   struct Restart {
     size_t at;
     const char* stage;
     bool back = false;
-    std::string holds;  // the restarted stage's keyframes and mapping's, once it is back
+    std::string holds;  // what the restarted stage holds once back
   };
-  std::vector<Restart> restarts = {{40, "loop_closing"}, {lap / 2, "loop_detector"}};
+  std::vector<Restart> restarts = {{40, "loop_closing"}, {lap / 2, "loop_detector"}, {lap * 3 / 4, "tracking"}};
+  size_t tracked_again_at = 0;  // the first pair with a pose after tracking's restart
   for (size_t i = 0; i < pairs.size(); ++i) {
     for (Restart& r : restarts) {
       if (i != r.at) continue;
       const std::string node = std::string("/binloop/") + r.stage;
       ASSERT_EQ(binloop::test::runCommand("rosnode kill " + node).code, 0) << "could not kill " << node;
-      // Back when it answers and holds as many keyframes as mapping (the map sent again).
       const ros::WallTime until = ros::WallTime::now() + ros::WallDuration(60);
-      ros::WallDuration(1.0).sleep();
+      ros::WallDuration(2.0).sleep();
       while (!r.back && ros::WallTime::now() < until) {
         const auto s = statistics();
         auto mine = s.find(std::string(r.stage) + "/keyframes"), mapping = s.find("local_mapping/keyframes");
-        if (mine != s.end() && mapping != s.end() && std::stoi(mapping->second) > 5 &&
-            std::stoi(mine->second) >= std::stoi(mapping->second)) {
+        if (std::string(r.stage) == "tracking") {
+          // Back when it takes pairs again (its map comes with its camera, at the next pair).
+          r.back = s.count("tracking/frames") && left_.getNumSubscribers() > 0 && right_.getNumSubscribers() > 0;
+          if (r.back) ros::WallDuration(1.0).sleep();  // local mapping's map reaches it
+          r.holds = "-";
+        } else if (mine != s.end() && mapping != s.end() && std::stoi(mapping->second) > 5 &&
+                   std::stoi(mine->second) >= std::stoi(mapping->second)) {
           r.back = true;
-          r.holds = mine->second + " of " + mapping->second;
+          r.holds = mine->second + " of " + mapping->second + " keyframes";
         }
         ros::WallDuration(0.5).sleep();
       }
-      EXPECT_TRUE(r.back) << r.stage << " did not come back holding the map";
-      std::cout << r.stage << " restarted at pair " << i << ": holds " << r.holds << " keyframes\n";
+      EXPECT_TRUE(r.back) << r.stage << " did not come back";
+      std::cout << r.stage << " restarted at pair " << i << ": holds " << r.holds << "\n";
     }
     publishPair(pairs[i].left, pairs[i].right, pairs[i].left_info, pairs[i].right_info);
     const double stamp = pairs[i].left.header.stamp.toSec();
-    waitFor(1.0, [&] { return seen_.poses.count(stamp) > 0; });
+    const bool posed = waitFor(1.0, [&] { return seen_.poses.count(stamp) > 0; });
+    if (posed && i > restarts.back().at && !tracked_again_at) tracked_again_at = i;
+  }
+  const size_t restarted_at = restarts.back().at;
+  EXPECT_TRUE(tracked_again_at > 0 && tracked_again_at <= restarted_at + 10)
+      << "tracking posed no pair within 10 of its restart (first: " << tracked_again_at << ")";
+  {
+    // In the same map: after the restart the poses are where the car is, not at a new map's origin.
+    std::lock_guard<std::mutex> lk(seen_.m);
+    int near = 0, posed = 0;
+    for (size_t i = restarted_at; i < restarted_at + 30 && i < pairs.size(); ++i) {
+      auto it = seen_.poses.find(pairs[i].left.header.stamp.toSec());
+      if (it == seen_.poses.end()) continue;
+      ++posed;
+      const Eigen::Vector3d truth = (d.route.front().inverse() * d.route[i]).translation();
+      const geometry_msgs::Point& q = it->second.position;
+      near += (Eigen::Vector3d(q.x, q.y, q.z) - truth).norm() < 2.0;
+    }
+    EXPECT_GE(posed, 20);
+    EXPECT_EQ(near, posed) << "poses after tracking's restart are not in the map it had";
   }
   const bool closed = waitFor(30, [&] {
     for (const auto& c : seen_.closures)
@@ -507,7 +534,9 @@ TEST_F(LoopGraph, RestartedLoopStagesGetTheMapAgainAndTheRevisitIsClosed) {
     for (const auto& c : seen_.closures) {
       if (c.status != binloop::LoopClosure::ACCEPTED) continue;
       EXPECT_LT(c.match_frame, restarts.front().at) << "the loop should reach keyframes made before the restarts";
-      EXPECT_LT((d.route[c.query_frame].translation() - d.route[c.match_frame].translation()).norm(), 10);
+      auto q = index_of.find(c.header.stamp.toSec());
+      ASSERT_NE(q, index_of.end());
+      EXPECT_LT((d.route[q->second].translation() - d.route[c.match_frame].translation()).norm(), 10);
     }
   }
   // Mapping applied it: its correction count follows loop closing's.

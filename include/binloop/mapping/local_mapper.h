@@ -110,6 +110,9 @@ class LocalMapper {
   /// they came: for a loop stage that started after them (a restarted process), so that it holds the map
   /// again. Poses as they are now, corrections_seen = correctionsApplied().
   std::vector<msg::KeyFramePtr> keyframeMessages() const;
+  /// The whole map as one update marked whole_map (no keyframe's processing): for a tracker that started
+  /// after keyframes were made (a restarted process), to adopt (Tracker::adoptMap).
+  msg::LocalMapUpdatePtr wholeMap() const;
 
   /// The whole map it owns (keyframes with keypoints and descriptors, points with their observations, the
   /// culled keyframes' anchors, corrections made), in id order: two saves of one map give the same bytes.

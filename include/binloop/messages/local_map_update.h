@@ -19,6 +19,10 @@ struct LocalMapUpdate {
   std::vector<SlamKeyframeId> culled_keyframes;
   uint64_t corrections_seen = 0;  // loop corrections applied before it was made (Correction::sequence)
   bool correction = false;        // the whole map after a loop correction, not one keyframe's processing
+  bool whole_map = false;         // the whole map sent again to a stage that (re)started (LocalMapper::wholeMap)
+  // With whole_map: the highest counters of tracking's keyframe and point ids the map holds or still refers
+  // to (culled keyframes, fused points), so that a restarted tracker issues none of them again.
+  uint64_t tracking_keyframe_ids = 0, tracking_point_ids = 0;
   // what it cost, for timing.csv and the ROS diagnostics
   double total_ms = 0, ba_ms = 0, triangulation_ms = 0;
   int ba_iterations = 0;

@@ -125,6 +125,11 @@ class Tracker {
   /// Into a newly made tracker (same camera, extractor settings and vocabulary, else DataError naming both).
   /// It then starts lost: the next frame is relocalised in the loaded map.
   void load(StateReader& r);
+  /// The map local mapping holds (a whole_map update), into a tracker that has not started: a tracking
+  /// process restarted while the graph kept its map. Like a load, it then starts lost at the map's last
+  /// keyframe, and its ids go on after the highest it finds of its own in the map. Throws
+  /// std::invalid_argument once tracking has started.
+  void adoptMap(const msg::LocalMapUpdate& whole);
   /// The camera a saved tracking state was made with, to make the tracker that loads it.
   static StereoCamera savedCamera(const std::string& path);
 
@@ -147,6 +152,8 @@ class Tracker {
   /// Relocalisation from scratch against the vocabulary's (or the most recent) keyframes: the candidate
   /// that explains most of the local map among those the camera could have reached (`reach`); with
   /// `hinted`, the keyframes nearest the pose hint are tried first.
+  /// Lost at the map's last keyframe, with no motion model (after a load or an adopted map).
+  void startLostAtLastKeyframe();
   bool relocalize(Frame& f, MotionReach& reach, bool hinted);
   /// PnP RANSAC on the matches in f.points, pose optimisation, a wide search for `pts`, then the local map.
   bool poseFromScratch(Frame& f, const std::vector<const msg::MapPoint*>& pts);

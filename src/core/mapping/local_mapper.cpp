@@ -570,6 +570,20 @@ std::vector<msg::KeyFramePtr> LocalMapper::keyframeMessages() const {
   return out;
 }
 
+msg::LocalMapUpdatePtr LocalMapper::wholeMap() const {
+  auto u = std::make_shared<msg::LocalMapUpdate>();
+  wholeMapInto(*u);
+  u->whole_map = true;
+  auto seen = [](uint64_t& highest, uint64_t id) {
+    if (issuerOf(id) == IdIssuer::kTracking) highest = std::max(highest, counterOf(id));
+  };
+  for (const auto& [id, kf] : kfs_) seen(u->tracking_keyframe_ids, id);
+  for (const auto& [id, c] : culled_) seen(u->tracking_keyframe_ids, id);
+  for (const auto& [id, mp] : pts_) seen(u->tracking_point_ids, id);
+  for (const auto& [id, kept] : replaced_) seen(u->tracking_point_ids, id);
+  return u;
+}
+
 msg::LocalMapUpdatePtr LocalMapper::apply(const msg::Correction& c) {
   const auto t0 = std::chrono::steady_clock::now();
   history_.begin(c.sequence);  // throws for a correction out of order

@@ -415,7 +415,9 @@ bool Tracker::relocalize(Frame& f, MotionReach& reach, bool hinted) {
   SlamKeyframeId best_reference = reference_;
   const Pose3 start = f.T_w_c;
   std::vector<SlamKeyframeId> tries;
-  if (keyframe_db_) {
+  // An empty index (a map adopted from local mapping carries no descriptors to index) finds nothing: the
+  // most recent keyframes then, as without a vocabulary.
+  if (keyframe_db_ && keyframe_db_->size() > 0) {
     tries = keyframe_db_->candidates(f.descriptors, static_cast<size_t>(p_.reloc_keyframes), [this](SlamKeyframeId k) {
       std::vector<SlamKeyframeId> n;
       if (const msg::KeyframeState* kf = map_.keyframe(k))

@@ -54,7 +54,11 @@ void Tracker::load(StateReader& r) {
            "tracker's vocabulary could not find its places; load it with reloc_vocab none");
   }
   r.expectEnd();
-  // Lost at the last keyframe: the next frame is searched for around it, then relocalised anywhere.
+  startLostAtLastKeyframe();
+}
+
+void Tracker::startLostAtLastKeyframe() {
+  // The next frame is searched for around the last keyframe, then relocalised anywhere.
   state_ = msg::TrackingState::kLost;
   reference_ = last_ref_ = map_.lastKeyframe();
   T_ref_last_ = Pose3::Identity();
@@ -62,6 +66,18 @@ void Tracker::load(StateReader& r) {
   if (const msg::KeyframeState* ref = map_.keyframe(reference_)) last_->T_w_c = ref->T_w_c;
   have_velocity_ = false;
   have_stamp_ = false;
+}
+
+void Tracker::adoptMap(const msg::LocalMapUpdate& whole) {
+  if (state_ != msg::TrackingState::kNotInitialized)
+    throw std::invalid_argument("tracking has started already; a map is adopted by a new tracker");
+  map_.apply(whole);
+  corrections_seen_ = whole.corrections_seen;
+  // A tracker restarted alone counts its ids from 1 again, and mapping refuses ids it holds: go on after
+  // the highest of this tracker's issuer in the map.
+  keyframe_ids_.restore(std::max(keyframe_ids_.issued(), whole.tracking_keyframe_ids));
+  point_ids_.restore(std::max(point_ids_.issued(), whole.tracking_point_ids));
+  if (map_.keyframeCount() > 0) startLostAtLastKeyframe();
 }
 
 StereoCamera Tracker::savedCamera(const std::string& path) {
