@@ -39,6 +39,10 @@ class FramePublisher {
   void lost(const ros::Time& stamp);
   /// A reset or a loaded map.
   void restart() { frames_.restart(); }
+  /// The images' clock went back (a replayed or looped bag): the robot's transforms it listens to are
+  /// forgotten, since tf would refuse every new one as older than what it holds (TF_OLD_DATA) for as long as
+  /// the jump.
+  void clockWentBack();
   /// A pose hint (/initialpose) as the camera's pose in the slam frame: a pose in map is the base's, a pose
   /// in slam the camera's. Throws ConversionError for another frame, or before the first tracked frame (the
   /// camera's mounting is not known yet).

@@ -279,6 +279,7 @@ std::string TrackingNodelet::check(const Image& left, const Image& right) {
   if (!time.taken()) return time.reason;
   if (time.verdict == StampGate::Verdict::kRestart) {
     tracker_->restartClock();
+    frames_out_->clockWentBack();
     ++clock_restarts_;
     path_.poses.clear();
   }

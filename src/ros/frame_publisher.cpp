@@ -119,6 +119,11 @@ binloop::Pose3 FramePublisher::hintInSlam(const std::string& frame, const binloo
                         slam_frame_ + "' (the camera's)");
 }
 
+void FramePublisher::clockWentBack() {
+  if (buffer_) buffer_->clear();
+  last_robot_odom_ = ros::Time();
+}
+
 void FramePublisher::lost(const ros::Time& stamp) {
   if (tf_ && last_map_odom_) send(*last_map_odom_, stamp, map_frame_, odom_frame_);
 }
