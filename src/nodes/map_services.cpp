@@ -26,6 +26,27 @@ namespace {
 std::vector<std::string> g_stages;
 double g_timeout_s = 120;
 
+void say(std::string* message, const std::string& line) { *message += (message->empty() ? "" : "\n") + line; }
+
+enum class Reached { kNo, kCallFailed, kAnswered };
+
+// Calls `service` of one stage with `srv`; the stage's answer (or why there is none) is added to `message`.
+template <class Srv>
+Reached callStage(const std::string& stage, const std::string& service, Srv& srv, std::string* message) {
+  ros::NodeHandle nh;
+  const std::string name = nh.resolveName(stage + "/" + service);
+  if (!ros::service::waitForService(name, ros::Duration(g_timeout_s))) {
+    say(message, stage + ": no service " + name + " (is the stage running?)");
+    return Reached::kNo;
+  }
+  if (!nh.serviceClient<Srv>(name).call(srv)) {
+    say(message, stage + ": " + name + " failed");
+    return Reached::kCallFailed;
+  }
+  if constexpr (!std::is_same_v<Srv, binloop::Statistics>) say(message, srv.response.message);
+  return Reached::kAnswered;
+}
+
 // Calls `service` of every stage in order; stops at the first that cannot be reached. `success` and `message`
 // gather the stages' answers (services without them, such as Statistics, leave them as they are).
 template <class Srv>
@@ -33,26 +54,15 @@ void callEach(const std::string& service, const typename Srv::Request& req, bool
               std::vector<typename Srv::Response>* answers = nullptr) {
   *success = true;
   message->clear();
-  auto say = [&](const std::string& line) { *message += (message->empty() ? "" : "\n") + line; };
-  ros::NodeHandle nh;
   for (const std::string& stage : g_stages) {
-    const std::string name = nh.resolveName(stage + "/" + service);
-    if (!ros::service::waitForService(name, ros::Duration(g_timeout_s))) {
-      *success = false;
-      return say(stage + ": no service " + name + " (is the stage running?)");
-    }
     Srv srv;
     srv.request = req;
-    if (!nh.serviceClient<Srv>(name).call(srv)) {
-      *success = false;
-      say(stage + ": " + name + " failed");
-      continue;
-    }
+    const Reached r = callStage(stage, service, srv, message);
+    if (r != Reached::kAnswered) *success = false;
+    if (r == Reached::kNo) return;
+    if (r != Reached::kAnswered) continue;
     if (answers) answers->push_back(srv.response);
-    if constexpr (!std::is_same_v<Srv, binloop::Statistics>) {
-      *success = *success && srv.response.success;
-      say(srv.response.message);
-    }
+    if constexpr (!std::is_same_v<Srv, binloop::Statistics>) *success = *success && srv.response.success;
   }
 }
 
@@ -78,16 +88,12 @@ bool onSaveMap(binloop::SaveMap::Request& req, binloop::SaveMap::Response& res) 
     each.map_id = save.mapId();
     callEach<binloop::SaveMap>("save_state", each, &ok, &res.message);
     res.map_id = save.mapId();
-    if (ok) {
-      save.commit();
-    } else {
-      res.message += "\nnothing saved: " + req.directory + " is as it was";
-    }
+    if (ok) save.commit();
   } catch (const std::exception& e) {
     ok = false;
-    res.message += (res.message.empty() ? "" : "\n") + std::string(e.what()) + "\nnothing saved: " + req.directory +
-                   " is as it was";
+    say(&res.message, e.what());
   }
+  if (!ok) say(&res.message, "nothing saved: " + req.directory + " is as it was");
   res.success = ok;
   ROS_INFO("binloop/map_services: save_map %s (map save %s): %s\n%s", req.directory.c_str(),
            binloop::mapIdText(res.map_id).c_str(), ok ? "done" : "FAILED", res.message.c_str());
@@ -96,17 +102,10 @@ bool onSaveMap(binloop::SaveMap::Request& req, binloop::SaveMap::Response& res) 
 
 // Every stage checks and loads its file aside (all of one save); then all commit, or all abort.
 bool onLoadMap(binloop::LoadMap::Request& req, binloop::LoadMap::Response& res) {
-  ros::NodeHandle nh;
   std::vector<std::string> prepared;
   bool ok = true;
-  auto say = [&](const std::string& line) { res.message += (res.message.empty() ? "" : "\n") + line; };
   auto call = [&](const std::string& stage, binloop::LoadMap& srv) {
-    const std::string name = nh.resolveName(stage + "/load_state");
-    if (!ros::service::waitForService(name, ros::Duration(g_timeout_s)))
-      return say(stage + ": no service " + name + " (is the stage running?)"), false;
-    if (!nh.serviceClient<binloop::LoadMap>(name).call(srv)) return say(stage + ": " + name + " failed"), false;
-    say(srv.response.message);
-    return static_cast<bool>(srv.response.success);
+    return callStage(stage, "load_state", srv, &res.message) == Reached::kAnswered && srv.response.success;
   };
   uint64_t map_id = 0;
   for (const std::string& stage : g_stages) {
@@ -121,13 +120,14 @@ bool onLoadMap(binloop::LoadMap::Request& req, binloop::LoadMap::Response& res) 
     if (prepared.empty()) map_id = srv.response.map_id;
     prepared.push_back(stage);
   }
+  const std::string phase = ok ? "commit" : "abort";  // the same for every prepared stage
   for (const std::string& stage : prepared) {
     binloop::LoadMap srv;
-    srv.request.phase = ok ? "commit" : "abort";
+    srv.request.phase = phase;
     srv.request.map_id = map_id;
-    if (!call(stage, srv) && ok) ok = false;  // a commit cannot fail but for a stage gone meanwhile
+    if (!call(stage, srv)) ok = false;  // a commit cannot fail but for a stage gone meanwhile
   }
-  if (!ok && prepared.size() < g_stages.size()) say("nothing loaded: every stage keeps its map");
+  if (!ok && prepared.size() < g_stages.size()) say(&res.message, "nothing loaded: every stage keeps its map");
   res.success = ok;
   res.map_id = map_id;
   ROS_INFO("binloop/map_services: load_map %s (map save %s): %s\n%s", req.directory.c_str(),
