@@ -293,11 +293,17 @@ std::string TrackingNodelet::check(const Image& left, const Image& right) {
 void TrackingNodelet::onImages(const sensor_msgs::ImageConstPtr& left, const sensor_msgs::ImageConstPtr& right) {
   CpuMeter::Scope cpu(cpu_);
   last_pair_wall_ = ros::WallTime::now();
-  if (pending_ > 0 && (last_pair_wall_ - last_mapping_contact_).toSec() > keyframe_timeout_s_) {
+  // Keyframes in flight are given up when mapping has been silent too long, or at once when no mapping
+  // listens any more (its process is gone): waiting would stop keyframes, and the local map would run out.
+  const bool mapping_gone = keyframe_pub_.getNumSubscribers() == 0;
+  if (pending_ > 0 && (mapping_gone || (last_pair_wall_ - last_mapping_contact_).toSec() > keyframe_timeout_s_)) {
     keyframes_given_up_ += static_cast<uint64_t>(pending_);
-    last_problem_ = "local mapping answered none of the last " + std::to_string(pending_) + " keyframes for " +
-                    std::to_string(keyframe_timeout_s_) + " s (~keyframe_timeout_s): they are given up";
-    NODELET_WARN("binloop/Tracking: %s", last_problem_.c_str());
+    last_problem_ = mapping_gone ? "no local mapping subscribes to the keyframes: the last " + std::to_string(pending_) +
+                                       " are given up"
+                                 : "local mapping answered none of the last " + std::to_string(pending_) +
+                                       " keyframes for " + std::to_string(keyframe_timeout_s_) +
+                                       " s (~keyframe_timeout_s): they are given up";
+    NODELET_WARN_THROTTLE(5.0, "binloop/Tracking: %s", last_problem_.c_str());
     pending_ = 0;
     last_mapping_contact_ = last_pair_wall_;
     trackWaiting();

@@ -550,3 +550,32 @@ TEST_F(LoopGraph, RestartedStagesGetTheMapAgainAndTheRevisitIsClosed) {
   EXPECT_TRUE(applied) << "mapping applied " << (s.count("local_mapping/corrections") ? s.at("local_mapping/corrections") : "?")
                        << " corrections, loop closing made " << (s.count("loop_closing/corrections") ? s.at("loop_closing/corrections") : "?");
 }
+
+// Run alone by mapping_down.test (the split graph, no respawn; the other .test files leave it out): local
+// mapping's process dies mid-drive. Tracking does not wait on it: the keyframes in flight are given up as soon
+// as nothing subscribes to them, it goes on making keyframes into its own map and posing every pair, and its
+// diagnostics say what it gave up.
+TEST_F(LoopGraph, TrackingGoesOnWhenLocalMappingIsGone) {
+  const Drive& d = drive();
+  ASSERT_TRUE(d.problem.empty()) << d.problem;
+  const std::vector<Pair> pairs = readPairs(d.bag);
+  ASSERT_TRUE(graphConnected());
+  const size_t down_at = 60, until = 160;
+  size_t posed_after = 0;
+  for (size_t i = 0; i < until; ++i) {
+    if (i == down_at) {
+      ASSERT_EQ(binloop::test::runCommand("rosnode kill /binloop/local_mapping").code, 0);
+      ros::WallDuration(1.0).sleep();
+    }
+    publishPair(pairs[i].left, pairs[i].right, pairs[i].left_info, pairs[i].right_info);
+    const double stamp = pairs[i].left.header.stamp.toSec();
+    const bool posed = waitFor(1.0, [&] { return seen_.poses.count(stamp) > 0; });
+    if (i >= down_at && posed) ++posed_after;
+    ros::WallDuration(0.05).sleep();  // about ten pairs a second
+  }
+  EXPECT_GE(posed_after, (until - down_at) * 9 / 10) << "tracking stopped posing pairs without local mapping";
+  EXPECT_TRUE(waitFor(5, [&] {
+    auto given_up = seen_.tracking_diag.find("keyframes given up (mapping did not answer)");
+    return given_up != seen_.tracking_diag.end() && std::stoi(given_up->second) > 0;
+  })) << "tracking's diagnostics do not say that keyframes were given up";
+}
