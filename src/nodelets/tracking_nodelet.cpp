@@ -14,6 +14,7 @@
 #include <utility>
 
 #include "binloop/pipeline/model_files.h"
+#include "binloop/tracking/keyframes_in_flight.h"
 #include "binloop/tracking/tracker.h"
 #include "binloop/util/package_paths.h"
 #include "binloop_ros/callback_guard.h"
@@ -81,12 +82,7 @@ class TrackingNodelet : public nodelet::Nodelet {
   CpuMeter cpu_;
   nav_msgs::Path path_;
   uint64_t frames_ = 0, rejected_ = 0, keyframes_sent_ = 0, lost_ = 0;
-  int pending_ = 0;             // keyframes sent to mapping and not yet answered by an update
-  // Flow control heals itself: a keyframe mapping never answers (mapping restarting, a full TCP queue in the
-  // split launch) would hold pending_ up for good, and at the queue limit no keyframe would be made again.
-  double keyframe_timeout_s_ = 5;  // ~keyframe_timeout_s: no answer for this long: the keyframes in flight are given up
-  ros::WallTime last_mapping_contact_;  // the last keyframe sent or update received
-  uint64_t keyframes_given_up_ = 0;
+  binloop::KeyframesInFlight in_flight_;  // keyframes sent to mapping and not yet answered (~keyframe_timeout_s)
   size_t max_waiting_ = 100;            // lock-step pairs held for mapping at most (the oldest are dropped)
   uint64_t corrections_ = 0;    // corrected maps applied: the slam-frame pose may jump then, odom must not
   uint64_t corrections_at_last_ = 0;
@@ -103,7 +99,7 @@ void TrackingNodelet::onInit() {
                                       "time_jump_confirm_pairs", "stale_after_s", "path_max_poses", "keyframe_timeout_s"};
     known.insert(known.end(), FramePublisher::parameterNames().begin(), FramePublisher::parameterNames().end());
     requireKnownParams(pnh, known);
-    keyframe_timeout_s_ = numberParam(pnh, "keyframe_timeout_s", 5);
+    in_flight_ = binloop::KeyframesInFlight(numberParam(pnh, "keyframe_timeout_s", 5));
     stamps_ = std::make_unique<StampGate>(StampGateParams{numberParam(pnh, "max_time_jump", 5),
                                                           static_cast<int>(numberParam(pnh, "time_jump_confirm_pairs", 3))});
     stale_after_s_ = numberParam(pnh, "stale_after_s", 2);
@@ -213,11 +209,9 @@ void TrackingNodelet::adopt(binloop::msg::LocalMapUpdatePtr whole) {
     adopt_ = std::move(whole);
     return;
   }
-  if (tracker_->state() != binloop::msg::TrackingState::kNotInitialized) {
-    // A pair that came before the map began a new one: given up for the graph's, while it is that young.
-    if (tracker_->map().keyframeCount() > 2 || whole->keyframes.size() <= tracker_->map().keyframeCount()) return;
+  if (!tracker_->givesWayTo(*whole)) return;
+  if (tracker_->state() != binloop::msg::TrackingState::kNotInitialized)
     startOver(std::make_unique<binloop::Tracker>(tracker_->camera(), config_.tracker));
-  }
   tracker_->adoptMap(*whole);
   ++maps_adopted_;
   NODELET_INFO("binloop/Tracking: took local mapping's map (%zu keyframes, %zu points): lost until the next frames "
@@ -229,7 +223,7 @@ void TrackingNodelet::adopt(binloop::msg::LocalMapUpdatePtr whole) {
 void TrackingNodelet::startOver(std::unique_ptr<binloop::Tracker> t) {
   adopt_.reset();
   tracker_ = std::move(t);
-  pending_ = 0;
+  in_flight_.clear();
   frames_out_->restart();
   stamps_->reset();
   path_.poses.clear();
@@ -293,25 +287,16 @@ std::string TrackingNodelet::check(const Image& left, const Image& right) {
 void TrackingNodelet::onImages(const sensor_msgs::ImageConstPtr& left, const sensor_msgs::ImageConstPtr& right) {
   CpuMeter::Scope cpu(cpu_);
   last_pair_wall_ = ros::WallTime::now();
-  // Keyframes in flight are given up when mapping has been silent too long, or at once when no mapping
-  // listens any more (its process is gone): waiting would stop keyframes, and the local map would run out.
-  const bool mapping_gone = keyframe_pub_.getNumSubscribers() == 0;
-  if (pending_ > 0 && (mapping_gone || (last_pair_wall_ - last_mapping_contact_).toSec() > keyframe_timeout_s_)) {
-    keyframes_given_up_ += static_cast<uint64_t>(pending_);
-    last_problem_ = mapping_gone ? "no local mapping subscribes to the keyframes: the last " + std::to_string(pending_) +
-                                       " are given up"
-                                 : "local mapping answered none of the last " + std::to_string(pending_) +
-                                       " keyframes for " + std::to_string(keyframe_timeout_s_) +
-                                       " s (~keyframe_timeout_s): they are given up";
+  const std::string given_up = in_flight_.giveUpIfStale(last_pair_wall_.toSec(), keyframe_pub_.getNumSubscribers() > 0);
+  if (!given_up.empty()) {
+    last_problem_ = given_up;
     NODELET_WARN_THROTTLE(5.0, "binloop/Tracking: %s", last_problem_.c_str());
-    pending_ = 0;
-    last_mapping_contact_ = last_pair_wall_;
     trackWaiting();
   }
   // Pairs wait while there is no camera yet (camera_info may come just after the first images) and, in
   // lock-step, while mapping has not answered.
   const bool no_camera = !tracker_ && (!left_info_ || !right_info_);
-  if (no_camera || (lockstep_ && (pending_ > 0 || !waiting_.empty()))) {
+  if (no_camera || (lockstep_ && (in_flight_.count() > 0 || !waiting_.empty()))) {
     waiting_.emplace_back(left, right);
     if (no_camera && waiting_.size() > 10) {
       waiting_.pop_front();
@@ -327,7 +312,7 @@ void TrackingNodelet::onImages(const sensor_msgs::ImageConstPtr& left, const sen
 }
 
 void TrackingNodelet::trackWaiting() {
-  while (!waiting_.empty() && (tracker_ || (left_info_ && right_info_)) && !(lockstep_ && pending_ > 0)) {
+  while (!waiting_.empty() && (tracker_ || (left_info_ && right_info_)) && !(lockstep_ && in_flight_.count() > 0)) {
     const auto pair = waiting_.front();
     waiting_.pop_front();
     track(pair.first, pair.second);
@@ -349,13 +334,12 @@ void TrackingNodelet::track(const sensor_msgs::ImageConstPtr& left, const sensor
   if (!problem.empty()) return reject(problem);
   frame.index = static_cast<int>(frames_++);
   frame.stamp_s = left->header.stamp.toSec();
-  binloop::Tracker::Output out = tracker_->track(frame, pending_);
+  binloop::Tracker::Output out = tracker_->track(frame, in_flight_.count());
   if (out.frame.state == binloop::msg::TrackingState::kLost) ++lost_;
   if (!out.frame.problem.empty()) last_problem_ = out.frame.problem;
   if (out.keyframe) {
-    ++pending_;
+    in_flight_.sent(ros::WallTime::now().toSec());
     ++keyframes_sent_;
-    last_mapping_contact_ = ros::WallTime::now();
     keyframe_pub_.publish(boost::make_shared<binloop::KeyFrame>(toRos(*out.keyframe, frames_out_->slamFrame())));
   }
   frame_pub_.publish(boost::make_shared<binloop::TrackedFrame>(toRos(out.frame, frames_out_->slamFrame())));
@@ -452,9 +436,12 @@ void TrackingNodelet::onUpdate(const binloop::LocalMapUpdateConstPtr& m) {
     if (u.whole_map) return adopt(std::make_shared<const binloop::msg::LocalMapUpdate>(std::move(u)));
     if (!tracker_) return;
     tracker_->apply(u);
-    if (u.correction) ++corrections_;
-    else if (pending_ > 0) --pending_;
-    last_mapping_contact_ = ros::WallTime::now();
+    if (u.correction) {
+      ++corrections_;
+      in_flight_.heard(ros::WallTime::now().toSec());
+    } else {
+      in_flight_.answered(ros::WallTime::now().toSec());
+    }
     trackWaiting();
   } catch (const std::exception& e) {
     ++rejected_;
@@ -470,7 +457,7 @@ void TrackingNodelet::diagnose(diagnostic_updater::DiagnosticStatusWrapper& s) {
   else if (quiet_s > stale_after_s_)
     s.summary(diagnostic_msgs::DiagnosticStatus::WARN, "no stereo pair for " + std::to_string(static_cast<int>(quiet_s)) + " s");
   else if (guard_.failures() > 0) s.summary(diagnostic_msgs::DiagnosticStatus::WARN, "tracking; a callback failed");
-  else if (keyframes_given_up_ > 0)
+  else if (in_flight_.givenUp() > 0)
     s.summary(diagnostic_msgs::DiagnosticStatus::WARN, "tracking; local mapping did not answer some keyframes");
   else if (lost) s.summary(diagnostic_msgs::DiagnosticStatus::WARN, "lost");
   else if (rejected_ > 0) s.summary(diagnostic_msgs::DiagnosticStatus::WARN, "tracking; some input dropped");
@@ -485,8 +472,8 @@ void TrackingNodelet::diagnose(diagnostic_updater::DiagnosticStatusWrapper& s) {
   s.add("maps taken from local mapping", maps_adopted_);
   s.add("seconds since the last pair", quiet_s);
   s.add("keyframes sent", keyframes_sent_);
-  s.add("mapping queue", pending_);
-  s.add("keyframes given up (mapping did not answer)", keyframes_given_up_);
+  s.add("mapping queue", in_flight_.count());
+  s.add("keyframes given up (mapping did not answer)", in_flight_.givenUp());
   s.add("pairs waiting", waiting_.size());
   s.add("loop corrections applied", corrections_);
   s.add("stereo stamp difference s", last_stamp_diff_);

@@ -63,9 +63,7 @@ bool StageServices::onLoad(binloop::LoadMap::Request& req, binloop::LoadMap::Res
     const std::string path = binloop::stageStatePath(req.directory, stage_);
     res.map_id = binloop::stateFileMapId(path, stage_);
     if (req.map_id && res.map_id != req.map_id)
-      throw binloop::dataError(path, 0, "belongs to map save " + binloop::mapIdText(res.map_id) +
-                                            ", the other stages' files to " + binloop::mapIdText(req.map_id) +
-                                            ": the folder mixes two saves (save the map again)");
+      throw binloop::mixedSaveError(path, res.map_id, "the other stages' files", req.map_id);
     PreparedLoad load = h_.prepare(path);
     if (phase.empty()) return load.commit();
     pending_ = Pending{res.map_id, std::move(load)};

@@ -11,6 +11,8 @@
 #include <string>
 #include <vector>
 
+#include "binloop/io/data_error.h"
+
 namespace binloop {
 
 /// A new map id: never 0, and different for every call, in this process and across processes (the clock,
@@ -46,6 +48,10 @@ class MapSave {
 /// The map id every one of `stages`' state files in `directory` carries. Throws DataError naming the file
 /// that is missing, broken, or of another save than the first. Reads the files' headers only.
 uint64_t checkMapFolder(const std::string& directory, const std::vector<std::string>& stages);
+
+/// The error for `path` of map save `id` found where the other files are of save `expected` (`whose`
+/// names them, e.g. "the tracking stage's file").
+DataError mixedSaveError(const std::string& path, uint64_t id, const std::string& whose, uint64_t expected);
 
 /// "0123456789abcdef": how a map id is shown.
 std::string mapIdText(uint64_t map_id);

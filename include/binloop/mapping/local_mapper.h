@@ -137,6 +137,8 @@ class LocalMapper {
   };
 
   void insert(const msg::KeyFrame& kf);
+  /// `kf` as a keyframe message at revision 1, in the map's current (corrected) frame.
+  std::shared_ptr<msg::KeyFrame> messageOf(const KF& kf) const;
   void updateConnections(KF& kf);
   void cullRecentPoints(msg::LocalMapUpdate& u);
   void createNewPoints(KF& kf, msg::LocalMapUpdate& u);

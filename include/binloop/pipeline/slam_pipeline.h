@@ -124,6 +124,9 @@ class SlamPipeline {
   void map(const MappingInput& in);
   void searchLoops(const LoopInput& in);
   void drainUpdates();
+  /// Calls f(name, stage) for each stage that runs, in the order stageNames() lists them.
+  template <class Self, class F>
+  static void forEachStage(Self& self, F&& f);
 
   PipelineMode mode_;
   Tracker tracker_;

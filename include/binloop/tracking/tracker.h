@@ -130,6 +130,10 @@ class Tracker {
   /// keyframe, and its ids go on after the highest it finds of its own in the map. Throws
   /// std::invalid_argument once tracking has started.
   void adoptMap(const msg::LocalMapUpdate& whole);
+  /// Whether local mapping's map `whole` should take this tracker's place: always before tracking started;
+  /// after, only while this tracker's own map is that young (at most 2 keyframes, fewer than `whole`'s) —
+  /// a pair that reached a restarted tracking before the map did began a new map, which gives way.
+  bool givesWayTo(const msg::LocalMapUpdate& whole) const;
   /// The camera a saved tracking state was made with, to make the tracker that loads it.
   static StereoCamera savedCamera(const std::string& path);
 
@@ -192,8 +196,6 @@ class Tracker {
     int frames_left = 0;
   };
   std::optional<PoseHint> hint_;  // hintPose()
-  /// Keyframes within the hint's radius, nearest first, at most `n`.
-  std::vector<SlamKeyframeId> keyframesNearHint(size_t n) const;
 };
 
 }  // namespace binloop

@@ -101,6 +101,11 @@ void MapSave::commit() {
   syncToDisk(parent.empty() ? "." : parent.string());
 }
 
+DataError mixedSaveError(const std::string& path, uint64_t id, const std::string& whose, uint64_t expected) {
+  return dataError(path, 0, "belongs to map save " + mapIdText(id) + ", " + whose + " to " + mapIdText(expected) +
+                                ": the folder mixes two saves (save the map again)");
+}
+
 uint64_t checkMapFolder(const std::string& directory, const std::vector<std::string>& stages) {
   requireDirectory(directory);
   uint64_t first = 0;
@@ -111,9 +116,7 @@ uint64_t checkMapFolder(const std::string& directory, const std::vector<std::str
       first = id;
       first_stage = stage;
     } else if (id != first) {
-      throw dataError(stageStatePath(directory, stage), 0,
-                      "belongs to map save " + mapIdText(id) + ", the " + first_stage + " stage's file to " +
-                          mapIdText(first) + ": the folder mixes two saves (save the map again)");
+      throw mixedSaveError(stageStatePath(directory, stage), id, "the " + first_stage + " stage's file", first);
     }
   }
   return first;

@@ -508,11 +508,8 @@ LocalMapper::Output LocalMapper::process(const msg::KeyFrame& in) {
   u->corrections_seen = history_.applied();
   u->total_ms = msSinceT(t0);
 
-  auto refined = std::make_shared<msg::KeyFrame>(in);
+  auto refined = messageOf(kf);
   refined->revision = in.revision + 1;
-  refined->state = kf.state;
-  refined->corrections_seen = history_.applied();  // its pose is already in the corrected map's frame
-  refined->new_points.clear();
   return {u, refined};
 }
 
@@ -546,24 +543,29 @@ bool LocalMapper::keyframePose(SlamKeyframeId id, Pose3* T_w_c) const {
   return false;
 }
 
+std::shared_ptr<msg::KeyFrame> LocalMapper::messageOf(const KF& kf) const {
+  auto m = std::make_shared<msg::KeyFrame>();
+  m->id = kf.state.id;
+  m->revision = 1;
+  m->frame_index = kf.frame_index;
+  m->stamp_s = kf.stamp_s;
+  m->camera = camera_;
+  m->scale_factor = scales_.factor;
+  m->levels = static_cast<uint8_t>(scales_.levels());
+  m->keypoints = kf.keypoints;
+  m->descriptors = kf.descriptors;
+  m->state = kf.state;
+  m->corrections_seen = history_.applied();  // its pose is already in the corrected map's frame
+  return m;
+}
+
 std::vector<msg::KeyFramePtr> LocalMapper::keyframeMessages() const {
   std::vector<const KF*> kfs;
   for (const auto& [id, kf] : kfs_) kfs.push_back(&kf);
   std::sort(kfs.begin(), kfs.end(), [](const KF* a, const KF* b) { return a->seq < b->seq; });
   std::vector<msg::KeyFramePtr> out;
   for (const KF* kf : kfs) {
-    auto m = std::make_shared<msg::KeyFrame>();
-    m->id = kf->state.id;
-    m->revision = 1;
-    m->frame_index = kf->frame_index;
-    m->stamp_s = kf->stamp_s;
-    m->camera = camera_;
-    m->scale_factor = scales_.factor;
-    m->levels = static_cast<uint8_t>(scales_.levels());
-    m->keypoints = kf->keypoints;
-    m->descriptors = kf->descriptors;
-    m->state = kf->state;
-    m->corrections_seen = history_.applied();
+    auto m = messageOf(*kf);
     m->resent = true;
     out.push_back(std::move(m));
   }

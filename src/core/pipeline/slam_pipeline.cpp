@@ -43,19 +43,25 @@ SlamPipeline::SlamPipeline(const StereoCamera& cam, const TrackerParams& tp, con
 
 SlamPipeline::~SlamPipeline() { finish(); }
 
+template <class Self, class F>
+void SlamPipeline::forEachStage(Self& self, F&& f) {
+  f("tracking", self.tracker_);
+  f("local_mapping", self.mapper_);
+  if (self.detector_) f("loop_detector", *self.detector_);
+  if (self.closer_) f("loop_closing", *self.closer_);
+}
+
 std::vector<std::string> SlamPipeline::stageNames() const {
-  std::vector<std::string> stages = {"tracking", "local_mapping"};
-  if (detector_) stages.push_back("loop_detector");
-  if (closer_) stages.push_back("loop_closing");
+  std::vector<std::string> stages;
+  forEachStage(*this, [&](const char* name, const auto&) { stages.push_back(name); });
   return stages;
 }
 
 uint64_t SlamPipeline::saveMap(const std::string& directory) const {
   MapSave save(directory);
-  saveStateFile(tracker_, stageStatePath(save.staging(), "tracking"), "tracking", save.mapId());
-  saveStateFile(mapper_, stageStatePath(save.staging(), "local_mapping"), "local_mapping", save.mapId());
-  if (detector_) saveStateFile(*detector_, stageStatePath(save.staging(), "loop_detector"), "loop_detector", save.mapId());
-  if (closer_) saveStateFile(*closer_, stageStatePath(save.staging(), "loop_closing"), "loop_closing", save.mapId());
+  forEachStage(*this, [&](const char* name, const auto& stage) {
+    saveStateFile(stage, stageStatePath(save.staging(), name), name, save.mapId());
+  });
   save.commit();
   return save.mapId();
 }
@@ -66,10 +72,7 @@ uint64_t SlamPipeline::loadMap(const std::string& directory) {
     throw dataError(directory, 0, "the map has no loop_detector.state (saved without loop closing): load it with "
                                   "loop closing off (--detector none)");
   const uint64_t map_id = checkMapFolder(directory, stageNames());
-  loadStateFile(tracker_, stageStatePath(directory, "tracking"), "tracking");
-  loadStateFile(mapper_, stageStatePath(directory, "local_mapping"), "local_mapping");
-  if (detector_) loadStateFile(*detector_, stageStatePath(directory, "loop_detector"), "loop_detector");
-  if (closer_) loadStateFile(*closer_, stageStatePath(directory, "loop_closing"), "loop_closing");
+  forEachStage(*this, [&](const char* name, auto& stage) { loadStateFile(stage, stageStatePath(directory, name), name); });
   return map_id;
 }
 

@@ -404,10 +404,6 @@ void Tracker::hintPose(const Pose3& T_w_c, double radius_m, int frames) {
   hint_ = PoseHint{orthonormalized(T_w_c), radius_m, frames};
 }
 
-std::vector<SlamKeyframeId> Tracker::keyframesNearHint(size_t n) const {
-  return hint_ ? map_.keyframesNear(hint_->T_w_c.translation(), hint_->radius_m, n) : std::vector<SlamKeyframeId>{};
-}
-
 bool Tracker::relocalize(Frame& f, MotionReach& reach, bool hinted) {
   std::unique_ptr<Frame> best;
   int best_inliers = 0;
@@ -430,7 +426,8 @@ bool Tracker::relocalize(Frame& f, MotionReach& reach, bool hinted) {
   }
   // A hint's nearest keyframes go first (the vocabulary may not rank them: the view may have changed).
   if (hinted) {
-    std::vector<SlamKeyframeId> near = keyframesNearHint(static_cast<size_t>(p_.reloc_keyframes));
+    std::vector<SlamKeyframeId> near =
+        map_.keyframesNear(hint_->T_w_c.translation(), hint_->radius_m, static_cast<size_t>(p_.reloc_keyframes));
     for (SlamKeyframeId k : tries)
       if (std::find(near.begin(), near.end(), k) == near.end()) near.push_back(k);
     tries = std::move(near);

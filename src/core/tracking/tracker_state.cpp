@@ -68,6 +68,11 @@ void Tracker::startLostAtLastKeyframe() {
   have_stamp_ = false;
 }
 
+bool Tracker::givesWayTo(const msg::LocalMapUpdate& whole) const {
+  if (state_ == msg::TrackingState::kNotInitialized) return true;
+  return map_.keyframeCount() <= 2 && whole.keyframes.size() > map_.keyframeCount();
+}
+
 void Tracker::adoptMap(const msg::LocalMapUpdate& whole) {
   if (state_ != msg::TrackingState::kNotInitialized)
     throw std::invalid_argument("tracking has started already; a map is adopted by a new tracker");

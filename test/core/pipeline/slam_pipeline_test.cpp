@@ -340,7 +340,13 @@ TEST(SlamPipeline, ARestartedTrackerTakesTheMapAndTracksOnInIt) {
   EXPECT_EQ(whole->keyframes.size(), slam.mapper().keyframeCount());
   EXPECT_GT(whole->tracking_keyframe_ids, 0u);
 
+  Tracker young(s->cam);
+  young.track(s->frames[150]);
+  ASSERT_EQ(young.map().keyframeCount(), 1u);
+  EXPECT_TRUE(young.givesWayTo(*whole)) << "a map of one keyframe begun before the graph's map came";
+
   Tracker restarted(s->cam);
+  EXPECT_TRUE(restarted.givesWayTo(*whole));
   restarted.adoptMap(*whole);
   EXPECT_EQ(restarted.state(), msg::TrackingState::kLost);
   EXPECT_EQ(restarted.map().keyframeCount(), whole->keyframes.size());
@@ -372,6 +378,7 @@ TEST(SlamPipeline, ARestartedTrackerTakesTheMapAndTracksOnInIt) {
   EXPECT_GE(found, 35);
   EXPECT_LT(worst, 1.0);
   EXPECT_GE(keyframes, 1);
+  EXPECT_FALSE(restarted.givesWayTo(*whole)) << "a tracker on the map does not start over";
 }
 
 // Frame 309 of route 06 comes out of a bend: after 10 missing frames the ordinary tracking (the motion
