@@ -1,4 +1,4 @@
-// Place-recognition benchmark (README "Loop models"): hbow transform of 2000 descriptors with a k=10, L=6
+// Place-recognition benchmark (docs/loop_models.md): hbow transform of 2000 descriptors with a k=10, L=6
 // vocabulary; loading a 1M-word vocabulary; one query against 1500 keyframes of 2000 features (ORB-SLAM2's
 // keyframes on KITTI) for every model; index memory per keyframe. Medians of 9 runs on this machine; prints
 // tables, never pass/fail, and writes the headline numbers to $BINLOOP_BENCH_JSON (scripts/bench.sh sets

@@ -1,5 +1,5 @@
 #!/bin/bash
-# Re-makes the shipped vocabularies exactly as they were made (README, "Vocabularies").
+# Re-makes the shipped vocabularies exactly as they were made (docs/loop_models.md, "Vocabularies").
 # Every image goes through binloop's ORB-SLAM2-style extractor with the SLAM's settings (config/kitti.yaml's
 # orb: 2000 features, scale 1.2, 8 levels, FAST 20/7, 30-px cells, Gaussian BRIEF tests), which `train`
 # uses by default, so the SLAM and `eval-loops` feed these models the descriptors they were trained on; each

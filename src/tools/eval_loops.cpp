@@ -1,5 +1,5 @@
 // eval-loops: runs loop models over the same images and measures them against ground-truth loop pairs
-// (see README, "Evaluating loop detection").
+// (see docs/loop_models.md, "Evaluating loop detection").
 #include <algorithm>
 #include <chrono>
 #include <cstdio>

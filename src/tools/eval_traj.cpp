@@ -1,5 +1,5 @@
 // eval-traj: an estimated trajectory against KITTI ground truth: ATE RMSE after SE(3) alignment and the
-// KITTI devkit's relative errors (README, "Tools"). One `key: value` per line, or one JSON object.
+// KITTI devkit's relative errors (docs/tools.md). One `key: value` per line, or one JSON object.
 #include <cmath>
 #include <cstdio>
 #include <filesystem>

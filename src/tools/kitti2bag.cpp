@@ -1,4 +1,4 @@
-// kitti2bag: a KITTI odometry sequence folder -> ROS 1 bag (see README, "Tools").
+// kitti2bag: a KITTI odometry sequence folder -> ROS 1 bag (see docs/tools.md).
 #include <iostream>
 
 #include "binloop/io/data_error.h"

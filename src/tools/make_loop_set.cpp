@@ -1,5 +1,5 @@
 // make-loop-set: a real-image loop set (an image folder and its loop pairs) from a list of places; see
-// include/binloop/eval/loop_set.h and README, "Real-image loop sets".
+// include/binloop/eval/loop_set.h and docs/loop_models.md, "Real-image loop sets".
 #include <filesystem>
 #include <fstream>
 #include <iostream>

@@ -1,4 +1,4 @@
-// render: synthetic stereo sequences in KITTI layout along a real ground-truth route (see README, "Tools").
+// render: synthetic stereo sequences in KITTI layout along a real ground-truth route (see docs/tools.md).
 #include <chrono>
 #include <filesystem>
 #include <iostream>

@@ -1,5 +1,5 @@
 // train: trains a place-recognition model (vocabulary) from images, or imports a DBoW2 vocabulary
-// (see README, "Loop models").
+// (see docs/loop_models.md).
 #include <chrono>
 #include <filesystem>
 #include <iostream>

@@ -1,5 +1,5 @@
 #pragma once
-// Ground-truth loop pairs from poses, by SPEC's definition: frames within `radius_m` metres of each other
+// Ground-truth loop pairs from poses, the project's definition: frames within `radius_m` metres of each other
 // that are more than `min_frame_gap` frames apart (not temporal neighbours). The KITTI lists in
 // ../shared/data/kitti/loop_gt were made the same way (6 m); this makes them for any sequence with poses,
 // such as a rendered route or the built-in loop.

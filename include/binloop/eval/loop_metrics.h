@@ -1,5 +1,5 @@
 #pragma once
-// Loop-detection metrics (SPEC "Evaluation definitions"): each query keyframe predicts at most one loop
+// Loop-detection metrics, as `eval-loops` reports them: each query keyframe predicts at most one loop
 // (its best candidate, with a confidence); sweeping a threshold over the confidences gives the
 // precision-recall curve, its area, and the recall at 100 % precision.
 #include <set>

@@ -1,5 +1,5 @@
 #pragma once
-// ORB-SLAM2's consistency check (SPEC, loop detection stage) in a form a threshold can sweep: a loop is
+// ORB-SLAM2's consistency check (of the loop-detection stage) in a form a threshold can sweep: a loop is
 // reported for a query only when it and the queries just before it each have a candidate, and every
 // candidate's group (itself and its neighbours) overlaps the previous one's. For a threshold t the check
 // passes exactly when such a chain exists among candidates of confidence >= t, so a chain's confidence is

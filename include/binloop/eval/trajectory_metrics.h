@@ -1,9 +1,9 @@
 #pragma once
-// Trajectory accuracy against ground truth (SPEC "Evaluation definitions"): the absolute trajectory error
+// Trajectory accuracy against ground truth, as every binloop tool and benchmark reports it: the absolute trajectory error
 // after a rigid (SE(3), no scale) Umeyama alignment, and the KITTI devkit's relative errors over path
 // segments of 100..800 m.
 //
-// Matching an estimate to the ground truth (README, "Tools": eval-traj):
+// Matching an estimate to the ground truth (docs/tools.md: eval-traj):
 // - KITTI files (12 numbers per line) carry no stamps: line i is frame i, so they hold every frame from 0
 //   (a prefix is accepted; more lines than the ground truth is an error).
 // - TUM files ("stamp tx ty tz qx qy qz qw") may hold any subset of frames, e.g. keyframes only. Their

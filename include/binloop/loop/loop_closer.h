@@ -1,5 +1,5 @@
 #pragma once
-// The loop-closing stage (SPEC, pipeline step 4): refined keyframes and local mapping's updates in (its own
+// The loop-closing stage (step 4 of four; ARCHITECTURE.md): refined keyframes and local mapping's updates in (its own
 // copy of every keyframe: keypoints, descriptors, pose, covisibility, parent), the loop detector's accepted
 // candidates in; per verified loop a LoopClosure out, and for an accepted one a Correction for local mapping.
 //

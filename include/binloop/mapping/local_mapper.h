@@ -1,8 +1,12 @@
 #pragma once
-// The local mapping stage (SPEC, pipeline step 2): keyframes from tracking in; a LocalMapUpdate back to
+// The local mapping stage (step 2 of four; ARCHITECTURE.md): keyframes from tracking in; a LocalMapUpdate back to
 // tracking and the refined keyframe on to the loop stages out. It owns the map: every keyframe and map
 // point with its observations, the covisibility graph and the spanning tree. Other stages only ever see
 // copies of parts of it, in messages.
+//
+// Threads: not thread-safe. One thread at a time calls everything, except abortFlag(), which any thread may
+// set. The background global BA runs on a thread of its own over a copy of the map and touches nothing of
+// the mapper's; its result is folded in only by mergeGlobalBa(), on the caller's thread.
 #include <atomic>
 #include <deque>
 #include <map>
@@ -43,8 +47,7 @@ struct LocalMapperParams {
   int local_ba_max_keyframes = 30; // optimised keyframes (the new one and its strongest neighbours)
   LocalBaParams ba;
   bool cull_keyframes = true;
-  // After a loop correction, a bundle adjustment of the whole map. Off by default (README, "Loop closing,
-  // measured": what it costs and gives).
+  // After a loop correction, a bundle adjustment of the whole map. Off by default (docs/results/2026-11-26-slam-measurements.md, "Loop closing, measured": what it costs and gives).
   bool global_ba_after_loop = true;
   // Where it runs. False: on mapping's thread, before the corrected map goes to tracking (mapping waits;
   // lock-step runs stay bit-identical). True (the threaded pipeline and the nodelet set it): on its own

@@ -5,6 +5,10 @@
 // - threaded: local mapping and the loop stages (detection, then closing) each on their own thread behind
 //   queues, tracking on the caller's; updates reach tracking when they are ready, as between nodelets.
 // Stages only exchange the messages of messages/*.h; this class owns the queues between them.
+//
+// Threads: everything belongs to one caller thread, except switchDetector() (any thread: it only records
+// the switch) and, in threaded mode, addExternalLoop() (any thread: it only queues). In threaded mode each
+// stage object is touched by its own thread alone, and mapper() and the logs are read only after finish().
 #include <atomic>
 #include <functional>
 #include <memory>

@@ -1,5 +1,5 @@
 #pragma once
-// The one binary file format of every place-recognition model (see README, "Model files").
+// The one binary file format of every place-recognition model (see docs/loop_models.md, "Model files").
 //
 //   header (fixed 128 bytes): magic "BINLOOPM", format version, model type, descriptor bits, weighting,
 //     k, levels, words, training seed, training-data hash, training descriptor and image counts, payload

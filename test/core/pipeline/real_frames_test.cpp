@@ -52,7 +52,7 @@ double median(std::vector<double> v) {
 
 }  // namespace
 
-// sample_00: the ground truth of its first 16 frames is a constant-velocity fill (README, "Real images");
+// sample_00: the ground truth of its first 16 frames is a constant-velocity fill (docs/results/2026-11-26-slam-measurements.md, "Real images");
 // ORB-SLAM2's three runs agree within 3 cm, and binloop's last pose must lie within 0.10 m and 0.5 degrees
 // of theirs (median over the three). Measured 2026-11-25: 0.033 m, 0.045 degrees.
 TEST(RealFrames, Sample00EndsWhereThePeerEnds) {

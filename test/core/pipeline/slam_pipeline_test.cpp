@@ -77,7 +77,7 @@ std::vector<msg::TrackedFrame> runOn(const std::vector<StereoFrame>& frames, con
 
 // Real images. The sample's ground truth moves 0.86 m per frame, but two independent estimates from its
 // images (binloop's, and OpenCV's SGBM + ORB + solvePnPRansac) agree on 0.66-0.74 m for the first frames and
-// on about twice the rotation; the bounds below are what the images support (see README, "Running the SLAM").
+// on about twice the rotation; the bounds below are what the images support (see docs/slam.md).
 TEST(SlamPipeline, RealKittiSampleIsTrackedThroughout) {
   const std::string dir = test::sharedData("kitti/sample_00");
   BINLOOP_REQUIRE_DATA(dir);
@@ -277,8 +277,8 @@ TEST(SlamPipeline, TrackingIsFoundAgainAfterTwentyMissingFrames) {
 // The issue's bound, 0.3 m after 20 missing frames, where the car drives slowly: frames 350-449 mapped, then
 // 470-499 (15 m skipped). Measured (bench_recovery --start 450 --lead 100 --gap 20): 0.18 m on the first
 // frame, at most 0.28 m over the 30. At the usual 26-30 m skipped it does not hold: the map's points then in
-// view were measured from 40-70 m away and are metres off along the view (README, "Why the found places are
-// off").
+// view were measured from 40-70 m away and are metres off along the view
+// (docs/results/2026-11-26-slam-measurements.md, "Why the found places are off").
 TEST(SlamPipeline, TwentyMissingFramesOnASlowStretchAreFoundWithinThirtyCentimetres) {
   const RenderedStretch* s = renderedStretch(150, true, 350);
   if (!s) GTEST_SKIP() << "needs " << test::sharedData("kitti/poses/06.txt");

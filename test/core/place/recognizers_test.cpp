@@ -100,7 +100,7 @@ TEST_P(Recognizers, RebuildsAnotherModelFromKeptDescriptors) {
 
 // Confidence must rank loops across queries. A strong true loop whose own neighbours look much like it (a
 // high bar) has to outrank a weak chance match of a query whose neighbours share nothing with it (a tiny
-// bar): dividing by the bar alone ranked the weak match first (README, "Ranking loops").
+// bar): dividing by the bar alone ranked the weak match first (docs/loop_models.md, "Ranking loops").
 TEST_P(Recognizers, StrongTrueLoopOutranksWeakMatchWithTinyReference) {
   auto rec = make();
   KeyframeId id = 0;
