@@ -32,9 +32,10 @@ class FramePublisher {
   static const std::vector<std::string>& parameterNames();
 
   const std::string& slamFrame() const { return slam_frame_; }
-  /// A tracked frame: its camera pose in the slam frame. `camera_frame`: the image's frame id.
-  void tracked(const binloop::Pose3& T_slam_cam, const ros::Time& stamp, const std::string& camera_frame,
-               bool corrected);
+  /// A tracked frame: its camera pose in the slam frame and that pose's covariance
+  /// (msg::TrackedFrame::pose_covariance; zeros: unknown). `camera_frame`: the image's frame id.
+  void tracked(const binloop::Pose3& T_slam_cam, const RobotFrames::Matrix6d& covariance, const ros::Time& stamp,
+               const std::string& camera_frame, bool corrected);
   /// A frame that was not tracked (lost): keeps map -> odom alive.
   void lost(const ros::Time& stamp);
   /// A reset or a loaded map.

@@ -7,12 +7,16 @@
 // T_map_slam = T_base_cam. `odom` is continuous: it integrates the base's frame-to-frame motion, except across a
 // loop correction, where the SLAM's pose jumps: there the previous motion is repeated and map -> odom takes the
 // jump.
+#include <Eigen/Core>
+
 #include "binloop/types/pose.h"
 
 namespace binloop_ros {
 
 class RobotFrames {
  public:
+  using Matrix6d = Eigen::Matrix<double, 6, 6>;
+
   explicit RobotFrames(const binloop::Pose3& T_base_cam = opticalOnBase());
 
   /// The camera's optical axes on a z-up, x-forward base at the same place: x forward = the camera's z,
@@ -22,6 +26,9 @@ class RobotFrames {
   /// A tracked frame's camera pose in the slam frame at `stamp_s`; `corrected`: a loop correction (or a new
   /// map) moved the slam-frame poses since the last call.
   void update(const binloop::Pose3& T_slam_cam, double stamp_s, bool corrected);
+  /// The same, with the pose's covariance (msg::TrackedFrame::pose_covariance: the camera centre's and
+  /// rotation's errors in the slam frame; all zero: unknown).
+  void update(const binloop::Pose3& T_slam_cam, const Matrix6d& cov_slam_cam, double stamp_s, bool corrected);
   /// Forget the motion (a reset or a loaded map); odom goes on from where it is.
   void restart() { have_last_ = false; }
   bool started() const { return started_; }
@@ -46,12 +53,22 @@ class RobotFrames {
   /// The base's velocity in its own frame over the last step (m/s, rad/s); zero before two frames.
   const Eigen::Vector3d& linearVelocity() const { return v_; }
   const Eigen::Vector3d& angularVelocity() const { return w_; }
+  /// The covariance of baseInOdom() (nav_msgs/Odometry's pose: the base's position error in odom, then its
+  /// rotation error about odom's axes), from the last pose's covariance; kUnknown's diagonal when unknown.
+  const Matrix6d& poseCovariance() const { return pose_cov_; }
+  /// The covariance of the velocities (in the base frame, as Odometry's twist): the last two poses'
+  /// errors, taken as independent, over the step's time. kUnknown's diagonal before two known poses.
+  const Matrix6d& twistCovariance() const { return twist_cov_; }
+  /// The variance that stands for "unknown" (m^2, rad^2): large enough that a filter ignores the value.
+  static constexpr double kUnknown = 1e6;
 
  private:
   binloop::Pose3 T_base_cam_, T_cam_base_;
   binloop::Pose3 T_map_base_ = binloop::Pose3::Identity(), T_odom_base_ = binloop::Pose3::Identity();
   binloop::Pose3 last_motion_ = binloop::Pose3::Identity();  // base frame-to-frame
   Eigen::Vector3d v_ = Eigen::Vector3d::Zero(), w_ = Eigen::Vector3d::Zero();
+  Matrix6d pose_cov_ = kUnknown * Matrix6d::Identity(), twist_cov_ = kUnknown * Matrix6d::Identity();
+  bool pose_cov_known_ = false;
   double last_stamp_s_ = 0;
   bool have_last_ = false, started_ = false;
 };

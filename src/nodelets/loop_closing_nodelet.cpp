@@ -57,7 +57,7 @@ class LoopClosingNodelet : public nodelet::Nodelet {
   std::deque<binloop::LoopCandidatesConstPtr> pending_;
   struct Edge {
     binloop::SlamKeyframeId query, match;
-    std::string status;
+    binloop::msg::LoopStatus status;
   };
   std::vector<Edge> edges_;
   uint64_t verified_ = 0, accepted_ = 0, rejected_input_ = 0;
@@ -125,7 +125,7 @@ void LoopClosingNodelet::startOver(std::unique_ptr<binloop::LoopCloser> c) {
   keyframes_seen_.clear();
   updates_seen_.clear();
   edges_.clear();
-  for (const auto& e : closer_->loops()) edges_.push_back({e.query, e.candidate, "accepted"});
+  for (const auto& e : closer_->loops()) edges_.push_back({e.query, e.candidate, binloop::msg::LoopStatus::kAccepted});
   publishPathAndEdges(ros::Time::now());
 }
 
@@ -192,14 +192,14 @@ void LoopClosingNodelet::handle(const binloop::LoopCloser::Output& out, const st
   h.frame_id = slam_frame_;
   for (const auto& c : out.closures) {
     ++verified_;
-    ++by_status_[c->status];
+    ++by_status_[binloop::msg::loopStatusName(c->status)];
     // A held loop comes again with its final status: its edge changes colour instead of being drawn twice.
     auto same = std::find_if(edges_.begin(), edges_.end(),
                              [&](const auto& e) { return e.query == c->query && e.match == c->match; });
     if (same != edges_.end()) same->status = c->status;
     else edges_.push_back({c->query, c->match, c->status});
     last_loop_ = c->model + " " + std::to_string(c->query_frame) + " -> " + std::to_string(c->match_frame) + ": " +
-                 c->status + " (" + c->detail + ")";
+                 binloop::msg::loopStatusName(c->status) + " (" + c->detail + ")";
     NODELET_INFO("binloop/LoopClosing: loop %s", last_loop_.c_str());
     closure_pub_.publish(boost::make_shared<binloop::LoopClosure>(toRos(*c, h)));
   }
@@ -251,8 +251,9 @@ void LoopClosingNodelet::publishPathAndEdges(const ros::Time& stamp) {
     if (q == where.end() || m == where.end()) continue;
     std_msgs::ColorRGBA c;
     c.a = 1;
-    if (e.status == "accepted" || e.status == "agreed") c.g = 1;  // green
-    else if (e.status == "held") c.r = c.g = 1;   // yellow
+    using binloop::msg::LoopStatus;
+    if (e.status == LoopStatus::kAccepted || e.status == LoopStatus::kAgreed) c.g = 1;  // green
+    else if (e.status == LoopStatus::kHeld) c.r = c.g = 1;                            // yellow
     else c.r = 1;                                  // red: rejected, whatever the reason
     for (const auto* p : {&q->second, &m->second}) {
       geometry_msgs::Point gp;

@@ -96,7 +96,8 @@ void TrackingNodelet::onInit() {
   try {
     std::vector<std::string> known = {"config", "reloc_vocab", "force_extractor", "sync", "queue_size", "max_stamp_diff",
                                       "camera_frame", "camera", "seed", "lockstep", "max_time_jump", "transport", "stereo",
-                                      "time_jump_confirm_pairs", "stale_after_s", "path_max_poses", "keyframe_timeout_s"};
+                                      "time_jump_confirm_pairs", "stale_after_s", "path_max_poses", "keyframe_timeout_s",
+                                      "localize_only"};
     known.insert(known.end(), FramePublisher::parameterNames().begin(), FramePublisher::parameterNames().end());
     requireKnownParams(pnh, known);
     in_flight_ = binloop::KeyframesInFlight(numberParam(pnh, "keyframe_timeout_s", 5));
@@ -106,6 +107,7 @@ void TrackingNodelet::onInit() {
     path_max_poses_ = static_cast<size_t>(std::max(1.0, numberParam(pnh, "path_max_poses", 1000)));
     config_ = slamConfigFrom(pnh);
     config_.tracker.seed = static_cast<uint64_t>(numberParam(pnh, "seed", 1));
+    config_.tracker.localize_only = boolParam(pnh, "localize_only", config_.tracker.localize_only);
     // "" or "none": relocalisation tries only the most recent keyframes.
     const std::string reloc = stringParam(pnh, "reloc_vocab", binloop::packagePath(binloop::kRelocVocab));
     if (!reloc.empty() && reloc != "none") {
@@ -356,7 +358,7 @@ void TrackingNodelet::publishPose(const binloop::msg::TrackedFrame& f, const std
     frames_out_->lost(header.stamp);
     return;
   }
-  frames_out_->tracked(f.T_w_c, header.stamp, header.frame_id, corrections_ != corrections_at_last_);
+  frames_out_->tracked(f.T_w_c, f.pose_covariance, header.stamp, header.frame_id, corrections_ != corrections_at_last_);
   corrections_at_last_ = corrections_;
   const std::string problem = frames_out_->takeProblem();
   if (!problem.empty()) {

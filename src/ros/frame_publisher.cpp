@@ -70,10 +70,10 @@ void FramePublisher::send(const binloop::Pose3& T, const ros::Time& stamp, const
   }
 }
 
-void FramePublisher::tracked(const binloop::Pose3& T_slam_cam, const ros::Time& stamp, const std::string& camera_frame,
-                             bool corrected) {
+void FramePublisher::tracked(const binloop::Pose3& T_slam_cam, const RobotFrames::Matrix6d& covariance,
+                             const ros::Time& stamp, const std::string& camera_frame, bool corrected) {
   if (!mounted_) mountCamera(camera_frame);
-  frames_.update(T_slam_cam, stamp.toSec(), corrected);
+  frames_.update(T_slam_cam, covariance, stamp.toSec(), corrected);
 
   nav_msgs::Odometry odom;
   odom.header.stamp = stamp;
@@ -86,6 +86,11 @@ void FramePublisher::tracked(const binloop::Pose3& T_slam_cam, const ros::Time& 
   odom.twist.twist.angular.x = frames_.angularVelocity().x();
   odom.twist.twist.angular.y = frames_.angularVelocity().y();
   odom.twist.twist.angular.z = frames_.angularVelocity().z();
+  for (int r = 0; r < 6; ++r)
+    for (int c = 0; c < 6; ++c) {
+      odom.pose.covariance[6 * r + c] = frames_.poseCovariance()(r, c);
+      odom.twist.covariance[6 * r + c] = frames_.twistCovariance()(r, c);
+    }
   odom_pub_.publish(odom);
 
   if (!tf_) return;

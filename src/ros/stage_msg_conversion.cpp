@@ -308,7 +308,7 @@ binloop::LoopClosure toRos(const core::LoopClosure& c, const std_msgs::Header& h
   m.query_frame = c.query_frame;
   m.match_frame = c.match_frame;
   m.model = c.model;
-  m.status = c.status;
+  m.status = core::loopStatusName(c.status);
   m.detail = c.detail;
   m.query_to_match = toPoseMsg(c.T_query_match);
   m.matches = c.matches;
@@ -329,7 +329,11 @@ core::LoopClosure fromRos(const binloop::LoopClosure& m) {
   c.query_frame = m.query_frame;
   c.match_frame = m.match_frame;
   c.model = m.model;
-  c.status = m.status;
+  try {
+    c.status = core::parseLoopStatus(m.status);
+  } catch (const std::invalid_argument& e) {
+    throw ConversionError(std::string("LoopClosure.status: ") + e.what());
+  }
   c.detail = m.detail;
   c.T_query_match = toPose3(m.query_to_match);
   c.matches = m.matches;
@@ -385,6 +389,8 @@ binloop::TrackedFrame toRos(const core::TrackedFrame& f, const std::string& fram
   m.pose = toPoseMsg(f.T_w_c);
   m.reference = f.reference;
   m.reference_to_camera = toPoseMsg(f.T_ref_c);
+  for (int r = 0; r < 6; ++r)
+    for (int c = 0; c < 6; ++c) m.pose_covariance[6 * r + c] = f.pose_covariance(r, c);
   m.new_keyframe = f.new_keyframe;
   m.features = f.features;
   m.stereo_matches = f.stereo_matches;
@@ -406,6 +412,9 @@ core::TrackedFrame fromRos(const binloop::TrackedFrame& m) {
   f.T_w_c = toPose3(m.pose);
   f.reference = m.reference;
   f.T_ref_c = toPose3(m.reference_to_camera);
+  for (int r = 0; r < 6; ++r)
+    for (int c = 0; c < 6; ++c) f.pose_covariance(r, c) = m.pose_covariance[6 * r + c];
+  if (!f.pose_covariance.allFinite()) throw ConversionError("TrackedFrame.pose_covariance has a NaN or infinite number");
   f.new_keyframe = m.new_keyframe;
   f.features = m.features;
   f.stereo_matches = m.stereo_matches;

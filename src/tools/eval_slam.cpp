@@ -1,6 +1,6 @@
 // eval-slam: the SLAM once per loop detector over one sequence (the `run` tool as child processes), scored
 // side by side: trajectory accuracy, loops against ground truth, detection and verification timings.
-// See README, "Tools", and eval/slam_evaluation.h for what counts as a correct loop and a closed revisit.
+// See docs/tools.md, and eval/slam_evaluation.h for what counts as a correct loop and a closed revisit.
 #include <fcntl.h>
 #include <sys/wait.h>
 #include <unistd.h>
@@ -142,7 +142,7 @@ void score(Row& row, const fs::path& dir, const std::vector<Pose3>& gt, const st
   bool all_posed = true;
   if (row.model != "none")  // run writes no loops.csv without a detector
     for (const LoggedLoop& l : readLoopLog((dir / "loops.csv").string()))
-      if (l.status == "accepted") {
+      if (l.status == msg::LoopStatus::kAccepted) {
         accepted.emplace_back(static_cast<int>(l.query_frame), static_cast<int>(l.match_frame));
         poses.push_back(l.T_query_match);
         all_posed = all_posed && l.has_pose;

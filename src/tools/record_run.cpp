@@ -131,7 +131,7 @@ struct Recorder {
     writeLoopLog((out / "loops.csv").string(), loops);
     std::map<std::string, int> by_status;
     for (const auto& e : loops)
-      for (const auto& c : e.closures) ++by_status[c->status];
+      for (const auto& c : e.closures) ++by_status[msg::loopStatusName(c->status)];
     std::ofstream js(out / "summary.json");
     js << "{\n  \"source\": \"ros graph (record-run)\",\n  \"frames\": " << frames.size() << ",\n  \"lost_frames\": " << lost
        << ",\n  \"keyframes\": " << live << ",\n  \"loops_by_status\": {";

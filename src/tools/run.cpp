@@ -1,4 +1,4 @@
-// run: the SLAM over a KITTI-layout sequence folder, offline (no ROS master). See README, "Running the SLAM".
+// run: the SLAM over a KITTI-layout sequence folder, offline (no ROS master). See docs/slam.md.
 #include <algorithm>
 #include <chrono>
 #include <cstdio>
@@ -48,7 +48,7 @@ int main(int argc, char** argv) {
                "scripts/binloop run <sequence_dir> --out <dir> [--config config/kitti.yaml]\n"
                "    [--detector hmvlad|hbow|fabmap|vlad|vladpq|none] [--shadow all|M,M] [--switch-detector-at KF:M]\n"
                "    [--lockstep | --rate R] [--seed N] [--start N] [--end N] [--reloc-vocab <hbow.bin>|none]\n"
-               "    [--load-map <dir>] [--save-map <dir>]\n"
+               "    [--load-map <dir> [--localize-only]] [--save-map <dir>]\n"
                "Tracks and maps a KITTI-layout stereo sequence (image_0/, image_1/, calib.txt, times.txt), closes loops,\n"
                "and writes trajectory.kitti.txt / .tum.txt (every frame, loop-corrected), keyframes.kitti.txt / .tum.txt,\n"
                "timing.csv, loops.csv (one row per keyframe and model queried), summary.json.");
@@ -72,6 +72,7 @@ int main(int argc, char** argv) {
               packagePath(kRelocVocab))
       .option("load-map", "start in a map saved by --save-map or the ROS save_map service (tracking relocalises in it)")
       .option("save-map", "save the map at the end (one state file per stage, as the ROS save_map service)")
+      .flag("localize-only", "with --load-map: track in the loaded map and make no keyframe (the map stays as loaded)")
       .flag("force-extractor", "use a vocabulary trained with other extractor settings than config's orb section");
   return runTool("run", [&] {
     if (!args.parse(argc, argv)) return 0;
@@ -85,6 +86,10 @@ int main(int argc, char** argv) {
     if (detector != "none") checkName(detector, "--detector");
     SlamConfig config = args.has("config") ? loadSlamConfig(args.str("config")) : SlamConfig{};
     config.tracker.seed = static_cast<uint64_t>(args.integer("seed"));
+    if (args.has("localize-only")) {
+      if (!args.has("load-map")) throw CliError("--localize-only needs a map to localise in: give --load-map");
+      config.tracker.localize_only = true;
+    }
     const std::string reloc_vocab = args.str("reloc-vocab");
     if (reloc_vocab != "none") {
       config.tracker.vocabulary =
@@ -287,7 +292,7 @@ int main(int argc, char** argv) {
           query_ms[m].push_back(c->total_ms - sig);
         }
         for (const auto& c : e.closures) {
-          ++by_status[c->status];
+          ++by_status[msg::loopStatusName(c->status)];
           if (c->verify_ms > 0) verify_ms.push_back(c->verify_ms);
           if (c->optimize_ms > 0) optimize_ms.push_back(c->optimize_ms);
         }

@@ -61,3 +61,61 @@ TEST(RobotFrames, OdomStaysContinuousAcrossACorrectionAndMapToOdomTakesTheJump) 
   wheel.translation() = Eigen::Vector3d(10.4, -0.3, 0);
   expectNear(f.odomInMap(wheel) * wheel, f.baseInMap());
 }
+
+namespace {
+
+// The camera moved by (dc, dtheta) in the slam frame: centre c + dc, rotation exp(dtheta) R.
+Pose3 moved(const Pose3& T_slam_cam, const Eigen::Matrix<double, 6, 1>& d) {
+  Pose3 T = T_slam_cam;
+  const Eigen::Vector3d w = d.tail<3>();
+  T.linear() = (Eigen::AngleAxisd(w.norm(), w.normalized()) * T_slam_cam.linear()).eval();
+  T.translation() += d.head<3>();
+  return T;
+}
+
+}  // namespace
+
+// The odometry's covariance is the camera pose's, carried to the base in odom: checked against what a small
+// move of the camera does to baseInOdom(), on a camera mounted off the base's origin and turned.
+TEST(RobotFrames, PoseCovarianceIsTheCamerasCarriedToTheBaseInOdom) {
+  Pose3 mount = RobotFrames::opticalOnBase();
+  mount.linear() = (Eigen::AngleAxisd(0.2, Eigen::Vector3d::UnitZ()) * mount.linear()).eval();
+  mount.translation() = Eigen::Vector3d(1.5, 0.3, 1.2);  // camera 1.5 m ahead of the base, 1.2 m up
+  const Pose3 first = cameraAt(0), second = cameraAt(1.0, 0.3);
+  Eigen::Matrix<double, 6, 1> d;
+  d << 2e-6, -1e-6, 3e-6, 1e-6, -2e-6, 1.5e-6;
+  RobotFrames a(mount), b(mount);
+  a.update(first, 0.0, false);
+  b.update(first, 0.0, false);
+  a.update(second, 0.1, false);
+  b.update(moved(second, d), 0.1, false);
+  // The base's error in odom: position, then rotation about odom's axes.
+  Eigen::Matrix<double, 6, 1> e;
+  e.head<3>() = b.baseInOdom().translation() - a.baseInOdom().translation();
+  const Eigen::AngleAxisd aa(b.baseInOdom().linear() * a.baseInOdom().linear().transpose());
+  e.tail<3>() = aa.angle() * aa.axis();
+
+  RobotFrames c(mount);
+  c.update(first, RobotFrames::Matrix6d::Zero(), 0.0, false);
+  EXPECT_EQ(c.poseCovariance()(0, 0), RobotFrames::kUnknown) << "zeros: unknown";
+  c.update(second, d * d.transpose(), 0.1, false);
+  const RobotFrames::Matrix6d expected = e * e.transpose();
+  EXPECT_LT((c.poseCovariance() - expected).cwiseAbs().maxCoeff(), 1e-3 * expected.cwiseAbs().maxCoeff())
+      << c.poseCovariance() << "\nvs\n" << expected;
+  EXPECT_EQ(c.twistCovariance()(0, 0), RobotFrames::kUnknown) << "the last pose's covariance was unknown";
+}
+
+TEST(RobotFrames, TwistCovarianceIsTheTwoPosesErrorsOverTheStep) {
+  RobotFrames f;  // camera on the base's origin, optical axes
+  RobotFrames::Matrix6d cov = RobotFrames::Matrix6d::Zero();
+  cov.diagonal() << 1e-4, 4e-4, 9e-4, 1e-6, 4e-6, 9e-6;  // slam axes: x right, y down, z forward
+  f.update(cameraAt(0), cov, 0.0, false);
+  f.update(cameraAt(1.0), cov, 0.1, false);
+  // The base's x is the camera's z: twice 9e-4 m^2 over (0.1 s)^2.
+  EXPECT_NEAR(f.twistCovariance()(0, 0), 2 * 9e-4 / 0.01, 1e-9);
+  EXPECT_NEAR(f.twistCovariance()(1, 1), 2 * 1e-4 / 0.01, 1e-9);
+  EXPECT_NEAR(f.twistCovariance()(5, 5), 2 * 4e-6 / 0.01, 1e-9);  // yaw: about the camera's y
+  EXPECT_NEAR(f.poseCovariance()(2, 2), 4e-4, 1e-12);           // odom's z is the camera's -y
+  f.update(cameraAt(5.0), cov, 0.2, true);
+  EXPECT_EQ(f.twistCovariance()(0, 0), RobotFrames::kUnknown) << "across a correction the step is not measured";
+}

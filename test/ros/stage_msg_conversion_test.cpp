@@ -210,7 +210,7 @@ TEST(StageMsgConversion, LoopClosureRoundTrip) {
   a.query_frame = 1500;
   a.match_frame = 40;
   a.model = "external";
-  a.status = "beyond_drift_bound";
+  a.status = core::LoopStatus::kBeyondDriftBound;
   a.detail = "moves 7.2 m, bound 1.9 m";
   a.T_query_match = somePose(rng);
   a.matches = 120;
@@ -238,7 +238,31 @@ TEST(StageMsgConversion, LoopClosureRoundTrip) {
   EXPECT_EQ(a.keyframes_corrected, b.keyframes_corrected);
   EXPECT_EQ(a.verify_ms, b.verify_ms);
   EXPECT_EQ(a.optimize_ms, b.optimize_ms);
-  EXPECT_EQ(binloop::LoopClosure::BEYOND_DRIFT_BOUND, a.status);
+  EXPECT_EQ(binloop::LoopClosure::BEYOND_DRIFT_BOUND, toRos(a, std_msgs::Header()).status);
+}
+
+// The core's statuses are the message's constants, one for one; any other text is refused.
+TEST(StageMsgConversion, LoopClosureStatusesAreTheMessageConstants) {
+  const std::vector<std::pair<core::LoopStatus, std::string>> all = {
+      {core::LoopStatus::kAccepted, binloop::LoopClosure::ACCEPTED},
+      {core::LoopStatus::kHeld, binloop::LoopClosure::HELD},
+      {core::LoopStatus::kAgreed, binloop::LoopClosure::AGREED},
+      {core::LoopStatus::kTooFewMatches, binloop::LoopClosure::TOO_FEW_MATCHES},
+      {core::LoopStatus::kNoConsensus, binloop::LoopClosure::NO_CONSENSUS},
+      {core::LoopStatus::kTooFewInliers, binloop::LoopClosure::TOO_FEW_INLIERS},
+      {core::LoopStatus::kBeyondDriftBound, binloop::LoopClosure::BEYOND_DRIFT_BOUND},
+      {core::LoopStatus::kLargeResidual, binloop::LoopClosure::LARGE_RESIDUAL},
+      {core::LoopStatus::kUnknownKeyframe, binloop::LoopClosure::UNKNOWN_KEYFRAME}};
+  for (const auto& [status, text] : all) {
+    core::LoopClosure a;
+    a.status = status;
+    const binloop::LoopClosure m = toRos(a, std_msgs::Header());
+    EXPECT_EQ(m.status, text);
+    EXPECT_EQ(fromRos(m).status, status) << text;
+  }
+  binloop::LoopClosure m = toRos(core::LoopClosure{}, std_msgs::Header());
+  m.status = "found";
+  EXPECT_THROW(fromRos(m), binloop_ros::ConversionError);
 }
 
 TEST(StageMsgConversion, CorrectionRoundTrip) {

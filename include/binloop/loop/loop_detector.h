@@ -1,5 +1,5 @@
 #pragma once
-// The loop-detection stage (SPEC, pipeline step 3): refined keyframes from local mapping in, one
+// The loop-detection stage (step 3 of four; ARCHITECTURE.md): refined keyframes from local mapping in, one
 // LoopCandidates per keyframe out (plus one per shadow model). It owns the active place-recognition model,
 // every keyframe's descriptors (so that another model can be built from them at any time) and the
 // covisibility it has been told about; nothing is shared with the other stages.
@@ -26,7 +26,7 @@ class StateWriter;
 class StateReader;
 
 struct LoopDetectorParams {
-  std::string model = "hmvlad";  // the default model: its file is small enough to ship (README, "Loop models")
+  std::string model = "hmvlad";  // the default model: its file is small enough to ship (docs/loop_models.md)
   int max_reference = 10;   // strongest covisible neighbours that set the bar
   int ignore_recent = 20;   // keyframes just before the query are never candidates (they are not loops)
   int consistency = 2;      // consecutive consistent queries before a candidate is accepted (ORB-SLAM2: 3;

@@ -1,5 +1,5 @@
 #pragma once
-// Geometric verification of a loop candidate (SPEC, pipeline step 4, first half): do the query keyframe
+// Geometric verification of a loop candidate (the first half of loop closing): do the query keyframe
 // and the candidate keyframe see the same 3-D structure, and where is one camera relative to the other?
 // Stereo gives both keyframes metric 3-D points of their own, so the answer is a rigid transform:
 //   1. descriptor matches between their stereo keypoints (best below max_hamming, clearly better than the
@@ -16,6 +16,7 @@
 #include <vector>
 
 #include "binloop/messages/keyframe.h"
+#include "binloop/messages/loop_closure.h"
 #include "binloop/optim/pose_optimizer.h"
 #include "binloop/optim/rigid_alignment.h"
 #include "binloop/types/pose.h"
@@ -23,6 +24,8 @@
 namespace binloop {
 
 enum class LoopRejection { kNone, kTooFewMatches, kNoConsensus, kTooFewInliers };
+/// The loop status a verification ends with (kNone: accepted).
+msg::LoopStatus loopStatusOf(LoopRejection r);
 const char* rejectionName(LoopRejection r);
 
 struct LoopVerifierParams {

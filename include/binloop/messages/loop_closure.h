@@ -1,7 +1,9 @@
 #pragma once
 // LoopClosure: loop closing -> the logs, rviz and the user, one per loop it verified (accepted or not).
 // Maps 1:1 onto binloop/LoopClosure.
+#include <cstdint>
 #include <memory>
+#include <ostream>
 #include <string>
 
 #include "binloop/map/ids.h"
@@ -9,14 +11,29 @@
 
 namespace binloop::msg {
 
+/// What loop closing made of a verified candidate.
+enum class LoopStatus : uint8_t {
+  kAccepted,          // corrected the map
+  kHeld,              // waiting for a second loop to confirm it
+  kAgreed,            // a held loop that a later one confirmed
+  kTooFewMatches,     // rejected by verification (LoopRejection)
+  kNoConsensus,       // ...
+  kTooFewInliers,     // ...
+  kBeyondDriftBound,  // the correction is more than odometry's drift since the match can explain
+  kLargeResidual,     // the optimisation could not satisfy the loop edge
+  kUnknownKeyframe,   // a keyframe this stage does not hold
+};
+/// "accepted", "held", "agreed", "too_few_matches", ...: the name logs and ROS messages carry.
+const char* loopStatusName(LoopStatus s);
+/// The status of a name loopStatusName gives; throws std::invalid_argument for any other.
+LoopStatus parseLoopStatus(const std::string& name);
+inline std::ostream& operator<<(std::ostream& o, LoopStatus s) { return o << loopStatusName(s); }
+
 struct LoopClosure {
   SlamKeyframeId query = kNoId, match = kNoId;
   uint64_t query_frame = 0, match_frame = 0;
   std::string model;   // which detector proposed it, or "external"
-  // accepted, held (waiting for a second loop), agreed (with a held loop that a later one confirmed), or
-  // the reason it was rejected: too_few_matches, no_consensus, too_few_inliers, beyond_drift_bound,
-  // large_residual, unknown_keyframe
-  std::string status;
+  LoopStatus status = LoopStatus::kAccepted;
   std::string detail;  // the numbers behind the status, one line
   Pose3 T_query_match = Pose3::Identity();
   int matches = 0, inliers = 0;

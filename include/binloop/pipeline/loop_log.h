@@ -15,7 +15,8 @@ void writeLoopLog(const std::string& path, const std::vector<SlamPipeline::LoopL
                   const std::vector<Pose3>* ground_truth = nullptr);
 
 struct LoggedLoop {
-  std::string model, status;
+  std::string model;
+  msg::LoopStatus status = msg::LoopStatus::kAccepted;
   uint64_t query_frame = 0, match_frame = 0;
   int inliers = 0;
   double correction_m = 0;

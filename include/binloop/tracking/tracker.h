@@ -1,5 +1,5 @@
 #pragma once
-// The tracking stage (SPEC, pipeline step 1): stereo frames in, a pose per frame and keyframes out.
+// The tracking stage (step 1 of four; ARCHITECTURE.md): stereo frames in, a pose per frame and keyframes out.
 // It owns its state: the last frame, the motion model, and a MapReplica built only from the keyframes it
 // made and the LocalMapUpdate messages it is given (loop corrections arrive as one). It never waits for another stage, so the
 // pipeline can run it in lock-step or on its own thread.
@@ -81,6 +81,14 @@ struct TrackerParams {
   // refined by local BA) took t_rel from 1.14 % to 0.36 % and r_rel from 0.57 to 0.14 deg/100 m, because far
   // points are what pins the rotation.
   bool create_far_points = true;
+  // Localisation only: the tracker finds its frames in the map it holds (a loaded one) and makes no
+  // keyframe, so the map stays as it is (no mapping, no loop closing needed). Without a map no frame is
+  // tracked; beyond the map's edge tracking runs out of points and is lost until the map is seen again.
+  bool localize_only = false;
+  // ... where a frame tracks fewer inliers than this, it is relocalised too and the pose that explains more
+  // of the map wins: with no keyframes added, the local map never moves on to another part of the map that
+  // shows the same place (a revisit the map never closed), and only relocalisation finds it.
+  int localize_relocalize_below = 150;
 };
 
 class Tracker {
@@ -163,6 +171,9 @@ class Tracker {
   bool poseFromScratch(Frame& f, const std::vector<const msg::MapPoint*>& pts);
   bool trackLocalMap(Frame& f, float radius, int min_inliers);
   int optimizePose(Frame& f);
+  /// The frame's matched map points as pose-optimisation observations (`index`: their keypoints); a match
+  /// whose point the replica no longer holds is dropped from the frame.
+  std::vector<PoseObservation> observationsOf(Frame& f, std::vector<int>* index) const;
   void updateLocalKeyframes(const Frame& f);
   bool needKeyframe(const Frame& f, int mapping_queue) const;
   msg::KeyFramePtr makeKeyframe(Frame& f);

@@ -17,6 +17,13 @@ inline Pose3 orthonormalized(const Pose3& T) {
   return o;
 }
 
+/// The cross-product matrix: skew(v) * w = v x w.
+inline Eigen::Matrix3d skew(const Eigen::Vector3d& v) {
+  Eigen::Matrix3d m;
+  m << 0, -v.z(), v.y(), v.z(), 0, -v.x(), -v.y(), v.x(), 0;
+  return m;
+}
+
 /// A pose with its time, e.g. one line of a trajectory file (T_w_c of the left camera).
 struct StampedPose {
   double stamp_s = 0.0;

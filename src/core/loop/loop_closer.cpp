@@ -142,7 +142,7 @@ std::vector<msg::LoopClosure> LoopCloser::takeHeld() {
 
 void LoopCloser::rejectHeld(const std::string& why, Output* out) {
   for (msg::LoopClosure& c : takeHeld()) {
-    c.status = "beyond_drift_bound";
+    c.status = msg::LoopStatus::kBeyondDriftBound;
     c.detail += "; " + why;
     out->closures.push_back(std::make_shared<msg::LoopClosure>(std::move(c)));
   }
@@ -211,7 +211,7 @@ LoopCloser::Output LoopCloser::verify(SlamKeyframeId query, SlamKeyframeId match
   c->match = match;
   auto fq = frames_.find(query), fm = frames_.find(match);
   if (fq == frames_.end() || fm == frames_.end() || query == match) {
-    c->status = "unknown_keyframe";
+    c->status = msg::LoopStatus::kUnknownKeyframe;
     c->detail = query == match ? "a keyframe cannot close a loop with itself"
                                : std::string("loop closing does not hold keyframe ") +
                                      std::to_string(fq == frames_.end() ? query : match) + " (never sent, or culled)";
@@ -235,7 +235,7 @@ LoopCloser::Output LoopCloser::verify(SlamKeyframeId query, SlamKeyframeId match
   c->inliers = v.inliers;
   c->T_query_match = v.T_query_candidate;
   if (!v.accepted) {
-    c->status = rejectionName(v.rejection);
+    c->status = loopStatusOf(v.rejection);
     c->detail = v.detail;
     return out;
   }
@@ -253,7 +253,7 @@ LoopCloser::Output LoopCloser::verify(SlamKeyframeId query, SlamKeyframeId match
   LoopEdge confirmed_edge;
   bool confirming = false;
   if (c->correction_m > p_.hold_factor * c->drift_bound_m) {
-    c->status = "beyond_drift_bound";
+    c->status = msg::LoopStatus::kBeyondDriftBound;
     c->detail = numbers + "; more than " + fixedDecimals(p_.hold_factor, 2) + "x the bound: not a loop drift can explain";
     return out;
   }
@@ -276,7 +276,7 @@ LoopCloser::Output LoopCloser::verify(SlamKeyframeId query, SlamKeyframeId match
         // stays, so that a loop verified at every keyframe of a revisit (3-4 m apart) reaches the travel a
         // confirmation needs. Replacing it instead dropped every true loop of a revisit whose drift was over
         // the bound (rendered 06 run flat out: 10 m against 5.65 m, verified at 17 keyframes, none closed).
-        c->status = "held";
+        c->status = msg::LoopStatus::kHeld;
         c->detail = numbers + "; agrees with" + agreement + ", " + fixedDecimals(p_.confirm_min_travel_m, 2) +
                     " m needed): waits with it";
         held_->agreeing.push_back(*c);
@@ -284,7 +284,7 @@ LoopCloser::Output LoopCloser::verify(SlamKeyframeId query, SlamKeyframeId match
       }
     }
     if (!confirming) {
-      c->status = "held";
+      c->status = msg::LoopStatus::kHeld;
       c->detail = numbers + "; held until a second loop confirms it";
       if (held_) rejectHeld("replaced by a newer held loop that does not agree with it", &out);
       held_ = Held{edges.front(), *c, delta, order_.size(), {}};
@@ -311,12 +311,12 @@ LoopCloser::Output LoopCloser::verify(SlamKeyframeId query, SlamKeyframeId match
     msg::LoopClosure& w = waited[k];
     if (!applied) {
       w.status = c->status;  // large_residual: nothing moved
-      w.detail += "; the loop at keyframe " + by + " that confirmed it was rejected (" + c->status + ")";
+      w.detail += "; the loop at keyframe " + by + " that confirmed it was rejected (" + msg::loopStatusName(c->status) + ")";
     } else if (k == 0) {
-      w.status = "accepted";
+      w.status = msg::LoopStatus::kAccepted;
       w.detail += "; confirmed by the loop at keyframe " + by;
     } else {
-      w.status = "agreed";
+      w.status = msg::LoopStatus::kAgreed;
       w.detail += "; the held loop was confirmed by the loop at keyframe " + by + ", whose two edges carry the correction";
     }
     out.closures.push_back(std::make_shared<msg::LoopClosure>(std::move(w)));
@@ -355,7 +355,7 @@ bool LoopCloser::correct(const std::vector<LoopEdge>& new_loops, const std::vect
                "), " + std::to_string(g.nodes.size()) + " keyframes, " + std::to_string(g.edges.size()) + " edges, " +
                std::to_string(r.iterations) + " iterations";
   if (c->residual_ratio > p_.max_residual_ratio) {
-    c->status = "large_residual";
+    c->status = msg::LoopStatus::kLargeResidual;
     return false;
   }
 
@@ -374,7 +374,7 @@ bool LoopCloser::correct(const std::vector<LoopEdge>& new_loops, const std::vect
   }
   if (p_.fuse) corr->fused = fused;
   for (const LoopEdge& l : new_loops) loops_.push_back(l);
-  c->status = "accepted";
+  c->status = msg::LoopStatus::kAccepted;
   c->keyframes_corrected = static_cast<int>(g.nodes.size());
   last_correction_at_ = order_.size();
   out->correction = corr;

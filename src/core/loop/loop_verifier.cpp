@@ -14,15 +14,17 @@
 
 namespace binloop {
 
-const char* rejectionName(LoopRejection r) {
+msg::LoopStatus loopStatusOf(LoopRejection r) {
   switch (r) {
-    case LoopRejection::kNone: return "accepted";
-    case LoopRejection::kTooFewMatches: return "too_few_matches";
-    case LoopRejection::kNoConsensus: return "no_consensus";
-    case LoopRejection::kTooFewInliers: return "too_few_inliers";
+    case LoopRejection::kNone: return msg::LoopStatus::kAccepted;
+    case LoopRejection::kTooFewMatches: return msg::LoopStatus::kTooFewMatches;
+    case LoopRejection::kNoConsensus: return msg::LoopStatus::kNoConsensus;
+    case LoopRejection::kTooFewInliers: return msg::LoopStatus::kTooFewInliers;
   }
-  return "unknown";
+  return msg::LoopStatus::kTooFewMatches;
 }
+
+const char* rejectionName(LoopRejection r) { return msg::loopStatusName(loopStatusOf(r)); }
 
 namespace {
 

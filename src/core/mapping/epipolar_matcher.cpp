@@ -8,12 +8,6 @@ namespace binloop {
 
 namespace {
 
-Eigen::Matrix3d skew(const Eigen::Vector3d& v) {
-  Eigen::Matrix3d m;
-  m << 0, -v.z(), v.y(), v.z(), 0, -v.x(), -v.y(), v.x(), 0;
-  return m;
-}
-
 Eigen::Matrix3d intrinsics(const StereoCamera& c) {
   Eigen::Matrix3d K;
   K << c.fx, 0, c.cx, 0, c.fy, c.cy, 0, 0, 1;

@@ -73,7 +73,7 @@ void row(std::ostream& o, const msg::LoopCandidates* q, const msg::LoopClosure* 
     o << counterOf(c->query) << "," << c->query_frame << "," << c->model << ",0,,\"\",,,";
   }
   if (c) {
-    o << c->status << "," << c->match_frame << "," << c->matches << "," << c->inliers << "," << c->correction_m << ","
+    o << msg::loopStatusName(c->status) << "," << c->match_frame << "," << c->matches << "," << c->inliers << "," << c->correction_m << ","
       << c->drift_bound_m << "," << c->residual_ratio << ",";
   } else {
     o << ",,,,,,,";
@@ -129,10 +129,14 @@ std::vector<LoggedLoop> readLoopLog(const std::string& path) {
       throw dataError(path, static_cast<int>(n),
                       std::to_string(f.size()) + " fields, expected " + std::to_string(fields_expected));
     if (f[8].empty()) continue;  // no closure on this row
+    LoggedLoop l;
     try {
-      LoggedLoop l;
+      l.status = msg::parseLoopStatus(f[8]);
+    } catch (const std::invalid_argument& e) {
+      throw dataError(path, static_cast<int>(n), e.what());
+    }
+    try {
       l.model = f[2];
-      l.status = f[8];
       l.query_frame = std::stoull(f[1]);
       l.match_frame = std::stoull(f[9]);
       l.inliers = std::stoi(f[11]);

@@ -9,6 +9,7 @@
 
 #include "binloop/io/data_error.h"
 #include "binloop/map/keypoint_geometry.h"
+#include "binloop/optim/pose_covariance.h"
 #include "binloop/util/fixed_decimals.h"
 #include "binloop/util/hash_random.h"
 
@@ -83,6 +84,11 @@ Tracker::Output Tracker::track(const StereoFrame& in, int mapping_queue) {
   const auto t0 = std::chrono::steady_clock::now();
 
   if (state_ == msg::TrackingState::kNotInitialized) {
+    if (p_.localize_only) {
+      tf.problem = "localisation only, and no map to localise in: load one";
+      tf.track_ms = msSinceT(t0);
+      return out;
+    }
     if (!initialize(f, &out.keyframe)) {
       tf.problem = "not initialised: " + std::to_string(f.stereo_matches) + " stereo matches, " +
                    std::to_string(p_.init_min_stereo) + " needed";
@@ -155,10 +161,31 @@ Tracker::Output Tracker::track(const StereoFrame& in, int mapping_queue) {
       ok = trackLocalMap(f, p_.lost_radius, p_.min_inliers_after_loss) && reach.admits(f.T_w_c);
       if (!ok && predict && p_.recover_rotation_first) ok = recoverRotationFirst(f, predicted) && reach.admits(f.T_w_c);
       // Still nothing: the pose is unknown; find it from scratch against recent keyframes.
-      if (!ok) ok = relocalized = relocalize(f, reach, hinted);
+      // Localisation only: the map is as loaded, and two parts of it may show one place a metre apart (a
+      // revisit never closed); a pose found in the other part is no less right, so no gate.
+      MotionReach anywhere;
+      if (!ok) ok = relocalized = relocalize(f, p_.localize_only && !hinted ? anywhere : reach, hinted);
       if (!ok) reference_ = reference_before;
       if (ok && (relocalized || state_ != msg::TrackingState::kOk)) {
         state_ = msg::TrackingState::kRelocalized;
+      }
+    }
+    if (ok && p_.localize_only && !relocalized && inliers_ < p_.localize_relocalize_below) {
+      // Tracked, but on little of the map: relocalised as well, and the pose that explains more of it wins
+      // (ORB-SLAM2's localisation mode does the same once it is down to visual odometry).
+      const int tracked = inliers_;
+      const std::vector<SlamKeyframeId> local = local_keyframes_;
+      const SlamKeyframeId reference = reference_;
+      Frame other = f;
+      MotionReach anywhere;
+      if (relocalize(other, anywhere, false) && inliers_ > tracked) {
+        f = std::move(other);
+        relocalized = true;
+        state_ = msg::TrackingState::kRelocalized;
+      } else {
+        inliers_ = tracked;
+        local_keyframes_ = local;
+        reference_ = reference;
       }
     }
     if (hinted && (ok || --hint_->frames_left <= 0)) hint_.reset();
@@ -179,10 +206,13 @@ Tracker::Output Tracker::track(const StereoFrame& in, int mapping_queue) {
     // The motion from the last tracked frame is the velocity, unless the frame was found from scratch: then
     // that "motion" is wherever the camera was carried, and the next frame is matched without a prediction
     // (as ORB-SLAM2 drops its velocity after relocalising).
+    // Every match left after the last pose optimisation is one of its inliers.
+    const PoseCovariance cov = poseCovariance(cam_, f.T_w_c, observationsOf(f, nullptr));
+    if (cov.valid) tf.pose_covariance = cov.covariance;
     velocity_ = last_pose.inverse() * f.T_w_c;
     velocity_dt_ = dt > 0 ? dt : 1;
     have_velocity_ = !relocalized;
-    if (needKeyframe(f, mapping_queue)) out.keyframe = makeKeyframe(f);
+    if (!p_.localize_only && needKeyframe(f, mapping_queue)) out.keyframe = makeKeyframe(f);
   }
 
   tf.T_w_c = f.T_w_c;
@@ -205,9 +235,8 @@ bool Tracker::initialize(Frame& f, msg::KeyFramePtr* kf) {
   return true;
 }
 
-int Tracker::optimizePose(Frame& f) {
+std::vector<PoseObservation> Tracker::observationsOf(Frame& f, std::vector<int>* index) const {
   std::vector<PoseObservation> obs;
-  std::vector<int> index;
   const ScalePyramid& s = builder_.scales();
   for (size_t i = 0; i < f.size(); ++i) {
     if (f.points[i] == kNoId) continue;
@@ -223,8 +252,14 @@ int Tracker::optimizePose(Frame& f) {
     o.u_right = k.right_x;
     o.inv_sigma2 = s.inv_sigma2[k.octave];
     obs.push_back(o);
-    index.push_back(static_cast<int>(i));
+    if (index) index->push_back(static_cast<int>(i));
   }
+  return obs;
+}
+
+int Tracker::optimizePose(Frame& f) {
+  std::vector<int> index;
+  const std::vector<PoseObservation> obs = observationsOf(f, &index);
   if (obs.size() < 3) return 0;
   const PoseOptimizationResult r = binloop::optimizePose(cam_, orthonormalized(f.T_w_c.inverse()), obs, p_.pose);
   f.T_w_c = orthonormalized(r.T_c_w.inverse());

@@ -3,6 +3,7 @@
 #include <gtest/gtest.h>
 
 #include <cmath>
+#include <optional>
 
 #include "../optim/optim_test_scene.h"
 #include "support/random_descriptors.h"
@@ -120,7 +121,7 @@ TEST_F(LoopCloserTest, ARevisitWithinTheDriftBoundIsAcceptedAndCorrectsTheQuery)
   const LoopCloser::Output out = lc.process(proposal(kLap, 0));
   ASSERT_EQ(out.closures.size(), 1u);
   const msg::LoopClosure& c = *out.closures[0];
-  ASSERT_EQ(c.status, "accepted") << c.detail;
+  ASSERT_EQ(c.status, msg::LoopStatus::kAccepted) << c.detail;
   EXPECT_NEAR(c.correction_m, drift * kLap, 0.1) << c.detail;
   EXPECT_GT(c.drift_bound_m, c.correction_m);
   EXPECT_GE(c.inliers, 40);
@@ -156,7 +157,7 @@ TEST_F(LoopCloserTest, AStageStartedAfterCorrectionsFollowsTheMapsSequence) {
   lc.addKeyframe(keyframe(kLap, truth, 0, truthOnCircle(0)));  // a new one, made before it heard of any
   const LoopCloser::Output out = lc.process(proposal(kLap, 0));
   ASSERT_EQ(out.closures.size(), 1u);
-  ASSERT_EQ(out.closures[0]->status, "accepted") << out.closures[0]->detail;
+  ASSERT_EQ(out.closures[0]->status, msg::LoopStatus::kAccepted) << out.closures[0]->detail;
   ASSERT_TRUE(out.correction);
   EXPECT_EQ(out.correction->sequence, 4u);
 }
@@ -167,7 +168,7 @@ TEST_F(LoopCloserTest, ACandidateFromAnotherPlaceIsRejectedForTooFewMatches) {
   lc.addKeyframe(keyframe(kLap, truthOnCircle(0), 0, truthOnCircle(0)));
   const LoopCloser::Output out = lc.process(proposal(kLap, 4));  // keyframe 4 saw place 4, not place 0
   ASSERT_EQ(out.closures.size(), 1u);
-  EXPECT_EQ(out.closures[0]->status, "too_few_matches") << out.closures[0]->detail;
+  EXPECT_EQ(out.closures[0]->status, msg::LoopStatus::kTooFewMatches) << out.closures[0]->detail;
   EXPECT_FALSE(out.correction);
   EXPECT_TRUE(lc.loops().empty());
 }
@@ -183,7 +184,7 @@ TEST_F(LoopCloserTest, ARepeatedBlockBeyondTheDriftBoundIsRejected) {
   for (int i = kLap; i <= q; ++i) far.addKeyframe(keyframe(i, truthAfter(i), i == q ? 0 : -1, truthAfter(q)));
   LoopCloser::Output out = far.process(proposal(q, 0));
   ASSERT_EQ(out.closures.size(), 1u);
-  EXPECT_EQ(out.closures[0]->status, "beyond_drift_bound") << out.closures[0]->detail;
+  EXPECT_EQ(out.closures[0]->status, msg::LoopStatus::kBeyondDriftBound) << out.closures[0]->detail;
   EXPECT_GT(out.closures[0]->correction_m, 30);
   EXPECT_FALSE(out.correction);
 
@@ -195,16 +196,17 @@ TEST_F(LoopCloserTest, ARepeatedBlockBeyondTheDriftBoundIsRejected) {
   for (int i = kLap; i <= q; ++i) lc.addKeyframe(keyframe(i, truthAfter(i), i == q ? 0 : -1, truthAfter(q)));
   out = lc.process(proposal(q, 0));
   ASSERT_EQ(out.closures.size(), 1u);
-  EXPECT_EQ(out.closures[0]->status, "held") << out.closures[0]->detail;
+  EXPECT_EQ(out.closures[0]->status, msg::LoopStatus::kHeld) << out.closures[0]->detail;
   EXPECT_FALSE(out.correction);
-  std::string final_status;
-  for (int i = q + 1; i < q + 8 && final_status.empty(); ++i) {
+  std::optional<msg::LoopStatus> final_status;
+  for (int i = q + 1; i < q + 8 && !final_status; ++i) {
     lc.addKeyframe(keyframe(i, truthAfter(i), -1, Pose3::Identity()));
     out = lc.process(proposal(i, -1));
     for (const auto& c : out.closures) final_status = c->status;
     EXPECT_FALSE(out.correction);
   }
-  EXPECT_EQ(final_status, "beyond_drift_bound");
+  ASSERT_TRUE(final_status) << "no final status within 7 keyframes";
+  EXPECT_EQ(*final_status, msg::LoopStatus::kBeyondDriftBound);
   EXPECT_TRUE(lc.loops().empty());
 }
 
@@ -217,13 +219,13 @@ TEST_F(LoopCloserTest, ASecondConsistentLoopConfirmsAHeldOne) {
   lc.addKeyframe(keyframe(kLap, truthOnCircle(kLap), 0, truthOnCircle(0)));
   LoopCloser::Output out = lc.process(proposal(kLap, 0));
   ASSERT_EQ(out.closures.size(), 1u);
-  EXPECT_EQ(out.closures[0]->status, "held") << out.closures[0]->detail;
+  EXPECT_EQ(out.closures[0]->status, msg::LoopStatus::kHeld) << out.closures[0]->detail;
   for (int i = kLap + 1; i <= kLap + 3; ++i)
     lc.addKeyframe(keyframe(i, truthOnCircle(i), i == kLap + 3 ? 3 : -1, truthOnCircle(3)));
   out = lc.process(proposal(kLap + 3, 3));
   ASSERT_EQ(out.closures.size(), 2u);
-  EXPECT_EQ(out.closures[0]->status, "accepted") << out.closures[0]->detail;
-  EXPECT_EQ(out.closures[1]->status, "accepted") << out.closures[1]->detail;
+  EXPECT_EQ(out.closures[0]->status, msg::LoopStatus::kAccepted) << out.closures[0]->detail;
+  EXPECT_EQ(out.closures[1]->status, msg::LoopStatus::kAccepted) << out.closures[1]->detail;
   EXPECT_EQ(out.closures[1]->query, id(kLap));
   EXPECT_EQ(out.closures[1]->query_frame, 3u * kLap);  // the held loop's own numbers, not the confirming one's
   EXPECT_EQ(out.closures[0]->query_frame, 3u * (kLap + 3));
@@ -248,9 +250,9 @@ TEST_F(LoopCloserTest, LoopsTooNearToConfirmAHeldOneWaitWithIt) {
     const LoopCloser::Output out = lc.process(proposal(kLap + k, k));
     for (const auto& c : out.closures) {
       for (int i = 0; i <= 3; ++i)
-        if (c->query == id(kLap + i)) seen.push_back(c->status + "@" + std::to_string(i));
+        if (c->query == id(kLap + i)) seen.push_back(msg::loopStatusName(c->status) + std::string("@") + std::to_string(i));
       if (k < 3) {
-        EXPECT_EQ(c->status, "held") << c->detail;
+        EXPECT_EQ(c->status, msg::LoopStatus::kHeld) << c->detail;
       }
     }
     EXPECT_EQ(static_cast<bool>(out.correction), k == 3);
@@ -270,7 +272,7 @@ TEST_F(LoopCloserTest, LoopsTooNearToConfirmAHeldOneWaitWithIt) {
     const int place = k < 2 ? k : -1;
     alone.addKeyframe(keyframe(kLap + k, truthOnCircle(kLap + k), place, truthOnCircle(k)));
     for (const auto& c : alone.process(proposal(kLap + k, place)).closures)
-      seen.push_back(c->status + "@" + std::to_string(c->query == id(kLap) ? 0 : 1));
+      seen.push_back(msg::loopStatusName(c->status) + std::string("@") + std::to_string(c->query == id(kLap) ? 0 : 1));
   }
   const std::vector<std::string> rejected{"held@0", "held@1", "beyond_drift_bound@0", "beyond_drift_bound@1"};
   EXPECT_EQ(seen, rejected);
@@ -283,12 +285,12 @@ TEST_F(LoopCloserTest, ALoopStillHeldWhenTheInputEndsGetsItsFinalStatus) {
   driveLap(lc);
   for (int k = 0; k < 2; ++k) {
     lc.addKeyframe(keyframe(kLap + k, truthOnCircle(kLap + k), k, truthOnCircle(k)));
-    for (const auto& c : lc.process(proposal(kLap + k, k)).closures) EXPECT_EQ(c->status, "held") << c->detail;
+    for (const auto& c : lc.process(proposal(kLap + k, k)).closures) EXPECT_EQ(c->status, msg::LoopStatus::kHeld) << c->detail;
   }
   const LoopCloser::Output end = lc.finish();
   ASSERT_EQ(end.closures.size(), 2u);
   for (const auto& c : end.closures) {
-    EXPECT_EQ(c->status, "beyond_drift_bound");
+    EXPECT_EQ(c->status, msg::LoopStatus::kBeyondDriftBound);
     EXPECT_NE(c->detail.find("input ended"), std::string::npos) << c->detail;
   }
   EXPECT_EQ(end.closures[0]->query, id(kLap));  // the held loop first, then the one that waited with it
@@ -304,12 +306,12 @@ TEST_F(LoopCloserTest, AnExternalLoopIsVerifiedBeforeItIsApplied) {
   LoopCloser::Output wrong = lc.addExternalLoop(id(kLap), id(2), "operator");
   ASSERT_EQ(wrong.closures.size(), 1u);
   EXPECT_EQ(wrong.closures[0]->model, "operator");
-  EXPECT_EQ(wrong.closures[0]->status, "too_few_matches");
+  EXPECT_EQ(wrong.closures[0]->status, msg::LoopStatus::kTooFewMatches);
   EXPECT_FALSE(wrong.correction);
   LoopCloser::Output unknown = lc.addExternalLoop(id(kLap), id(500));
-  EXPECT_EQ(unknown.closures[0]->status, "unknown_keyframe");
+  EXPECT_EQ(unknown.closures[0]->status, msg::LoopStatus::kUnknownKeyframe);
   LoopCloser::Output right = lc.addExternalLoop(id(kLap), id(1), "operator");
-  EXPECT_EQ(right.closures[0]->status, "accepted") << right.closures[0]->detail;
+  EXPECT_EQ(right.closures[0]->status, msg::LoopStatus::kAccepted) << right.closures[0]->detail;
   EXPECT_TRUE(right.correction);
 }
 
@@ -334,7 +336,7 @@ TEST_F(LoopCloserTest, AFarMatchIsAnchoredAtItsCovisibleKeyframeNearestTheQuery)
     const LoopCloser::Output out = lc.process(proposal(kLap, 3));
     ASSERT_EQ(out.closures.size(), 1u);
     const msg::LoopClosure& c = *out.closures[0];
-    ASSERT_EQ(c.status, "accepted") << c.detail;
+    ASSERT_EQ(c.status, msg::LoopStatus::kAccepted) << c.detail;
     if (reanchor_min_m > 0) {
       EXPECT_EQ(c.match, id(1)) << c.detail;
       EXPECT_EQ(c.match_frame, 3u);
@@ -359,7 +361,7 @@ TEST_F(LoopCloserTest, AProposalOfACulledKeyframeIsVerifiedAgainstItsParent) {
   const LoopCloser::Output out = lc.process(proposal(kLap, 1));
   ASSERT_EQ(out.closures.size(), 1u);
   const msg::LoopClosure& c = *out.closures[0];
-  EXPECT_EQ(c.status, "accepted") << c.detail;
+  EXPECT_EQ(c.status, msg::LoopStatus::kAccepted) << c.detail;
   EXPECT_EQ(c.match, id(0));
   EXPECT_NE(c.detail.find("keyframe 2 was culled, its spanning-tree parent 1 stands for it"), std::string::npos)
       << c.detail;

@@ -59,7 +59,7 @@ std::vector<const msg::LoopClosure*> accepted(const DriveRun& r) {
   std::vector<const msg::LoopClosure*> out;
   for (const auto& e : r.log)
     for (const auto& c : e.closures)
-      if (c->status == "accepted") out.push_back(c.get());
+      if (c->status == msg::LoopStatus::kAccepted) out.push_back(c.get());
   return out;
 }
 
@@ -134,7 +134,7 @@ TEST(LoopClosingPipeline, ThreadedModeClosesTheLoopAndVerifiesExternalLoops) {
   for (const auto& e : r.log)
     for (const auto& c : e.closures) {
       std::cout << c->model << " " << c->query_frame << "->" << c->match_frame << " " << c->status << ": " << c->detail << "\n";
-      if (c->model == "operator") external.push_back(c->status + ": " + c->detail);
+      if (c->model == "operator") external.push_back(msg::loopStatusName(c->status) + std::string(": ") + c->detail);
     }
   ASSERT_EQ(external.size(), 2u);
   EXPECT_EQ(external[0].rfind("accepted", 0), 0u) << external[0];

@@ -14,7 +14,7 @@ using namespace binloop;
 
 namespace {
 
-SlamPipeline::LoopLogEntry entry(uint64_t query, uint64_t frame, const std::string& status, uint64_t match_frame) {
+SlamPipeline::LoopLogEntry entry(uint64_t query, uint64_t frame, msg::LoopStatus status, uint64_t match_frame) {
   SlamPipeline::LoopLogEntry e;
   auto c = std::make_shared<msg::LoopCandidates>();
   c->query = query;
@@ -47,11 +47,11 @@ SlamPipeline::LoopLogEntry entry(uint64_t query, uint64_t frame, const std::stri
 
 TEST(LoopLog, WhatIsWrittenIsReadBack) {
   test::TempDir tmp;
-  writeLoopLog(tmp / "loops.csv", {entry(1, 30, "too_few_matches", 2), entry(2, 40, "accepted", 3)});
+  writeLoopLog(tmp / "loops.csv", {entry(1, 30, msg::LoopStatus::kTooFewMatches, 2), entry(2, 40, msg::LoopStatus::kAccepted, 3)});
   const std::vector<LoggedLoop> loops = readLoopLog(tmp / "loops.csv");
   ASSERT_EQ(loops.size(), 2u);  // shadow rows carry no closure
-  EXPECT_EQ(loops[0].status, "too_few_matches");
-  EXPECT_EQ(loops[1].status, "accepted");
+  EXPECT_EQ(loops[0].status, msg::LoopStatus::kTooFewMatches);
+  EXPECT_EQ(loops[1].status, msg::LoopStatus::kAccepted);
   EXPECT_EQ(loops[1].query_frame, 40u);
   EXPECT_EQ(loops[1].match_frame, 3u);
   EXPECT_EQ(loops[1].inliers, 120);
@@ -60,7 +60,7 @@ TEST(LoopLog, WhatIsWrittenIsReadBack) {
 
 TEST(LoopLog, ABrokenFileNamesTheLine) {
   test::TempDir tmp;
-  writeLoopLog(tmp / "loops.csv", {entry(1, 30, "accepted", 2)});
+  writeLoopLog(tmp / "loops.csv", {entry(1, 30, msg::LoopStatus::kAccepted, 2)});
   std::ifstream in(tmp / "loops.csv");
   std::stringstream text;
   text << in.rdbuf();
@@ -69,12 +69,16 @@ TEST(LoopLog, ABrokenFileNamesTheLine) {
   test::writeText(tmp / "header.csv", "frame,model\n");
   EXPECT_THROW_WITH(readLoopLog(tmp / "header.csv"), DataError, "not a loops.csv");
   EXPECT_THROW_WITH(readLoopLog(tmp / "missing.csv"), DataError, "cannot open");
+  std::string renamed = text.str();
+  renamed.replace(renamed.find(",accepted,"), 10, ",approved,");
+  test::writeText(tmp / "status.csv", renamed);
+  EXPECT_THROW_WITH(readLoopLog(tmp / "status.csv"), DataError, "unknown loop status 'approved'");
 }
 
 // Each verified loop's relative pose is logged and read back; with ground truth its error is logged too.
 TEST(LoopLog, ARelativePoseAndItsErrorAgainstTheGroundTruth) {
   test::TempDir tmp;
-  SlamPipeline::LoopLogEntry e = entry(2, 4, "accepted", 1);
+  SlamPipeline::LoopLogEntry e = entry(2, 4, msg::LoopStatus::kAccepted, 1);
   Pose3 T = Pose3::Identity();
   T.translation() = Eigen::Vector3d(0.2, 0, -3.0);  // the match 3 m behind, 0.2 m off sideways
   T.linear() = Eigen::AngleAxisd(0.05, Eigen::Vector3d::UnitY()).toRotationMatrix();
@@ -106,7 +110,7 @@ TEST(LoopLog, ARelativePoseAndItsErrorAgainstTheGroundTruth) {
 // A loops.csv written before the relative pose was logged still reads, without poses.
 TEST(LoopLog, AnOlderLogWithoutPosesStillReads) {
   test::TempDir tmp;
-  writeLoopLog(tmp / "loops.csv", {entry(2, 40, "accepted", 3)});
+  writeLoopLog(tmp / "loops.csv", {entry(2, 40, msg::LoopStatus::kAccepted, 3)});
   std::ifstream in(tmp / "loops.csv");
   std::string line, old;
   while (std::getline(in, line)) {

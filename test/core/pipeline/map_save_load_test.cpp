@@ -96,7 +96,7 @@ TEST(MapSaveLoad, ARoundTripChangesNoByteAndTheLoadedMapIsTrackedAndClosed) {
   size_t accepted = 0;
   for (const auto& e : loaded.loopLog())
     for (const auto& c : e.closures)
-      if (c->status == "accepted") {
+      if (c->status == msg::LoopStatus::kAccepted) {
         ++accepted;
         EXPECT_LT(c->match_frame, d->lap) << "the loop should reach back into the loaded map";
       }
@@ -104,6 +104,45 @@ TEST(MapSaveLoad, ARoundTripChangesNoByteAndTheLoadedMapIsTrackedAndClosed) {
             << " loops accepted\n";
   EXPECT_GE(accepted, 1u);
   EXPECT_LT(err, 0.5);
+}
+
+// Localisation only on a loaded map: the second pass over the start is found in the first lap's map, every
+// pose where the route is, and the map is left as loaded (no keyframe made, so mapping gets nothing).
+TEST(MapSaveLoad, LocalisationOnlyTracksInTheLoadedMapAndChangesNothing) {
+  const LoopDrive* d = loopDrive();
+  if (!d) GTEST_SKIP() << "needs the texture photos of ../shared/data";
+  test::TempDir dir;
+  saveFirstLap(*d, dir / "map");
+
+  TrackerParams tp = trackerParams(*d);
+  tp.localize_only = true;
+  SlamPipeline loaded(d->cam, tp, {}, PipelineMode::kLockStep, 3, loopSetup(*d));
+  loaded.loadMap(dir / "map");
+  const size_t keyframes = loaded.mapper().keyframeCount();
+  size_t tracked = 0, made = 0;
+  double worst = 0;
+  for (size_t i = d->lap; i < d->frames.size(); ++i) {
+    const msg::TrackedFrame f = loaded.process(d->frames[i]);
+    made += f.new_keyframe != kNoId;
+    if (f.state == msg::TrackingState::kLost || f.state == msg::TrackingState::kNotInitialized) continue;
+    ++tracked;
+    worst = std::max(worst, (f.T_w_c.translation() - d->route[i].translation()).norm());
+    EXPECT_GT(f.pose_covariance.trace(), 0) << "frame " << i << ": a tracked frame carries its covariance";
+  }
+  loaded.finish();
+  const size_t frames = d->frames.size() - d->lap;
+  std::cout << "localisation only: " << tracked << " of " << frames << " frames tracked, at most " << worst
+            << " m from the route\n";
+  EXPECT_EQ(made, 0u);
+  EXPECT_EQ(loaded.mapper().keyframeCount(), keyframes);
+  EXPECT_EQ(loaded.tracker().map().keyframeCount(), keyframes);
+  EXPECT_GE(tracked, frames * 9 / 10);
+  EXPECT_LT(worst, 0.5);
+
+  SlamPipeline no_map(d->cam, tp, {}, PipelineMode::kLockStep);
+  const msg::TrackedFrame f = no_map.process(d->frames[0]);
+  EXPECT_EQ(f.state, msg::TrackingState::kNotInitialized);
+  EXPECT_NE(f.problem.find("no map to localise in"), std::string::npos) << f.problem;
 }
 
 TEST(MapSaveLoad, BrokenOrMismatchedFilesAreRefusedWithTheReason) {
