@@ -1,6 +1,7 @@
 #pragma once
 // What the Tracking nodelet says about where the robot is: tf (map -> odom -> base -> camera, REP-105, and
-// map -> slam for the SLAM's own outputs), odom with twist, over RobotFrames' transforms. Parameters (the
+// map -> slam for the SLAM's own outputs), odom with twist and covariances, and the camera's pose with its
+// covariance in the slam frame (pose_with_covariance), over RobotFrames' transforms. Parameters (the
 // nodelet's private ones):
 //   ~map_frame (map), ~odom_frame (odom), ~base_frame (base_link), ~slam_frame (slam): frame names;
 //   ~camera_in_base [x y z qx qy qz qw]: the camera's mounting; without it, the robot's TF is asked for
@@ -63,7 +64,7 @@ class FramePublisher {
   RobotFrames frames_;
   std::optional<binloop::Pose3> last_map_odom_;
   ros::Time last_robot_odom_;  // stamp of the last image the robot's odometry had a pose for
-  ros::Publisher odom_pub_;
+  ros::Publisher odom_pub_, pose_cov_pub_;
   std::unique_ptr<tf2_ros::TransformBroadcaster> tf_;
   std::unique_ptr<tf2_ros::StaticTransformBroadcaster> static_tf_;
   std::vector<geometry_msgs::TransformStamped> statics_;

@@ -1,5 +1,6 @@
 #include "binloop_ros/frame_publisher.h"
 
+#include <geometry_msgs/PoseWithCovarianceStamped.h>
 #include <nav_msgs/Odometry.h>
 
 #include "binloop_ros/msg_conversion.h"
@@ -25,6 +26,7 @@ FramePublisher::FramePublisher(ros::NodeHandle& nh, ros::NodeHandle& pnh) {
   publish_odom_tf_ = boolParam(pnh, "publish_odom_tf", true);
   mounting_param_ = poseParam(pnh, "camera_in_base");
   odom_pub_ = nh.advertise<nav_msgs::Odometry>("odom", 10);
+  pose_cov_pub_ = nh.advertise<geometry_msgs::PoseWithCovarianceStamped>("pose_with_covariance", 10);
   if (publish_tf_) {
     tf_ = std::make_unique<tf2_ros::TransformBroadcaster>();
     static_tf_ = std::make_unique<tf2_ros::StaticTransformBroadcaster>();
@@ -92,6 +94,17 @@ void FramePublisher::tracked(const binloop::Pose3& T_slam_cam, const RobotFrames
       odom.twist.covariance[6 * r + c] = frames_.twistCovariance()(r, c);
     }
   odom_pub_.publish(odom);
+
+  // The camera in the slam frame: TrackedFrame's covariance is already in its axes (centre, then rotation).
+  geometry_msgs::PoseWithCovarianceStamped pose;
+  pose.header.stamp = stamp;
+  pose.header.frame_id = slam_frame_;
+  pose.pose.pose = toPoseMsg(T_slam_cam);
+  const bool known = !covariance.isZero(0) && covariance.allFinite();
+  for (int r = 0; r < 6; ++r)
+    for (int c = 0; c < 6; ++c)
+      pose.pose.covariance[6 * r + c] = known ? covariance(r, c) : (r == c ? RobotFrames::kUnknown : 0.0);
+  pose_cov_pub_.publish(pose);
 
   if (!tf_) return;
   if (publish_odom_tf_) {

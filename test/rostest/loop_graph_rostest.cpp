@@ -14,6 +14,8 @@
 #include <diagnostic_msgs/DiagnosticArray.h>
 #include <dynamic_reconfigure/Reconfigure.h>
 #include <geometry_msgs/PoseStamped.h>
+#include <geometry_msgs/PoseWithCovarianceStamped.h>
+#include <nav_msgs/Odometry.h>
 #include <nav_msgs/Path.h>
 #include <ros/ros.h>
 #include <rosbag/bag.h>
@@ -51,6 +53,8 @@ struct Observed {
   std::vector<binloop::LoopClosure> closures;
   std::vector<binloop::LoopCandidates> candidates;
   nav_msgs::Path corrected_path;
+  std::vector<nav_msgs::Odometry> odometry;
+  std::vector<geometry_msgs::PoseWithCovarianceStamped> poses_with_covariance;
   std::map<std::string, std::string> tracking_diag;
 };
 
@@ -74,6 +78,15 @@ class LoopGraph : public ::testing::Test {
     subs_.push_back(nh.subscribe<binloop::LoopCandidates>("/binloop/loop_candidates", 1000, [this](const auto& m) {
       std::lock_guard<std::mutex> lk(seen_.m);
       seen_.candidates.push_back(*m);
+    }));
+    subs_.push_back(nh.subscribe<geometry_msgs::PoseWithCovarianceStamped>(
+        "/binloop/pose_with_covariance", 1000, [this](const auto& m) {
+          std::lock_guard<std::mutex> lk(seen_.m);
+          seen_.poses_with_covariance.push_back(*m);
+        }));
+    subs_.push_back(nh.subscribe<nav_msgs::Odometry>("/binloop/odom", 1000, [this](const auto& m) {
+      std::lock_guard<std::mutex> lk(seen_.m);
+      seen_.odometry.push_back(*m);
     }));
     subs_.push_back(nh.subscribe<nav_msgs::Path>("/binloop/corrected_path", 10, [this](const auto& m) {
       std::lock_guard<std::mutex> lk(seen_.m);
@@ -179,6 +192,37 @@ TEST_F(LoopGraph, TheRevisitIsClosedTheDetectorSwitchesAndBadPairsAreReported) {
   const double err = (Eigen::Vector3d(p.x, p.y, p.z) - truth).norm();
   std::cout << "final pose error " << err << " m; " << seen_.closures.size() << " loops verified\n";
   EXPECT_LT(err, 0.5);
+
+  // Odometry carries its covariances: the pose's known and small (a few cm) on every tracked pair after the
+  // first, the twist's on most (unknown only at the start and across a correction).
+  ASSERT_GT(seen_.odometry.size(), pairs.size() * 9 / 10);
+  size_t pose_known = 0, twist_known = 0;
+  double worst_sd = 0;
+  for (const auto& o : seen_.odometry) {
+    EXPECT_EQ(o.header.frame_id, "odom");
+    EXPECT_EQ(o.child_frame_id, "base_link");
+    const double var = o.pose.covariance[0] + o.pose.covariance[7] + o.pose.covariance[14];
+    if (var > 0 && var < 1) {
+      ++pose_known;
+      worst_sd = std::max(worst_sd, std::sqrt(var));
+    }
+    twist_known += o.twist.covariance[0] > 0 && o.twist.covariance[0] < 1e5;
+  }
+  std::cout << "odometry: pose covariance known on " << pose_known << " of " << seen_.odometry.size()
+            << ", twist on " << twist_known << "; largest position sd " << worst_sd << " m\n";
+  EXPECT_GE(pose_known, seen_.odometry.size() - 2);
+  EXPECT_GE(twist_known, seen_.odometry.size() * 9 / 10);
+  EXPECT_LT(worst_sd, 0.2);
+  // The camera's pose with its covariance, in the slam frame: one per odometry message, the same position
+  // variance (the slam and odom axes differ, the sum over them does not; the lever to base_link is zero here).
+  const size_t both = std::min(seen_.poses_with_covariance.size(), seen_.odometry.size());
+  ASSERT_GE(both + 2, seen_.odometry.size()) << "fewer poses with covariance than odometry messages";
+  for (size_t i = 1; i < both; ++i) {
+    const auto& c = seen_.poses_with_covariance[i].pose.covariance;
+    const auto& o = seen_.odometry[i].pose.covariance;
+    EXPECT_EQ(seen_.poses_with_covariance[i].header.frame_id, "slam");
+    EXPECT_NEAR(c[0] + c[7] + c[14], o[0] + o[7] + o[14], 1e-9 + 1e-6 * (o[0] + o[7] + o[14])) << i;
+  }
 }
 
 std::map<std::string, std::string> statistics() {

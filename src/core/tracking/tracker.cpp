@@ -208,7 +208,7 @@ Tracker::Output Tracker::track(const StereoFrame& in, int mapping_queue) {
     // (as ORB-SLAM2 drops its velocity after relocalising).
     // Every match left after the last pose optimisation is one of its inliers.
     const PoseCovariance cov = poseCovariance(cam_, f.T_w_c, observationsOf(f, nullptr));
-    if (cov.valid) tf.pose_covariance = cov.covariance;
+    if (cov.valid) tf.pose_covariance = p_.pose_covariance_scale * cov.covariance;
     velocity_ = last_pose.inverse() * f.T_w_c;
     velocity_dt_ = dt > 0 ? dt : 1;
     have_velocity_ = !relocalized;
