@@ -13,6 +13,7 @@
 #include "binloop/io/trajectory_io.h"
 #include "binloop/pipeline/slam_config.h"
 #include "binloop/pipeline/slam_pipeline.h"
+#include "covariance_check.h"
 #include "support/test_support.h"
 
 using namespace binloop;
@@ -87,23 +88,12 @@ TEST(RealFrames, ATrackedFramesCovarianceMatchesItsFrameToFrameError) {
   std::vector<msg::TrackedFrame> out;
   for (size_t i = 0; i < seq.size(); ++i) out.push_back(slam.process(seq.load(i)));
   slam.finish();
-  double err2 = 0, predicted = 0;
-  int steps = 0;
-  for (size_t k = 1; k < out.size(); ++k) {
-    const msg::TrackedFrame &a = out[k - 1], &b = out[k];
-    if (a.pose_covariance.isZero(0) || b.pose_covariance.isZero(0)) continue;
-    const Pose3 est = a.T_w_c.inverse() * b.T_w_c;
-    const Pose3 t = truth[k - 1].inverse() * truth[k];
-    err2 += (est.translation() - t.translation()).squaredNorm();
-    predicted += a.pose_covariance.topLeftCorner<3, 3>().trace() + b.pose_covariance.topLeftCorner<3, 3>().trace();
-    ++steps;
-  }
-  const double ratio = err2 / predicted;
-  std::cout << steps << " steps: rms frame-to-frame error " << std::sqrt(err2 / steps) << " m, predicted "
-            << std::sqrt(predicted / steps) << " m, ratio of squares " << ratio << "\n";
-  EXPECT_GE(steps, 48);
+  const test::CovarianceCheck c = test::checkCovariances(out, truth);
+  std::cout << c.steps << " steps: rms frame-to-frame error " << c.rms_error_m << " m, predicted " << c.predicted_sd_m
+            << " m, ratio of squares " << c.ratio << "\n";
+  EXPECT_GE(c.steps, 48);
   // With pose_covariance_scale (15) the prediction is within a factor of 2.5 of the error, either way
   // (rendered 06: 1.37, real KITTI 06: 0.67).
-  EXPECT_GT(ratio, 0.4);
-  EXPECT_LT(ratio, 2.5);
+  EXPECT_GT(c.ratio, 0.4);
+  EXPECT_LT(c.ratio, 2.5);
 }

@@ -18,6 +18,7 @@
 #include "binloop/sim/texture_bank.h"
 #include <opencv2/imgproc.hpp>
 
+#include "covariance_check.h"
 #include "support/test_support.h"
 #include "small_vocabulary.h"
 
@@ -334,25 +335,14 @@ TEST(SlamPipeline, ATrackedFramesCovarianceMatchesItsFrameToFrameError) {
   const RenderedStretch* s = renderedStretch(300);
   if (!s) GTEST_SKIP() << "needs " << test::sharedData("kitti/poses/06.txt");
   const std::vector<msg::TrackedFrame> out = runOn(s->frames, s->cam, PipelineMode::kLockStep);
-  double err2 = 0, predicted = 0;
-  int steps = 0;
-  for (size_t k = 1; k < out.size(); ++k) {
-    const msg::TrackedFrame &a = out[k - 1], &b = out[k];
-    if (a.pose_covariance.isZero(0) || b.pose_covariance.isZero(0)) continue;
-    const Pose3 est = a.T_w_c.inverse() * b.T_w_c;
-    const Pose3 truth = s->route[k - 1].inverse() * s->route[k];
-    err2 += (est.translation() - truth.translation()).squaredNorm();
-    predicted += a.pose_covariance.topLeftCorner<3, 3>().trace() + b.pose_covariance.topLeftCorner<3, 3>().trace();
-    ++steps;
-  }
-  const double ratio = err2 / predicted;
-  std::cout << steps << " steps: rms frame-to-frame error " << std::sqrt(err2 / steps) << " m, predicted "
-            << std::sqrt(predicted / steps) << " m, ratio of squares " << ratio << "\n";
-  EXPECT_GE(steps, 290);
+  const test::CovarianceCheck c = test::checkCovariances(out, s->route);
+  std::cout << c.steps << " steps: rms frame-to-frame error " << c.rms_error_m << " m, predicted " << c.predicted_sd_m
+            << " m, ratio of squares " << c.ratio << "\n";
+  EXPECT_GE(c.steps, 290);
   // With pose_covariance_scale (15) the prediction is within a factor of 2.5 of the error, either way
   // (rendered 06: 1.37, real KITTI 06: 0.67).
-  EXPECT_GT(ratio, 0.4);
-  EXPECT_LT(ratio, 2.5);
+  EXPECT_GT(c.ratio, 0.4);
+  EXPECT_LT(c.ratio, 2.5);
 }
 
 // A tracking process restarted alone in the split graph: the new tracker takes local mapping's map (the
