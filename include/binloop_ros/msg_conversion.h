@@ -2,6 +2,7 @@
 // Every conversion between ROS messages and core types lives here (and is tested in
 // test/ros/msg_conversion_test.cpp), so the rest of the ROS layer never touches message fields.
 #include <geometry_msgs/Pose.h>
+#include <geometry_msgs/PoseWithCovariance.h>
 #include <geometry_msgs/TransformStamped.h>
 #include <opencv2/core/mat.hpp>
 #include <ros/time.h>
@@ -39,6 +40,10 @@ binloop::StereoCamera toStereoCamera(const sensor_msgs::CameraInfo& left, const 
 std::string distortionWarning(const sensor_msgs::CameraInfo& info);
 
 geometry_msgs::Pose toPoseMsg(const binloop::Pose3& T);
+/// A 6x6 covariance as ROS messages carry it (36 numbers, row-major), and back.
+using CovarianceMsg = geometry_msgs::PoseWithCovariance::_covariance_type;  // 36 numbers, row-major
+CovarianceMsg toCovarianceMsg(const binloop::Matrix6d& c);
+binloop::Matrix6d fromCovarianceMsg(const CovarianceMsg& m);
 geometry_msgs::Point toPoint(const Eigen::Vector3d& p);
 binloop::Pose3 toPose3(const geometry_msgs::Pose& msg);
 /// tf's form of the same: `T` as the transform from `parent` to `child` (child's pose in parent).

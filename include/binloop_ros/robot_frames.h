@@ -15,7 +15,7 @@ namespace binloop_ros {
 
 class RobotFrames {
  public:
-  using Matrix6d = Eigen::Matrix<double, 6, 6>;
+  using Matrix6d = binloop::Matrix6d;
 
   explicit RobotFrames(const binloop::Pose3& T_base_cam = opticalOnBase());
 
@@ -61,13 +61,16 @@ class RobotFrames {
   const Matrix6d& twistCovariance() const { return twist_cov_; }
   /// The variance that stands for "unknown" (m^2, rad^2): large enough that a filter ignores the value.
   static constexpr double kUnknown = 1e6;
+  /// Whether a TrackedFrame's pose covariance is known (all zero: unknown).
+  static bool known(const Matrix6d& cov) { return !cov.isZero(0) && cov.allFinite(); }
+  static Matrix6d unknownCovariance() { return kUnknown * Matrix6d::Identity(); }
 
  private:
   binloop::Pose3 T_base_cam_, T_cam_base_;
   binloop::Pose3 T_map_base_ = binloop::Pose3::Identity(), T_odom_base_ = binloop::Pose3::Identity();
   binloop::Pose3 last_motion_ = binloop::Pose3::Identity();  // base frame-to-frame
   Eigen::Vector3d v_ = Eigen::Vector3d::Zero(), w_ = Eigen::Vector3d::Zero();
-  Matrix6d pose_cov_ = kUnknown * Matrix6d::Identity(), twist_cov_ = kUnknown * Matrix6d::Identity();
+  Matrix6d pose_cov_ = unknownCovariance(), twist_cov_ = unknownCovariance();
   bool pose_cov_known_ = false;
   double last_stamp_s_ = 0;
   bool have_last_ = false, started_ = false;

@@ -88,11 +88,8 @@ void FramePublisher::tracked(const binloop::Pose3& T_slam_cam, const RobotFrames
   odom.twist.twist.angular.x = frames_.angularVelocity().x();
   odom.twist.twist.angular.y = frames_.angularVelocity().y();
   odom.twist.twist.angular.z = frames_.angularVelocity().z();
-  for (int r = 0; r < 6; ++r)
-    for (int c = 0; c < 6; ++c) {
-      odom.pose.covariance[6 * r + c] = frames_.poseCovariance()(r, c);
-      odom.twist.covariance[6 * r + c] = frames_.twistCovariance()(r, c);
-    }
+  odom.pose.covariance = toCovarianceMsg(frames_.poseCovariance());
+  odom.twist.covariance = toCovarianceMsg(frames_.twistCovariance());
   odom_pub_.publish(odom);
 
   // The camera in the slam frame: TrackedFrame's covariance is already in its axes (centre, then rotation).
@@ -100,10 +97,8 @@ void FramePublisher::tracked(const binloop::Pose3& T_slam_cam, const RobotFrames
   pose.header.stamp = stamp;
   pose.header.frame_id = slam_frame_;
   pose.pose.pose = toPoseMsg(T_slam_cam);
-  const bool known = !covariance.isZero(0) && covariance.allFinite();
-  for (int r = 0; r < 6; ++r)
-    for (int c = 0; c < 6; ++c)
-      pose.pose.covariance[6 * r + c] = known ? covariance(r, c) : (r == c ? RobotFrames::kUnknown : 0.0);
+  pose.pose.covariance =
+      toCovarianceMsg(RobotFrames::known(covariance) ? covariance : RobotFrames::unknownCovariance());
   pose_cov_pub_.publish(pose);
 
   if (!tf_) return;

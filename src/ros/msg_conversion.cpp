@@ -117,6 +117,20 @@ geometry_msgs::Point toPoint(const Eigen::Vector3d& p) {
   return m;
 }
 
+CovarianceMsg toCovarianceMsg(const binloop::Matrix6d& c) {
+  CovarianceMsg m;
+  for (int r = 0; r < 6; ++r)
+    for (int k = 0; k < 6; ++k) m[6 * r + k] = c(r, k);
+  return m;
+}
+
+binloop::Matrix6d fromCovarianceMsg(const CovarianceMsg& m) {
+  binloop::Matrix6d c;
+  for (int r = 0; r < 6; ++r)
+    for (int k = 0; k < 6; ++k) c(r, k) = m[6 * r + k];
+  return c;
+}
+
 geometry_msgs::Pose toPoseMsg(const binloop::Pose3& T) {
   geometry_msgs::Pose p;
   const Eigen::Quaterniond q(T.rotation());

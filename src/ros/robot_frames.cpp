@@ -20,9 +20,9 @@ void RobotFrames::update(const binloop::Pose3& T_slam_cam, const Matrix6d& cov_s
   update(T_slam_cam, stamp_s, corrected);
   const Matrix6d last_cov = pose_cov_;
   const bool last_known = pose_cov_known_;
-  pose_cov_known_ = !cov_slam_cam.isZero(0) && cov_slam_cam.allFinite();
+  pose_cov_known_ = known(cov_slam_cam);
   if (!pose_cov_known_) {
-    pose_cov_ = twist_cov_ = kUnknown * Matrix6d::Identity();
+    pose_cov_ = twist_cov_ = unknownCovariance();
     return;
   }
   // The camera's errors in slam (dc, dtheta) are the base's in odom after a change of axes, R_odom_slam, and
@@ -36,7 +36,7 @@ void RobotFrames::update(const binloop::Pose3& T_slam_cam, const Matrix6d& cov_s
   J.bottomRightCorner<3, 3>() = R_odom_slam;
   pose_cov_ = J * cov_slam_cam * J.transpose();
   if (!had_last || !last_known || corrected || dt <= 1e-6) {
-    twist_cov_ = kUnknown * Matrix6d::Identity();
+    twist_cov_ = unknownCovariance();
     return;
   }
   Matrix6d R = Matrix6d::Zero();  // odom axes -> the base's, for both halves

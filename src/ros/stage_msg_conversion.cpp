@@ -389,8 +389,7 @@ binloop::TrackedFrame toRos(const core::TrackedFrame& f, const std::string& fram
   m.pose = toPoseMsg(f.T_w_c);
   m.reference = f.reference;
   m.reference_to_camera = toPoseMsg(f.T_ref_c);
-  for (int r = 0; r < 6; ++r)
-    for (int c = 0; c < 6; ++c) m.pose_covariance[6 * r + c] = f.pose_covariance(r, c);
+  m.pose_covariance = toCovarianceMsg(f.pose_covariance);
   m.new_keyframe = f.new_keyframe;
   m.features = f.features;
   m.stereo_matches = f.stereo_matches;
@@ -412,8 +411,7 @@ core::TrackedFrame fromRos(const binloop::TrackedFrame& m) {
   f.T_w_c = toPose3(m.pose);
   f.reference = m.reference;
   f.T_ref_c = toPose3(m.reference_to_camera);
-  for (int r = 0; r < 6; ++r)
-    for (int c = 0; c < 6; ++c) f.pose_covariance(r, c) = m.pose_covariance[6 * r + c];
+  f.pose_covariance = fromCovarianceMsg(m.pose_covariance);
   if (!f.pose_covariance.allFinite()) throw ConversionError("TrackedFrame.pose_covariance has a NaN or infinite number");
   f.new_keyframe = m.new_keyframe;
   f.features = m.features;

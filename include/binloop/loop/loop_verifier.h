@@ -26,7 +26,6 @@ namespace binloop {
 enum class LoopRejection { kNone, kTooFewMatches, kNoConsensus, kTooFewInliers };
 /// The loop status a verification ends with (kNone: accepted).
 msg::LoopStatus loopStatusOf(LoopRejection r);
-const char* rejectionName(LoopRejection r);
 
 struct LoopVerifierParams {
   int max_hamming = 50;     // ORB-SLAM2's TH_LOW

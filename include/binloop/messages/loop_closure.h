@@ -22,6 +22,7 @@ enum class LoopStatus : uint8_t {
   kBeyondDriftBound,  // the correction is more than odometry's drift since the match can explain
   kLargeResidual,     // the optimisation could not satisfy the loop edge
   kUnknownKeyframe,   // a keyframe this stage does not hold
+  kLast = kUnknownKeyframe,  // a new status goes before this line
 };
 /// "accepted", "held", "agreed", "too_few_matches", ...: the name logs and ROS messages carry.
 const char* loopStatusName(LoopStatus s);

@@ -23,7 +23,7 @@ struct TrackedFrame {
   SlamKeyframeId new_keyframe = kNoId;  // set when this frame became a keyframe
   // How well T_w_c is known from the points it matched (optim/pose_covariance.h): the camera centre's
   // error in the world frame, then the rotation's about the world axes; all zero: unknown (not tracked).
-  Eigen::Matrix<double, 6, 6> pose_covariance = Eigen::Matrix<double, 6, 6>::Zero();
+  Matrix6d pose_covariance = Matrix6d::Zero();
   int features = 0, stereo_matches = 0, tracked_points = 0;
   std::string problem;  // why the frame was not tracked (bad input, lost), empty otherwise
   double extract_ms = 0, stereo_ms = 0, track_ms = 0;

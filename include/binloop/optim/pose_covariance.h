@@ -13,8 +13,6 @@
 
 namespace binloop {
 
-using Matrix6d = Eigen::Matrix<double, 6, 6>;
-
 struct PoseCovariance {
   /// Of the camera centre's error in the world frame, then the rotation's about the world axes
   /// (R_w_c' = exp(dtheta) R_w_c): [x y z rx ry rz], m^2 and rad^2.

@@ -36,7 +36,6 @@ class KeyframesInFlight {
   int count() const { return count_; }
   /// Keyframes given up since construction.
   uint64_t givenUp() const { return given_up_; }
-  double timeoutS() const { return timeout_s_; }
 
  private:
   double timeout_s_;

@@ -165,11 +165,11 @@ class Tracker {
   int searchByProjection(Frame& f, const std::vector<const msg::MapPoint*>& pts, float radius) const;
   /// The frame's matched keypoints with stereo depth, each with up to three of its point's keyframes.
   std::vector<FarMatch> farMatches(const Frame& f, std::vector<int>* keypoint_of) const;
+  /// Lost at the map's last keyframe, with no motion model (after a load or an adopted map).
+  void startLostAtLastKeyframe();
   /// Relocalisation from scratch against the vocabulary's (or the most recent) keyframes: the candidate
   /// that explains most of the local map among those the camera could have reached (`reach`); with
   /// `hinted`, the keyframes nearest the pose hint are tried first.
-  /// Lost at the map's last keyframe, with no motion model (after a load or an adopted map).
-  void startLostAtLastKeyframe();
   bool relocalize(Frame& f, MotionReach& reach, bool hinted);
   /// PnP RANSAC on the matches in f.points, pose optimisation, a wide search for `pts`, then the local map.
   bool poseFromScratch(Frame& f, const std::vector<const msg::MapPoint*>& pts);

@@ -7,6 +7,8 @@
 namespace binloop {
 
 using Pose3 = Eigen::Isometry3d;
+/// A pose's covariance: [x y z rx ry rz].
+using Matrix6d = Eigen::Matrix<double, 6, 6>;
 
 /// The same pose with its rotation made exactly orthonormal again. Products of many poses (a motion model
 /// applied frame after frame) drift from a rotation by rounding; optimisers check for it.

@@ -24,8 +24,6 @@ msg::LoopStatus loopStatusOf(LoopRejection r) {
   return msg::LoopStatus::kTooFewMatches;
 }
 
-const char* rejectionName(LoopRejection r) { return msg::loopStatusName(loopStatusOf(r)); }
-
 namespace {
 
 Eigen::Vector3d pointOf(const msg::KeyFrame& kf, const msg::KeyPoint& k) {

@@ -4,12 +4,6 @@
 
 namespace binloop::msg {
 
-namespace {
-constexpr LoopStatus kAll[] = {LoopStatus::kAccepted,      LoopStatus::kHeld,          LoopStatus::kAgreed,
-                               LoopStatus::kTooFewMatches, LoopStatus::kNoConsensus,   LoopStatus::kTooFewInliers,
-                               LoopStatus::kBeyondDriftBound, LoopStatus::kLargeResidual, LoopStatus::kUnknownKeyframe};
-}  // namespace
-
 const char* loopStatusName(LoopStatus s) {
   switch (s) {
     case LoopStatus::kAccepted: return "accepted";
@@ -26,8 +20,8 @@ const char* loopStatusName(LoopStatus s) {
 }
 
 LoopStatus parseLoopStatus(const std::string& name) {
-  for (LoopStatus s : kAll)
-    if (name == loopStatusName(s)) return s;
+  for (int i = 0; i <= static_cast<int>(LoopStatus::kLast); ++i)
+    if (name == loopStatusName(static_cast<LoopStatus>(i))) return static_cast<LoopStatus>(i);
   throw std::invalid_argument("unknown loop status '" + name + "'");
 }
 

@@ -1,6 +1,7 @@
 #include "binloop/optim/pose_covariance.h"
 
 #include <Eigen/Cholesky>
+#include <cmath>
 #include <Eigen/Geometry>
 
 namespace binloop {
@@ -26,14 +27,17 @@ PoseCovariance poseCovariance(const StereoCamera& cam, const Pose3& T_w_c, const
     dproj << cam.fx * iz, 0, -cam.fx * p.x() * iz2,  //
         0, cam.fy * iz, -cam.fy * p.y() * iz2,       //
         cam.fx * iz, 0, (cam.bf() - cam.fx * p.x()) * iz2;
-    const int n = stereo ? 3 : 2;
-    const Eigen::MatrixXd J = dproj.topRows(n) * dp;
-    H += o.inv_sigma2 * J.transpose() * J;
-    const double u = cam.fx * p.x() * iz + cam.cx, v = cam.fy * p.y() * iz + cam.cy;
-    double r2 = (u - o.uv.x()) * (u - o.uv.x()) + (v - o.uv.y()) * (v - o.uv.y());
-    if (stereo) r2 += (u - cam.bf() * iz - o.u_right) * (u - cam.bf() * iz - o.u_right);
+    const Eigen::Matrix<double, 3, 6> J = dproj * dp;
+    const Eigen::Vector2d uv = cam.project(p);
+    double r2 = (uv - o.uv).squaredNorm();
+    if (stereo) {
+      H += o.inv_sigma2 * J.transpose() * J;
+      r2 += std::pow(uv.x() - cam.bf() * iz - o.u_right, 2);
+    } else {
+      H += o.inv_sigma2 * J.topRows<2>().transpose() * J.topRows<2>();
+    }
     chi2 += o.inv_sigma2 * r2;
-    rows += n;
+    rows += stereo ? 3 : 2;
     ++out.observations;
   }
   if (out.observations < 3 || rows <= 6) return out;

@@ -203,12 +203,12 @@ Tracker::Output Tracker::track(const StereoFrame& in, int mapping_queue) {
     }
     tf.state = state_ == msg::TrackingState::kRelocalized ? state_ : msg::TrackingState::kOk;
     state_ = msg::TrackingState::kOk;
-    // The motion from the last tracked frame is the velocity, unless the frame was found from scratch: then
-    // that "motion" is wherever the camera was carried, and the next frame is matched without a prediction
-    // (as ORB-SLAM2 drops its velocity after relocalising).
     // Every match left after the last pose optimisation is one of its inliers.
     const PoseCovariance cov = poseCovariance(cam_, f.T_w_c, observationsOf(f, nullptr));
     if (cov.valid) tf.pose_covariance = p_.pose_covariance_scale * cov.covariance;
+    // The motion from the last tracked frame is the velocity, unless the frame was found from scratch: then
+    // that "motion" is wherever the camera was carried, and the next frame is matched without a prediction
+    // (as ORB-SLAM2 drops its velocity after relocalising).
     velocity_ = last_pose.inverse() * f.T_w_c;
     velocity_dt_ = dt > 0 ? dt : 1;
     have_velocity_ = !relocalized;

@@ -80,8 +80,8 @@ void Tracker::adoptMap(const msg::LocalMapUpdate& whole) {
   corrections_seen_ = whole.corrections_seen;
   // A tracker restarted alone counts its ids from 1 again, and mapping refuses ids it holds: go on after
   // the highest of this tracker's issuer in the map.
-  keyframe_ids_.restore(std::max(keyframe_ids_.issued(), whole.tracking_keyframe_ids));
-  point_ids_.restore(std::max(point_ids_.issued(), whole.tracking_point_ids));
+  keyframe_ids_.restore(whole.tracking_keyframe_ids);  // none issued yet: it has not started
+  point_ids_.restore(whole.tracking_point_ids);
   if (map_.keyframeCount() > 0) startLostAtLastKeyframe();
 }
 

@@ -57,7 +57,7 @@ class LoopVerifierTest : public ::testing::Test {
 TEST_F(LoopVerifierTest, ARevisitIsAcceptedWithTheTrueRelativePose) {
   const msg::KeyFrame c = keyframe(1, Pose3::Identity(), 600), q = keyframe(2, T_w_q, 600);
   const LoopVerification v = verifyLoop(q, c, {});
-  ASSERT_TRUE(v.accepted) << rejectionName(v.rejection) << ": " << v.detail;
+  ASSERT_TRUE(v.accepted) << msg::loopStatusName(loopStatusOf(v.rejection)) << ": " << v.detail;
   const Pose3 truth = T_w_q.inverse();  // candidate camera = world
   EXPECT_LT((v.T_query_candidate.translation() - truth.translation()).norm(), 0.05);
   EXPECT_LT(test::rotationErrorDeg(v.T_query_candidate, truth), 0.2);
