@@ -148,15 +148,12 @@ void LoopDetectorNodelet::onReconfigure(binloop::LoopDetectorConfig& c, uint32_t
   options.fabmap_l2_offset = c.fabmap_l2_offset;
   options.vladpq_shared_slack = c.vladpq_shared_slack;
   auto make = binloop::modelFileFactory(vocab_dir_, config_.tracker.orb, force_, options);
-  std::vector<std::string> shadow;
-  if (c.shadow == "all") {
-    shadow = binloop::placeModelNames();
-  } else {
-    std::stringstream ss(c.shadow);
-    for (std::string n; std::getline(ss, n, ',');)
-      if (!n.empty()) shadow.push_back(n);
-  }
   try {
+    std::vector<std::string> skipped;
+    const std::vector<std::string> shadow = binloop::shadowModelNames(c.shadow, p.model, vocab_dir_, &skipped);
+    for (const std::string& n : skipped)
+      NODELET_WARN("binloop/LoopDetector: shadow model %s skipped: no %s.bin in %s", n.c_str(), n.c_str(),
+                   vocab_dir_.c_str());
     if (!detector_) {
       detector_ = std::make_unique<binloop::LoopDetector>(p, make);
       detector_->setModelIdentity(binloop::modelFileIdentities(vocab_dir_));

@@ -123,17 +123,10 @@ int main(int argc, char** argv) {
                                       config.models);
       l.model_identity = modelFileIdentities(args.str("vocab-dir"));
       if (args.has("shadow")) {
-        std::string s = args.str("shadow");
-        if (s == "all") {
-          l.shadow = names;
-        } else {
-          std::stringstream ss(s);
-          std::string n;
-          while (std::getline(ss, n, ',')) {
-            checkName(n, "--shadow");
-            l.shadow.push_back(n);
-          }
-        }
+        std::vector<std::string> skipped;
+        l.shadow = shadowModelNames(args.str("shadow"), detector, args.str("vocab-dir"), &skipped);
+        for (const std::string& n : skipped)
+          std::cerr << "run: shadow model " << n << " skipped: no " << n << ".bin in " << args.str("vocab-dir") << "\n";
       }
       if (args.has("switch-detector-at")) {
         std::stringstream ss(args.str("switch-detector-at"));

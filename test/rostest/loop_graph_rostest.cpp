@@ -5,132 +5,33 @@
 // Then it saves the map, resets the graph and loads the map into it (the same keyframes and index, and a
 // pair of the start tracked in it again), and sends malformed stereo pairs and checks that the graph says
 // so and keeps tracking.
-#include <binloop/LoopCandidates.h>
 #include <binloop/LoadMap.h>
-#include <binloop/LoopClosure.h>
 #include <binloop/Reset.h>
 #include <binloop/SaveMap.h>
-#include <binloop/Statistics.h>
-#include <diagnostic_msgs/DiagnosticArray.h>
 #include <dynamic_reconfigure/Reconfigure.h>
-#include <geometry_msgs/PoseStamped.h>
-#include <geometry_msgs/PoseWithCovarianceStamped.h>
-#include <nav_msgs/Odometry.h>
-#include <nav_msgs/Path.h>
 #include <ros/ros.h>
-#include <rosbag/bag.h>
-#include <rosbag/view.h>
-#include <sensor_msgs/CameraInfo.h>
-#include <sensor_msgs/Image.h>
 
 #include <filesystem>
 #include <fstream>
-#include <map>
-#include <mutex>
 
 #include "binloop/io/map_folder.h"
 #include "binloop/io/state_file.h"
 #include "binloop/io/trajectory_io.h"
 #include "binloop/sim/builtin_route.h"
-#include "binloop_ros/topics.h"
+#include "graph_fixture.h"
 #include "rendered_drive.h"
 #include "rostest_main.h"
 #include "support/test_support.h"
 
 namespace {
 
-namespace topics = binloop_ros::topics;
 using binloop::test::Drive;
 using binloop::test::drive;
 using binloop::test::Pair;
 using binloop::test::readPairs;
+using binloop::test::statistics;
 
-// What the graph publishes, collected on the spinner's thread.
-struct Observed {
-  std::mutex m;
-  std::map<double, geometry_msgs::Pose> poses;  // by stamp
-  std::vector<double> pose_stamps;              // every pose message's stamp, in order
-  std::vector<binloop::LoopClosure> closures;
-  std::vector<binloop::LoopCandidates> candidates;
-  nav_msgs::Path corrected_path;
-  std::vector<nav_msgs::Odometry> odometry;
-  std::vector<geometry_msgs::PoseWithCovarianceStamped> poses_with_covariance;
-  std::map<std::string, std::string> tracking_diag;
-};
-
-class LoopGraph : public ::testing::Test {
- protected:
-  void SetUp() override {
-    ros::NodeHandle nh;
-    left_ = nh.advertise<sensor_msgs::Image>(topics::kLeftImage, 10);
-    right_ = nh.advertise<sensor_msgs::Image>(topics::kRightImage, 10);
-    left_info_ = nh.advertise<sensor_msgs::CameraInfo>(topics::kLeftInfo, 10);
-    right_info_ = nh.advertise<sensor_msgs::CameraInfo>(topics::kRightInfo, 10);
-    subs_.push_back(nh.subscribe<geometry_msgs::PoseStamped>("/binloop/pose", 1000, [this](const auto& m) {
-      std::lock_guard<std::mutex> lk(seen_.m);
-      seen_.poses[m->header.stamp.toSec()] = m->pose;
-      seen_.pose_stamps.push_back(m->header.stamp.toSec());
-    }));
-    subs_.push_back(nh.subscribe<binloop::LoopClosure>("/binloop/loop_closure", 100, [this](const auto& m) {
-      std::lock_guard<std::mutex> lk(seen_.m);
-      seen_.closures.push_back(*m);
-    }));
-    subs_.push_back(nh.subscribe<binloop::LoopCandidates>("/binloop/loop_candidates", 1000, [this](const auto& m) {
-      std::lock_guard<std::mutex> lk(seen_.m);
-      seen_.candidates.push_back(*m);
-    }));
-    subs_.push_back(nh.subscribe<geometry_msgs::PoseWithCovarianceStamped>(
-        "/binloop/pose_with_covariance", 1000, [this](const auto& m) {
-          std::lock_guard<std::mutex> lk(seen_.m);
-          seen_.poses_with_covariance.push_back(*m);
-        }));
-    subs_.push_back(nh.subscribe<nav_msgs::Odometry>("/binloop/odom", 1000, [this](const auto& m) {
-      std::lock_guard<std::mutex> lk(seen_.m);
-      seen_.odometry.push_back(*m);
-    }));
-    subs_.push_back(nh.subscribe<nav_msgs::Path>("/binloop/corrected_path", 10, [this](const auto& m) {
-      std::lock_guard<std::mutex> lk(seen_.m);
-      seen_.corrected_path = *m;
-    }));
-    subs_.push_back(nh.subscribe<diagnostic_msgs::DiagnosticArray>("/diagnostics", 100, [this](const auto& m) {
-      std::lock_guard<std::mutex> lk(seen_.m);
-      for (const auto& s : m->status)
-        if (s.name.find("tracking") != std::string::npos)
-          for (const auto& kv : s.values) seen_.tracking_diag[kv.key] = kv.value;
-    }));
-  }
-
-  // Waits for `pred` (checked under the lock) up to `seconds`.
-  template <class Pred>
-  bool waitFor(double seconds, Pred pred) {
-    const ros::WallTime until = ros::WallTime::now() + ros::WallDuration(seconds);
-    while (ros::ok() && ros::WallTime::now() < until) {
-      {
-        std::lock_guard<std::mutex> lk(seen_.m);
-        if (pred()) return true;
-      }
-      ros::WallDuration(0.005).sleep();
-    }
-    return false;
-  }
-
-  bool graphConnected() {
-    return waitFor(60, [&] { return left_.getNumSubscribers() > 0 && right_.getNumSubscribers() > 0 &&
-                                    left_info_.getNumSubscribers() > 0; });
-  }
-
-  void publishPair(const sensor_msgs::Image& l, const sensor_msgs::Image& r, const sensor_msgs::CameraInfo& li,
-                   const sensor_msgs::CameraInfo& ri) {
-    left_info_.publish(li);
-    right_info_.publish(ri);
-    left_.publish(l);
-    right_.publish(r);
-  }
-
-  ros::Publisher left_, right_, left_info_, right_info_;
-  std::vector<ros::Subscriber> subs_;
-  Observed seen_;
-};
+class LoopGraph : public binloop::test::GraphTest {};
 
 }  // namespace
 
@@ -225,13 +126,6 @@ TEST_F(LoopGraph, TheRevisitIsClosedTheDetectorSwitchesAndBadPairsAreReported) {
   }
 }
 
-std::map<std::string, std::string> statistics() {
-  binloop::Statistics srv;
-  std::map<std::string, std::string> out;
-  if (!ros::service::call("/binloop/statistics", srv)) return out;
-  for (const auto& kv : srv.response.values) out[kv.key] = kv.value;
-  return out;
-}
 
 // After the first test's drive (or alone, after a short one): save, reset, load into the emptied graph.
 TEST_F(LoopGraph, TheMapIsSavedAndLoadedIntoAFreshGraphWithTheSameKeyframesAndIndex) {

@@ -1,6 +1,8 @@
 #include "binloop/pipeline/model_files.h"
 
+#include <algorithm>
 #include <filesystem>
+#include <sstream>
 
 #include "binloop/place/model_file.h"
 
@@ -34,6 +36,28 @@ LoopDetector::ModelIdentity modelFileIdentities(const std::string& dir) {
   return [dir](const std::string& name) {
     return modelFileIdentity((std::filesystem::path(dir) / (name + ".bin")).string());
   };
+}
+
+std::vector<std::string> shadowModelNames(const std::string& spec, const std::string& active, const std::string& dir,
+                                          std::vector<std::string>* skipped) {
+  const std::vector<std::string>& known = placeModelNames();
+  std::vector<std::string> out;
+  if (spec == "all") {
+    for (const std::string& n : known) {
+      if (n == active) continue;
+      if (std::filesystem::exists(std::filesystem::path(dir) / (n + ".bin"))) out.push_back(n);
+      else if (skipped) skipped->push_back(n);
+    }
+    return out;
+  }
+  std::stringstream ss(spec);
+  for (std::string n; std::getline(ss, n, ',');) {
+    if (n.empty()) continue;
+    if (std::find(known.begin(), known.end(), n) == known.end())
+      throw PlaceError("shadow model '" + n + "': not one of hbow, fabmap, vlad, hmvlad, vladpq");
+    out.push_back(n);
+  }
+  return out;
 }
 
 std::shared_ptr<const VocabularyTree> loadRelocalisationVocabulary(const std::string& path, const OrbSlamParams& orb,
