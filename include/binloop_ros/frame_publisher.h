@@ -11,6 +11,7 @@
 //     computed against it (looked up in TF at each image's stamp);
 //   ~ground_truth_frame: a frame that coincides with the slam frame (KITTI's ground truth), for rviz.
 // While tracking is lost, map -> odom is sent again with the image's stamp, so the tree stays alive.
+#include <geometry_msgs/PoseWithCovarianceStamped.h>
 #include <ros/ros.h>
 #include <tf2_ros/buffer.h>
 #include <tf2_ros/static_transform_broadcaster.h>
@@ -24,6 +25,11 @@
 #include "binloop_ros/robot_frames.h"
 
 namespace binloop_ros {
+
+struct PoseHint {
+  binloop::Pose3 T_slam_cam;
+  double radius_m = 5;
+};
 
 class FramePublisher {
  public:
@@ -49,6 +55,9 @@ class FramePublisher {
   /// in slam the camera's. Throws ConversionError for another frame, or before the first tracked frame (the
   /// camera's mounting is not known yet).
   binloop::Pose3 hintInSlam(const std::string& frame, const binloop::Pose3& T) const;
+  /// /initialpose as hintInSlam's pose and the radius to relocalise within: three standard deviations of its
+  /// position (rviz sends 0.5 m), at least 5 m, as an operator clicks roughly, and at most 50 m.
+  PoseHint hint(const geometry_msgs::PoseWithCovarianceStamped& m) const;
   /// The last problem (a failed TF lookup), "" if none since the last call.
   std::string takeProblem();
 

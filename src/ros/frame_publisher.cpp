@@ -3,6 +3,9 @@
 #include <geometry_msgs/PoseWithCovarianceStamped.h>
 #include <nav_msgs/Odometry.h>
 
+#include <algorithm>
+#include <cmath>
+
 #include "binloop_ros/msg_conversion.h"
 #include "binloop_ros/node_params.h"
 
@@ -130,6 +133,11 @@ binloop::Pose3 FramePublisher::hintInSlam(const std::string& frame, const binloo
   if (f == slam_frame_) return T;
   throw ConversionError("a pose hint in frame '" + frame + "': give it in '" + map_frame_ + "' (the base's pose) or '" +
                         slam_frame_ + "' (the camera's)");
+}
+
+PoseHint FramePublisher::hint(const geometry_msgs::PoseWithCovarianceStamped& m) const {
+  const double var = std::max(m.pose.covariance[0], m.pose.covariance[7]);
+  return {hintInSlam(m.header.frame_id, toPose3(m.pose.pose)), std::clamp(3 * std::sqrt(std::max(var, 0.0)), 5.0, 50.0)};
 }
 
 void FramePublisher::clockWentBack() {

@@ -16,6 +16,7 @@
 #include "binloop/place/hbow_recognizer.h"
 #include "binloop/sim/stereo_renderer.h"
 #include "binloop/sim/texture_bank.h"
+#include "binloop/tracking/tracking_stage.h"
 #include <opencv2/imgproc.hpp>
 
 #include "covariance_check.h"
@@ -397,6 +398,47 @@ TEST(SlamPipeline, ARestartedTrackerTakesTheMapAndTracksOnInIt) {
   EXPECT_LT(worst, 1.0);
   EXPECT_GE(keyframes, 1);
   EXPECT_FALSE(restarted.givesWayTo(*whole)) << "a tracker on the map does not start over";
+}
+
+// The tracking stage as the nodelet runs it (tracking/tracking_stage.h): local mapping's map kept until the
+// camera is known and then taken; keyframes counted in flight until mapping answers; a tracker on the map not
+// restarted by it, a young one restarted for it; a reset without a fixed camera leaves no tracker.
+TEST(TrackingStage, TakesLocalMappingsMapWhenTheCameraIsKnownAndCountsKeyframesInFlight) {
+  const RenderedStretch* s = renderedStretch(200, true);
+  if (!s) GTEST_SKIP() << "needs " << test::sharedData("kitti/poses/06.txt");
+  SlamPipeline slam(s->cam, {}, {}, PipelineMode::kLockStep);
+  for (int i = 0; i < 150; ++i) slam.process(s->frames[i]);
+  const msg::LocalMapUpdatePtr whole = slam.mapper().wholeMap();
+
+  TrackingStage stage({}, std::nullopt, 5);
+  EXPECT_EQ(stage.tracker(), nullptr);
+  EXPECT_EQ(stage.adopt(whole), TrackingStage::Adopted::kKept);
+  EXPECT_EQ(stage.mapsAdopted(), 0u);
+  stage.setCamera(s->cam);
+  ASSERT_NE(stage.tracker(), nullptr);
+  EXPECT_EQ(stage.mapsAdopted(), 1u);
+  EXPECT_EQ(stage.tracker()->map().keyframeCount(), whole->keyframes.size());
+  EXPECT_EQ(stage.tracker()->state(), msg::TrackingState::kLost);
+
+  int keyframes = 0;
+  for (int i = 155; i < 200 && keyframes == 0; ++i)
+    keyframes += stage.track(s->frames[i], i).keyframe != nullptr;
+  ASSERT_EQ(keyframes, 1) << "no keyframe made in the map taken";
+  EXPECT_EQ(stage.inFlight().count(), 1);
+  stage.apply(msg::LocalMapUpdate{}, 200);  // mapping's answer
+  EXPECT_EQ(stage.inFlight().count(), 0);
+  EXPECT_EQ(stage.adopt(whole), TrackingStage::Adopted::kIgnored) << "a tracker on the map does not start over";
+  stage.reset();
+  EXPECT_EQ(stage.tracker(), nullptr);
+
+  TrackingStage fixed({}, s->cam, 5);  // a camera from parameters: a tracker at once, and after a reset
+  ASSERT_NE(fixed.tracker(), nullptr);
+  fixed.track(s->frames[150], 0);
+  ASSERT_EQ(fixed.tracker()->map().keyframeCount(), 1u);
+  EXPECT_EQ(fixed.adopt(whole), TrackingStage::Adopted::kTakenAfterStartOver) << "a young map gives way";
+  EXPECT_EQ(fixed.tracker()->map().keyframeCount(), whole->keyframes.size());
+  fixed.reset();
+  EXPECT_NE(fixed.tracker(), nullptr);
 }
 
 // Frame 309 of route 06 comes out of a bend: after 10 missing frames the ordinary tracking (the motion
