@@ -7,7 +7,8 @@
 //   1000 of them the same 3-D points seen from 1.5 m to the side and 8 degrees turned, the rest clutter;
 //   brute force, and within ~100 coarse words (a shared point's word the same in both views, as hbow's
 //   depth-2 cells give for most);
-// - its step 1 alone (place/descriptor_block.h), the AVX-512 search and the plain loop, on random descriptors;
+// - its step 1 alone (place/descriptor_block.h), the AVX-512 search and the plain loop, on random
+// descriptors;
 // - essential-graph optimisation (build + optim/pose_graph.h) of a loop of N keyframes driven round a
 //   circle, each keyframe covisible (weight >= 100) with its 8 successors, as on rendered route 00 (1395
 //   keyframes, 11138 edges), 0.5 % drift, one loop edge from the last keyframe to the first.
@@ -23,20 +24,22 @@
 #include <string>
 #include <vector>
 
-#include "binloop/loop/essential_graph.h"
-#include "binloop/loop/loop_verifier.h"
-#include "binloop/place/descriptor_block.h"
-#include "binloop/optim/pose_graph.h"
-#include "binloop/util/hash_random.h"
 #include "../test/support/random_descriptors.h"
 #include "../test/support/stereo_keypoint.h"
+#include "binloop/loop/essential_graph.h"
+#include "binloop/loop/loop_verifier.h"
+#include "binloop/optim/pose_graph.h"
+#include "binloop/place/descriptor_block.h"
+#include "binloop/util/hash_random.h"
 
 using namespace binloop;
 using Clock = std::chrono::steady_clock;
 
 namespace {
 
-double ms(Clock::time_point t0) { return std::chrono::duration<double, std::milli>(Clock::now() - t0).count(); }
+double ms(Clock::time_point t0) {
+  return std::chrono::duration<double, std::milli>(Clock::now() - t0).count();
+}
 
 double median(std::vector<double> v) {
   std::sort(v.begin(), v.end());
@@ -50,8 +53,8 @@ struct Row {
 
 // `words` gets a coarse word per keypoint as hbow's depth-2 cells would (~100): point i's is i % 100 in
 // every view, clutter's a random one.
-msg::KeyFrame keyframe(uint64_t id, const Pose3& T_w_c, const std::vector<Eigen::Vector3d>& pts, const Descriptors& ds,
-                       HashRng& rng, std::vector<uint32_t>* words) {
+msg::KeyFrame keyframe(uint64_t id, const Pose3& T_w_c, const std::vector<Eigen::Vector3d>& pts,
+                       const Descriptors& ds, HashRng& rng, std::vector<uint32_t>* words) {
   const StereoCamera cam = kittiCameraByName("kitti00");
   msg::KeyFrame kf;
   kf.id = kf.state.id = id;
@@ -75,7 +78,9 @@ msg::KeyFrame keyframe(uint64_t id, const Pose3& T_w_c, const std::vector<Eigen:
 Row verification(bool by_words, int runs) {
   Row r{std::string("verification of one candidate (2000 x 2000 keypoints, 1000 shared), ") +
             (by_words ? "matching within ~100 words (hbow)" : "brute-force matching"),
-        "<= 5 ms", "", {}};
+        "<= 5 ms",
+        "",
+        {}};
   HashRng rng(3);
   std::vector<Eigen::Vector3d> pts;
   Descriptors ds;
@@ -89,16 +94,21 @@ Row verification(bool by_words, int runs) {
   T_w_q.linear() = Eigen::AngleAxisd(8 * M_PI / 180, Eigen::Vector3d::UnitY()).toRotationMatrix();
   T_w_q.translation() = Eigen::Vector3d(1.5, 0.1, 0.8);
   std::vector<uint32_t> cw, qw;
-  const msg::KeyFrame c = keyframe(1, Pose3::Identity(), pts, ds, rng, &cw), q = keyframe(2, T_w_q, pts, ds, rng, &qw);
+  const msg::KeyFrame c = keyframe(1, Pose3::Identity(), pts, ds, rng, &cw),
+                      q = keyframe(2, T_w_q, pts, ds, rng, &qw);
   if (!by_words) cw.clear(), qw.clear();
   for (int i = 0; i < runs; ++i) {
     const auto t0 = Clock::now();
     const LoopVerification v = verifyLoop(q, c, {}, qw, cw);
     r.runs.push_back(ms(t0));
     if (i == 0)
-      std::fprintf(stderr, "closing_bench: verification steps (%s): %d matches in %.2f ms, RANSAC %.2f, refinement %.2f, guided search + refinement %.2f\n",
-                   by_words ? "words" : "brute force", v.matches, v.match_ms, v.ransac_ms, v.refine_ms, v.guided_ms);
-    if (!v.accepted) std::fprintf(stderr, "closing_bench: verification rejected the synthetic loop: %s\n", v.detail.c_str());
+      std::fprintf(stderr,
+                   "closing_bench: verification steps (%s): %d matches in %.2f ms, RANSAC %.2f, refinement "
+                   "%.2f, guided search + refinement %.2f\n",
+                   by_words ? "words" : "brute force", v.matches, v.match_ms, v.ransac_ms, v.refine_ms,
+                   v.guided_ms);
+    if (!v.accepted)
+      std::fprintf(stderr, "closing_bench: verification rejected the synthetic loop: %s\n", v.detail.c_str());
   }
   return r;
 }
@@ -106,9 +116,12 @@ Row verification(bool by_words, int runs) {
 // Step 1 of verification alone, both ways: the eight-wide AVX-512 search where the CPU has it, the plain
 // loop everywhere (what a CPU without AVX-512 VPOPCNTDQ runs).
 Row bruteForce(bool wide, int runs) {
-  Row r{std::string("step 1 alone: nearest + second of 2000 descriptors among 2000, ") +
-            (wide ? (DescriptorBlock::wide() ? "AVX-512" : "AVX-512 (not on this CPU: plain)") : "plain loop"),
-        "", "", {}};
+  Row r{
+      std::string("step 1 alone: nearest + second of 2000 descriptors among 2000, ") +
+          (wide ? (DescriptorBlock::wide() ? "AVX-512" : "AVX-512 (not on this CPU: plain)") : "plain loop"),
+      "",
+      "",
+      {}};
   HashRng rng(4);
   Descriptors q(2000), c(2000);
   for (auto* set : {&q, &c})
@@ -127,7 +140,9 @@ Row bruteForce(bool wide, int runs) {
 
 Row essentialGraph(int n, int runs) {
   Row r{"essential graph optimisation, " + std::to_string(n) + "-keyframe loop (8 covisible each)",
-        n <= 300 ? "<= 100 ms" : "", n <= 300 ? "178 ms (loop of ~250 keyframes)" : "", {}};
+        n <= 300 ? "<= 100 ms" : "",
+        n <= 300 ? "178 ms (loop of ~250 keyframes)" : "",
+        {}};
   const double radius = 4.0 * n / (2 * M_PI);  // 4 m between keyframes
   std::vector<msg::KeyframeState> kfs;
   for (int i = 0; i < n; ++i) {
@@ -141,7 +156,8 @@ Row essentialGraph(int n, int runs) {
     s.id = static_cast<uint64_t>(i + 1);
     s.T_w_c = drift * truth;
     if (i > 0) s.parent = static_cast<uint64_t>(i);
-    for (int k = 1; k <= 8 && i + k < n; ++k) s.covisible.push_back({static_cast<uint64_t>(i + 1 + k), 400u - 30u * k});
+    for (int k = 1; k <= 8 && i + k < n; ++k)
+      s.covisible.push_back({static_cast<uint64_t>(i + 1 + k), 400u - 30u * k});
     kfs.push_back(s);
   }
   LoopEdge loop{static_cast<uint64_t>(n), 1, Pose3::Identity()};
@@ -155,8 +171,9 @@ Row essentialGraph(int n, int runs) {
     const PoseGraphResult res = optimizePoseGraph(g.nodes, g.edges);
     r.runs.push_back(ms(t0));
     if (i == 0)
-      std::fprintf(stderr, "closing_bench: %d keyframes, %zu edges, %d iterations, loop chi2 %.1f -> %.2f\n", n,
-                   g.edges.size(), res.iterations, res.initial_edge_chi2[g.new_loop_edge], res.edge_chi2[g.new_loop_edge]);
+      std::fprintf(stderr, "closing_bench: %d keyframes, %zu edges, %d iterations, loop chi2 %.1f -> %.2f\n",
+                   n, g.edges.size(), res.iterations, res.initial_edge_chi2[g.new_loop_edge],
+                   res.edge_chi2[g.new_loop_edge]);
   }
   return r;
 }
@@ -181,24 +198,33 @@ int main(int argc, char** argv) {
   rows.push_back(bruteForce(false, runs * 3));
   rows.push_back(essentialGraph(250, runs));
   rows.push_back(essentialGraph(1400, std::max(1, runs / 2)));
-  // Global BA runs inside the SLAM (mapping.global_ba_after_loop); its time is in summary.json (global_ba_ms).
-  rows.push_back({"global bundle adjustment, rendered route 06 (in the SLAM: run with mapping.global_ba_after_loop: 1)", "reported", "", {}});
-  std::printf("\nCPU: %s\n\n| measure | median ms | min | max | goal | ORB-SLAM2 (i7) | runs |\n|---|---|---|---|---|---|---|\n",
-              cpuModel().c_str());
+  // Global BA runs inside the SLAM (mapping.global_ba_after_loop); its time is in summary.json
+  // (global_ba_ms).
+  rows.push_back(
+      {"global bundle adjustment, rendered route 06 (in the SLAM: run with mapping.global_ba_after_loop: 1)",
+       "reported",
+       "",
+       {}});
+  std::printf(
+      "\nCPU: %s\n\n| measure | median ms | min | max | goal | ORB-SLAM2 (i7) | runs "
+      "|\n|---|---|---|---|---|---|---|\n",
+      cpuModel().c_str());
   for (const Row& r : rows) {
     if (r.runs.empty()) {
-      std::printf("| %s | in the SLAM: summary.json global_ba_ms | | | %s | %s | |\n", r.name.c_str(), r.goal.c_str(), r.orbslam2.c_str());
+      std::printf("| %s | in the SLAM: summary.json global_ba_ms | | | %s | %s | |\n", r.name.c_str(),
+                  r.goal.c_str(), r.orbslam2.c_str());
       continue;
     }
     std::printf("| %s | %.2f | %.2f | %.2f | %s | %s | %zu |\n", r.name.c_str(), median(r.runs),
-                *std::min_element(r.runs.begin(), r.runs.end()), *std::max_element(r.runs.begin(), r.runs.end()),
-                r.goal.c_str(), r.orbslam2.c_str(), r.runs.size());
+                *std::min_element(r.runs.begin(), r.runs.end()),
+                *std::max_element(r.runs.begin(), r.runs.end()), r.goal.c_str(), r.orbslam2.c_str(),
+                r.runs.size());
   }
   const char* json = std::getenv("BINLOOP_BENCH_JSON");
   std::ofstream out(json ? json : ".build/bench/closing.json");
   out << "{\n  \"cpu\": \"" << cpuModel() << "\",\n  \"verification_ms\": " << median(rows[0].runs)
       << ",\n  \"verification_by_words_ms\": " << median(rows[1].runs)
-      << ",\n  \"essential_graph_250_ms\": " << median(rows[4].runs) << ",\n  \"essential_graph_1400_ms\": "
-      << median(rows[5].runs) << "\n}\n";
+      << ",\n  \"essential_graph_250_ms\": " << median(rows[4].runs)
+      << ",\n  \"essential_graph_1400_ms\": " << median(rows[5].runs) << "\n}\n";
   return 0;
 }

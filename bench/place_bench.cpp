@@ -73,8 +73,8 @@ void writeJson(const std::string& path) {
   char date[32];
   const std::time_t now = std::time(nullptr);
   std::strftime(date, sizeof date, "%Y-%m-%dT%H:%M:%SZ", std::gmtime(&now));
-  out << "{\n  \"date\": \"" << date << "\",\n  \"cpu\": \"" << cpuModel() << "\",\n  \"cores\": "
-      << std::thread::hardware_concurrency() << ",\n  \"runs\": " << 9;
+  out << "{\n  \"date\": \"" << date << "\",\n  \"cpu\": \"" << cpuModel()
+      << "\",\n  \"cores\": " << std::thread::hardware_concurrency() << ",\n  \"runs\": " << 9;
   for (const auto& [k, v] : g_results) out << ",\n  \"" << k << "\": " << v;
   out << "\n}\n";
   std::printf("\nwrote %s\n", path.c_str());
@@ -138,12 +138,15 @@ void vocabularyBench() {
     for (int i = 0; i < 50; ++i) loaded->transform(d2000, &bow);  // the mapped tree, as a user gets it
     transform_ms.push_back(std::chrono::duration<double, std::milli>(Clock::now() - t).count() / 50);
   }
-  std::printf("\n| hbow vocabulary (k=10, L=6, %zu words, %.1f MB file) | median | min | max | goal |\n|---|---|---|---|---|\n",
-              big.words(), fs::file_size(file) / 1e6);
+  std::printf(
+      "\n| hbow vocabulary (k=10, L=6, %zu words, %.1f MB file) | median | min | max | goal "
+      "|\n|---|---|---|---|---|\n",
+      big.words(), fs::file_size(file) / 1e6);
   g_results["vocab_load_1m_ms_median"] = median(load_ms);
   g_results["transform_2000_random_1m_ms_median"] = median(transform_ms);
   std::printf("| load (ms) | %.1f | %.1f | %.1f | <= 30 |\n", median(load_ms),
-              *std::min_element(load_ms.begin(), load_ms.end()), *std::max_element(load_ms.begin(), load_ms.end()));
+              *std::min_element(load_ms.begin(), load_ms.end()),
+              *std::max_element(load_ms.begin(), load_ms.end()));
   std::printf("| transform 2000 descriptors (ms) | %.3f | %.3f | %.3f | <= 0.5 |\n", median(transform_ms),
               *std::min_element(transform_ms.begin(), transform_ms.end()),
               *std::max_element(transform_ms.begin(), transform_ms.end()));
@@ -164,8 +167,11 @@ void vocabularyBench() {
       ms.push_back(std::chrono::duration<double, std::milli>(Clock::now() - t).count() / 50);
     }
     g_results["transform_2000_ms_median"] = median(ms);
-    std::printf("| transform %zu real KITTI descriptors, vocab/kitti08/hbow.bin (k=10, L=6, %zu words) (ms) | %.3f | %.3f | %.3f | <= 0.5 |\n",
-                real.size(), voc->words(), median(ms), *std::min_element(ms.begin(), ms.end()), *std::max_element(ms.begin(), ms.end()));
+    std::printf(
+        "| transform %zu real KITTI descriptors, vocab/kitti08/hbow.bin (k=10, L=6, %zu words) (ms) | %.3f | "
+        "%.3f | %.3f | <= 0.5 |\n",
+        real.size(), voc->words(), median(ms), *std::min_element(ms.begin(), ms.end()),
+        *std::max_element(ms.begin(), ms.end()));
   }
 }
 
@@ -178,13 +184,18 @@ void queryBench(const std::string& only_model) {
   }
   const int n = 1500;
   const auto kfs = keyframes(n);
-  std::printf("\n| model (vocab/kitti08) | query vs %d keyframes, median ms | p95 ms | signature ms | index bytes/keyframe | goal ms |\n|---|---|---|---|---|---|\n", n);
-  const std::map<std::string, double> goal{{"hbow", 1}, {"fabmap", 10}, {"vlad", 0.1}, {"hmvlad", 0.1}, {"vladpq", 0.1}};
+  std::printf(
+      "\n| model (vocab/kitti08) | query vs %d keyframes, median ms | p95 ms | signature ms | index "
+      "bytes/keyframe | goal ms |\n|---|---|---|---|---|---|\n",
+      n);
+  const std::map<std::string, double> goal{
+      {"hbow", 1}, {"fabmap", 10}, {"vlad", 0.1}, {"hmvlad", 0.1}, {"vladpq", 0.1}};
   for (const auto& name : placeModelNames()) {
     if (!only_model.empty() && name != only_model) continue;
     const std::string model_file = vocab_dir + "/" + name + ".bin";
     if (!fs::exists(model_file)) {
-      std::printf("| %s | (no %s: make it with vocab/make_vocab.sh) | | | | |\n", name.c_str(), model_file.c_str());
+      std::printf("| %s | (no %s: make it with vocab/make_vocab.sh) | | | | |\n", name.c_str(),
+                  model_file.c_str());
       continue;
     }
     auto rec = makePlaceRecognizer(name, {model_file});
@@ -207,14 +218,15 @@ void queryBench(const std::string& only_model) {
       all.insert(all.end(), q.begin(), q.end());
     }
     std::string breakdown;
-    for (const auto& [step, ms] : steps) breakdown += " " + step + " " + std::to_string(median(ms)).substr(0, 6);
+    for (const auto& [step, ms] : steps)
+      breakdown += " " + step + " " + std::to_string(median(ms)).substr(0, 6);
     std::fprintf(stderr, "%s steps (median ms):%s\n", name.c_str(), breakdown.c_str());
     std::sort(all.begin(), all.end());
     const double p95 = all[static_cast<size_t>(0.95 * (all.size() - 1))];
     g_results[name + "_query_1500x2000_ms_median"] = median(per_run);
     g_results[name + "_query_1500x2000_ms_p95"] = p95;
-    std::printf("| %s | %.4f | %.4f | %.2f | %zu | <= %g |\n", name.c_str(), median(per_run),
-                p95, median(sig), rec->indexBytesPerKeyframe(), goal.at(name));
+    std::printf("| %s | %.4f | %.4f | %.2f | %zu | <= %g |\n", name.c_str(), median(per_run), p95,
+                median(sig), rec->indexBytesPerKeyframe(), goal.at(name));
   }
 }
 

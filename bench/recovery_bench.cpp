@@ -9,8 +9,8 @@
 //                  [--reloc-vocab vocab/kitti08/hbow.bin] [--frames]
 #include <algorithm>
 #include <cstdio>
-#include <map>
 #include <filesystem>
+#include <map>
 #include <string>
 #include <vector>
 
@@ -27,14 +27,14 @@ using namespace binloop;
 
 namespace {
 
-constexpr int kAfter = 30;       // frames scored after each gap
-constexpr double kGoalM = 0.3;   // the SLAM issue's bound on the poses after a 20-frame gap
+constexpr int kAfter = 30;      // frames scored after each gap
+constexpr double kGoalM = 0.3;  // the SLAM issue's bound on the poses after a 20-frame gap
 
 struct Setup {
   std::string route = "06";
   std::vector<int> gaps{10, 20}, starts{100, 150, 200, 250, 300, 350};
-  int every = 0;  // > 0: starts every this many frames along the whole route instead of `starts`
-  int lead = 0;   // frames mapped before the gap; 0: all from frame 0
+  int every = 0;        // > 0: starts every this many frames along the whole route instead of `starts`
+  int lead = 0;         // frames mapped before the gap; 0: all from frame 0
   bool frames = false;  // print each scored frame too
 };
 
@@ -44,8 +44,9 @@ struct Outcome {
   int lost = 0;
 };
 
-Outcome runGap(const std::map<int, StereoFrame>& frames, const std::vector<Pose3>& route, const StereoCamera& cam,
-               const SlamConfig& config, int first, int start, int gap, bool print_frames) {
+Outcome runGap(const std::map<int, StereoFrame>& frames, const std::vector<Pose3>& route,
+               const StereoCamera& cam, const SlamConfig& config, int first, int start, int gap,
+               bool print_frames) {
   SlamPipeline slam(cam, config.tracker, config.mapper, PipelineMode::kLockStep);
   Pose3 last, before_last;
   for (int i = first; i < start; ++i) {
@@ -64,17 +65,21 @@ Outcome runGap(const std::map<int, StereoFrame>& frames, const std::vector<Pose3
       for (int k = start; k <= i; ++k) predicted = predicted * step;
       const Eigen::Vector3d e_p =
           predicted.linear().transpose() * (predicted.translation() - (drift * route[i]).translation());
-      std::printf("    constant velocity from frame %d predicts frame %d %.2f m off (right %.2f, ahead %.2f)\n",
-                  start - 1, i, e_p.norm(), e_p.x(), e_p.z());
+      std::printf(
+          "    constant velocity from frame %d predicts frame %d %.2f m off (right %.2f, ahead %.2f)\n",
+          start - 1, i, e_p.norm(), e_p.x(), e_p.z());
     }
     if (print_frames) {
       // Where the error lies in the camera's own frame (x right, z ahead) tells a slide along the road
       // from a wrong turn.
-      const Eigen::Vector3d e_c = tf.T_w_c.linear().transpose() * (tf.T_w_c.translation() - (drift * route[i]).translation());
-      const double turn = Eigen::AngleAxisd((drift * route[i]).linear().transpose() * tf.T_w_c.linear()).angle();
-      std::printf("    frame %d: %s, %d tracked, error %.2f m (right %.2f, ahead %.2f), turned %.2f deg%s%s\n", i,
-                  msg::toString(tf.state), tf.tracked_points, off, e_c.x(), e_c.z(), turn * 180 / 3.14159265358979,
-                  tf.problem.empty() ? "" : ": ", tf.problem.c_str());
+      const Eigen::Vector3d e_c =
+          tf.T_w_c.linear().transpose() * (tf.T_w_c.translation() - (drift * route[i]).translation());
+      const double turn =
+          Eigen::AngleAxisd((drift * route[i]).linear().transpose() * tf.T_w_c.linear()).angle();
+      std::printf(
+          "    frame %d: %s, %d tracked, error %.2f m (right %.2f, ahead %.2f), turned %.2f deg%s%s\n", i,
+          msg::toString(tf.state), tf.tracked_points, off, e_c.x(), e_c.z(), turn * 180 / 3.14159265358979,
+          tf.problem.empty() ? "" : ": ", tf.problem.c_str());
     }
     if (i == start + gap) o.first_state = msg::toString(tf.state), o.first_m = off;
     if (lost) {
@@ -97,7 +102,8 @@ int runBench(const SlamConfig& config, Setup setup) {
   const int max_gap = *std::max_element(setup.gaps.begin(), setup.gaps.end());
   if (setup.every > 0) {
     setup.starts.clear();
-    for (int s = std::max(setup.every, setup.lead); s + max_gap + kAfter <= static_cast<int>(route.size()); s += setup.every)
+    for (int s = std::max(setup.every, setup.lead); s + max_gap + kAfter <= static_cast<int>(route.size());
+         s += setup.every)
       setup.starts.push_back(s);
   }
   for (int start : setup.starts)
@@ -110,13 +116,16 @@ int runBench(const SlamConfig& config, Setup setup) {
   wp.aperiodic_ground = true;
   const auto world = sim::World::build(route, sim::TextureBank::build(sim::defaultTexturePhotos(), 1), wp, 1);
   sim::StereoRenderer renderer(world, cam, {}, 1);
-  std::printf("Rendered %s (aperiodic ground): %s, then `gap` frames missing; errors of the %d frames after the "
-              "gap, lost frames left out of the worst; `skipped` is how far the camera moved meanwhile.\n\n",
-              setup.route.c_str(),
-              setup.lead > 0 ? ("the " + std::to_string(setup.lead) + " frames before `start` mapped").c_str()
-                             : "frames 0..start-1 mapped",
-              kAfter);
-  std::printf("| start | gap | skipped | first frame | its error | worst, 10 frames | worst, %d frames | lost |\n", kAfter);
+  std::printf(
+      "Rendered %s (aperiodic ground): %s, then `gap` frames missing; errors of the %d frames after the "
+      "gap, lost frames left out of the worst; `skipped` is how far the camera moved meanwhile.\n\n",
+      setup.route.c_str(),
+      setup.lead > 0 ? ("the " + std::to_string(setup.lead) + " frames before `start` mapped").c_str()
+                     : "frames 0..start-1 mapped",
+      kAfter);
+  std::printf(
+      "| start | gap | skipped | first frame | its error | worst, 10 frames | worst, %d frames | lost |\n",
+      kAfter);
   std::printf("|---|---|---|---|---|---|---|---|\n");
   std::map<int, std::vector<double>> worst_by_gap;  // lost frames count as failing the goal
   std::map<int, int> first_ok, all_ok;
@@ -126,7 +135,8 @@ int runBench(const SlamConfig& config, Setup setup) {
       const int first = setup.lead > 0 ? start - setup.lead : 0;
       std::map<int, StereoFrame> frames;
       auto add = [&](int from, int to) {
-        const auto rendered = sim::renderFrames(renderer, route, static_cast<size_t>(from), static_cast<size_t>(to - from));
+        const auto rendered =
+            sim::renderFrames(renderer, route, static_cast<size_t>(from), static_cast<size_t>(to - from));
         for (int i = from; i < to; ++i) {
           StereoFrame f = rendered[static_cast<size_t>(i - from)];
           f.index = i;  // renderFrames counts from its first frame; the tracker needs the route's clock
@@ -153,9 +163,10 @@ int runBench(const SlamConfig& config, Setup setup) {
     const double median = w[w.size() / 2];
     char median_text[32] = "a lost frame";
     if (median < 1e9) std::snprintf(median_text, sizeof median_text, "%.2f m", median);
-    std::printf("gap %d: %d of %zu starts within %.1f m on the first frame after it, %d on all %d (none lost); "
-                "median worst over the %d: %s\n",
-                gap, first_ok[gap], w.size(), kGoalM, all_ok[gap], kAfter, kAfter, median_text);
+    std::printf(
+        "gap %d: %d of %zu starts within %.1f m on the first frame after it, %d on all %d (none lost); "
+        "median worst over the %d: %s\n",
+        gap, first_ok[gap], w.size(), kGoalM, all_ok[gap], kAfter, kAfter, median_text);
   }
   return 0;
 }
@@ -164,23 +175,28 @@ int runBench(const SlamConfig& config, Setup setup) {
 
 int main(int argc, char** argv) {
   CliArgs args("bench_recovery",
-               "bench_recovery [--config file.yaml] [--gap N ...] [--route NN] [--start N ... | --every N] [--lead N]");
+               "bench_recovery [--config file.yaml] [--gap N ...] [--route NN] [--start N ... | --every N] "
+               "[--lead N]");
   args.option("config", "SLAM settings (config/kitti.yaml's keys); default: the built-in ones")
       .option("gap", "frames dropped; repeat for several (default: 10 and 20)")
       .option("route", "KITTI route whose ground truth is rendered (default: 06)")
       .option("start", "first missing frame; repeat for several (default: 100, 150, ..., 350)")
       .option("every", "starts every N frames along the whole route instead (needs --lead)")
       .option("lead", "frames mapped before each gap (default: all from frame 0)")
-      .option("reloc-vocab", "hbow vocabulary for relocalisation anywhere in the map, as `run` loads by default "
-                             "(vocab/kitti08/hbow.bin); default: none, only the most recent keyframes")
-      .flag("frames", "also print each scored frame: state, error along and across the view, rotation error, problem");
+      .option("reloc-vocab",
+              "hbow vocabulary for relocalisation anywhere in the map, as `run` loads by default "
+              "(vocab/kitti08/hbow.bin); default: none, only the most recent keyframes")
+      .flag("frames",
+            "also print each scored frame: state, error along and across the view, rotation error, problem");
   return runTool("bench_recovery", [&] {
     if (!args.parse(argc, argv)) return 0;
     SlamConfig config = args.has("config") ? loadSlamConfig(args.str("config")) : SlamConfig{};
     if (args.has("reloc-vocab"))
-      config.tracker.vocabulary = loadRelocalisationVocabulary(args.str("reloc-vocab"), config.tracker.orb, false);
+      config.tracker.vocabulary =
+          loadRelocalisationVocabulary(args.str("reloc-vocab"), config.tracker.orb, false);
     auto count = [](const std::string& option, const std::string& v) {
-      if (v.empty() || v.size() > 6 || v.find_first_not_of("0123456789") != std::string::npos || std::stoi(v) < 1)
+      if (v.empty() || v.size() > 6 || v.find_first_not_of("0123456789") != std::string::npos ||
+          std::stoi(v) < 1)
         throw CliError("--" + option + " '" + v + "': a whole number, at least 1");
       return std::stoi(v);
     };
@@ -199,7 +215,8 @@ int main(int argc, char** argv) {
     if (!args.all("start").empty()) setup.starts.clear();
     for (const std::string& s : args.all("start")) setup.starts.push_back(count("start", s));
     if (args.has("every")) {
-      if (setup.lead == 0) throw CliError("--every needs --lead (mapping from frame 0 for every start would take hours)");
+      if (setup.lead == 0)
+        throw CliError("--every needs --lead (mapping from frame 0 for every start would take hours)");
       setup.every = count("every", args.str("every"));
     }
     return runBench(config, setup);

@@ -87,7 +87,8 @@ int main(int argc, char** argv) {
   for (int run = 0; run < 5; ++run) {
     const auto t0 = std::chrono::steady_clock::now();
     int n = 0;
-    for (size_t i = 0; i < route.size(); i += route.size() / 40, ++n) renderer.render(static_cast<int>(i), 0.1 * i, route[i], &l, &r);
+    for (size_t i = 0; i < route.size(); i += route.size() / 40, ++n)
+      renderer.render(static_cast<int>(i), 0.1 * i, route[i], &l, &r);
     fps.push_back(n / std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count());
   }
   std::printf("\nrender speed, 1241x376 stereo, one thread, 40 frames of route 00, 5 runs\n");
@@ -111,11 +112,13 @@ int main(int argc, char** argv) {
     rendered.emplace_back(l.clone(), r.clone());
   }
   std::printf("\nORB (2000 features) on KITTI 00 frames 0-10: real vs rendered along the same route\n");
-  std::printf("| images | keypoints | grid cells covered (16x6) | matched in next frame | matched in right image |\n");
+  std::printf(
+      "| images | keypoints | grid cells covered (16x6) | matched in next frame | matched in right image "
+      "|\n");
   std::printf("|---|---|---|---|---|\n");
   auto row = [](const char* name, const OrbStats& s) {
-    std::printf("| %s | %.0f | %.0f %% | %.0f %% | %.0f %% |\n", name, s.keypoints, 100 * s.spread, 100 * s.temporal,
-                100 * s.stereo);
+    std::printf("| %s | %.0f | %.0f %% | %.0f %% | %.0f %% |\n", name, s.keypoints, 100 * s.spread,
+                100 * s.temporal, 100 * s.stereo);
   };
   if (!real.empty()) row("real KITTI 00 sample", orbStats(real));
   row("rendered route 00 (defaults)", orbStats(rendered));

@@ -53,7 +53,9 @@ namespace {
 constexpr int kRealRuns = 9;
 constexpr int kStretchRuns = 5;
 
-double ms(Clock::time_point t0) { return std::chrono::duration<double, std::milli>(Clock::now() - t0).count(); }
+double ms(Clock::time_point t0) {
+  return std::chrono::duration<double, std::milli>(Clock::now() - t0).count();
+}
 
 double median(std::vector<double> v) {
   std::sort(v.begin(), v.end());
@@ -105,8 +107,8 @@ void printTable(const std::vector<Result>& rows) {
     std::snprintf(med, sizeof med, r.fmt, median(r.runs));
     std::snprintf(lo, sizeof lo, r.fmt, *std::min_element(r.runs.begin(), r.runs.end()));
     std::snprintf(hi, sizeof hi, r.fmt, *std::max_element(r.runs.begin(), r.runs.end()));
-    std::printf("| %s | %s | %s | %s | %s | %s | %s, %zu runs |\n", r.name.c_str(), med, lo, hi, r.goal.c_str(),
-                r.orbslam2.c_str(), r.data.c_str(), r.runs.size());
+    std::printf("| %s | %s | %s | %s | %s | %s | %s, %zu runs |\n", r.name.c_str(), med, lo, hi,
+                r.goal.c_str(), r.orbslam2.c_str(), r.data.c_str(), r.runs.size());
   }
 }
 
@@ -115,8 +117,8 @@ void printTable(const std::vector<Result>& rows) {
 struct Stretch {
   std::vector<StereoFrame> frames;
   StereoCamera cam;
-  std::string source;  // for the table and the JSON
-  std::string skipped;  // why there is no stretch (frames empty)
+  std::string source;    // for the table and the JSON
+  std::string skipped;   // why there is no stretch (frames empty)
   double decode_ms = 0;  // mean time to read a frame's two PNGs (0 when rendered in memory)
 };
 
@@ -124,8 +126,9 @@ Stretch loadStretch(const std::string& dir, size_t start, size_t n) {
   Stretch s;
   try {
     const auto seq = KittiSequence::open(dir);
-    if (start >= seq.size()) throw std::runtime_error("--start " + std::to_string(start) + " is past its " +
-                                                      std::to_string(seq.size()) + " frames");
+    if (start >= seq.size())
+      throw std::runtime_error("--start " + std::to_string(start) + " is past its " +
+                               std::to_string(seq.size()) + " frames");
     const size_t end = std::min(seq.size(), start + n);
     s.cam = seq.camera();
     const auto t0 = Clock::now();
@@ -143,7 +146,8 @@ Stretch renderStretch(const std::string& shared, size_t start, size_t n) {
   Stretch s;
   const std::string route_file = shared + "/kitti/poses/06.txt";
   if (!fs::exists(route_file)) {
-    s.skipped = "no sequence given (--sequence or $BINLOOP_BENCH_SLAM_SEQUENCE) and no " + route_file + " to render along";
+    s.skipped = "no sequence given (--sequence or $BINLOOP_BENCH_SLAM_SEQUENCE) and no " + route_file +
+                " to render along";
     return s;
   }
   try {
@@ -158,11 +162,12 @@ Stretch renderStretch(const std::string& shared, size_t start, size_t n) {
     s.cam = kittiCameraByName("kitti04");
     sim::StereoRenderer renderer(world, s.cam, {}, 1);
     std::fprintf(stderr, "rendering KITTI 06 frames %zu-%zu (%dx%d, %s)...\n", start, end - 1, s.cam.width,
-                 s.cam.height, photos ? (std::to_string(photos) + " photo textures").c_str() : "procedural textures");
+                 s.cam.height,
+                 photos ? (std::to_string(photos) + " photo textures").c_str() : "procedural textures");
     s.frames = sim::renderFrames(renderer, route, start, end - start);
     std::fprintf(stderr, "rendered %zu frames in %.0f s\n", s.frames.size(), ms(t0) / 1000);
-    s.source = "KITTI 06 route rendered here, frames " + std::to_string(start) + "-" + std::to_string(end - 1) +
-               (photos ? "" : ", procedural textures");
+    s.source = "KITTI 06 route rendered here, frames " + std::to_string(start) + "-" +
+               std::to_string(end - 1) + (photos ? "" : ", procedural textures");
   } catch (const std::exception& e) {
     s.frames.clear();
     s.skipped = std::string("rendering failed: ") + e.what();
@@ -174,9 +179,10 @@ Stretch renderStretch(const std::string& shared, size_t start, size_t n) {
 
 struct PipelineRun {
   double fps = 0;
-  double track_ms = 0;    // mean extract + stereo + track of the frames tracked (state kOk), first frame excluded
+  double track_ms =
+      0;  // mean extract + stereo + track of the frames tracked (state kOk), first frame excluded
   double extract_ms = 0, stereo_ms = 0, pose_ms = 0;  // its three parts (pose_ms: Tracker::track after build)
-  double mapping_ms = 0;  // mean per mapped keyframe
+  double mapping_ms = 0;                              // mean per mapped keyframe
   double ba_ms = 0;
   double mapping_p95_ms = 0;
   int tracked = 0, lost = 0, keyframes = 0;
@@ -226,7 +232,8 @@ std::string parts(const std::vector<PipelineRun>& runs) {
   std::vector<double> e, st, t;
   for (const auto& r : runs) e.push_back(r.extract_ms), st.push_back(r.stereo_ms), t.push_back(r.pose_ms);
   char buf[120];
-  std::snprintf(buf, sizeof buf, "extraction %.1f + stereo %.1f + tracking %.1f ms", median(e), median(st), median(t));
+  std::snprintf(buf, sizeof buf, "extraction %.1f + stereo %.1f + tracking %.1f ms", median(e), median(st),
+                median(t));
   return buf;
 }
 
@@ -361,11 +368,13 @@ void compareExtractors(const std::vector<StereoFrame>& frames, const StereoCamer
            {"(b) OpenCV ORB", &opencv},
            {"(c) OpenCV ORB, 64-px grid spread (the retired extractOrb)", &grid}}) {
     const Row r = measure(*ex, frames, cam);
-    std::printf("| %s | %.1f | %.0f | %.0f %% | %.0f %% | %.2f |\n", name, r.extract_ms, r.keypoints, 100 * r.coverage,
-                100 * r.stereo_rate, r.stereo_ms);
+    std::printf("| %s | %.1f | %.0f | %.0f %% | %.0f %% | %.2f |\n", name, r.extract_ms, r.keypoints,
+                100 * r.coverage, 100 * r.stereo_rate, r.stereo_ms);
   }
 
-  std::printf("\nStereo matcher settings on (a)'s features\n| setting | stereo matched | stereo ms |\n|---|---|---|\n");
+  std::printf(
+      "\nStereo matcher settings on (a)'s features\n| setting | stereo matched | stereo ms "
+      "|\n|---|---|---|\n");
   StereoMatchParams equiangular, centre;
   equiangular.fit = StereoMatchParams::SubPixelFit::kEquiangular;
   centre.centre_pixel_offset = true;
@@ -438,7 +447,8 @@ int main(int argc, char** argv) {
   Result extract_row{"ORB extraction, 2000 features, one 1241x376 image (ms)", "<= 20",
                      "24.8 (left and right on two threads)", real_problem};
   Result stereo_row{"stereo matching, one pair (ms)", "<= 10", "15.5", real_problem};
-  Result track_real_row{"tracking a frame end to end: build + track, real frames (ms)", "<= 50", "49.5", real_problem};
+  Result track_real_row{"tracking a frame end to end: build + track, real frames (ms)", "<= 50", "49.5",
+                        real_problem};
   double keypoints = 0, stereo_rate = 0;
   if (!real.empty()) {
     const OrbSlamExtractor ours;  // 2000 features, 1.2, 8 levels, as FrameBuilder's
@@ -462,10 +472,12 @@ int main(int argc, char** argv) {
       std::vector<double> t;
       for (size_t i = 0; i < real.size(); ++i) {
         const auto t0 = Clock::now();
-        const StereoMatches m = matchStereo(left[i].second, left[i].first, right[i].second, right[i].first, real_cam);
+        const StereoMatches m =
+            matchStereo(left[i].second, left[i].first, right[i].second, right[i].first, real_cam);
         t.push_back(ms(t0));
         if (run == 0) {
-          keypoints += static_cast<double>(left[i].second.keypoints.size()) / static_cast<double>(real.size());
+          keypoints +=
+              static_cast<double>(left[i].second.keypoints.size()) / static_cast<double>(real.size());
           stereo_rate += m.matched / std::max(1.0, static_cast<double>(left[i].second.keypoints.size())) /
                          static_cast<double>(real.size());
         }
@@ -473,11 +485,12 @@ int main(int argc, char** argv) {
       stereo_row.runs.push_back(mean(t));
     }
     char buf[200];
-    std::snprintf(buf, sizeof buf, "real KITTI 00 sample, %zu left images (%.0f keypoints), pyramid included, one thread",
+    std::snprintf(buf, sizeof buf,
+                  "real KITTI 00 sample, %zu left images (%.0f keypoints), pyramid included, one thread",
                   real.size(), keypoints);
     extract_row.data = buf;
-    std::snprintf(buf, sizeof buf, "real KITTI 00 sample, %zu pairs (%.0f %% matched), one thread", real.size(),
-                  100 * stereo_rate);
+    std::snprintf(buf, sizeof buf, "real KITTI 00 sample, %zu pairs (%.0f %% matched), one thread",
+                  real.size(), 100 * stereo_rate);
     stereo_row.data = buf;
     std::vector<PipelineRun> runs;
     for (int run = 0; run < kRealRuns; ++run) {
@@ -485,10 +498,11 @@ int main(int argc, char** argv) {
       track_real_row.runs.push_back(runs.back().track_ms);
     }
     const int tracked = runs.front().tracked;
-    std::snprintf(buf, sizeof buf,
-                  "real KITTI 00 sample, frames 1-%zu (%d tracked; %d keyframes in all, so a small local map); %s; "
-                  "extraction on 2 threads",
-                  real.size() - 1, tracked, runs.front().keyframes, parts(runs).c_str());
+    std::snprintf(
+        buf, sizeof buf,
+        "real KITTI 00 sample, frames 1-%zu (%d tracked; %d keyframes in all, so a small local map); %s; "
+        "extraction on 2 threads",
+        real.size() - 1, tracked, runs.front().keyframes, parts(runs).c_str());
     track_real_row.data = buf;
     if (tracked == 0) {
       track_real_row.runs.clear();
@@ -529,19 +543,23 @@ int main(int argc, char** argv) {
     char buf[400];
     const std::string size = std::to_string(stretch.cam.width) + "x" + std::to_string(stretch.cam.height);
     std::snprintf(buf, sizeof buf, "%s (%s), %d of %zu frames tracked, %d lost; %s; extraction on 2 threads",
-                  stretch.source.c_str(), size.c_str(), r.tracked, stretch.frames.size(), r.lost, parts(runs).c_str());
+                  stretch.source.c_str(), size.c_str(), r.tracked, stretch.frames.size(), r.lost,
+                  parts(runs).c_str());
     track_row.data = buf;
-    std::snprintf(buf, sizeof buf, "same stretch, %d keyframes; local BA %.1f ms of it, p95 %.0f ms (medians); one thread",
+    std::snprintf(buf, sizeof buf,
+                  "same stretch, %d keyframes; local BA %.1f ms of it, p95 %.0f ms (medians); one thread",
                   r.keyframes, median(ba), median(p95));
     mapping_row.data = buf;
-    const std::string decode =
-        stretch.decode_ms > 0 ? " (PNG decoding, " + std::to_string(static_cast<int>(stretch.decode_ms + 0.5)) +
-                                    " ms/frame here, not included)"
-                              : "";
-    std::snprintf(buf, sizeof buf,
-                  "SlamPipeline kLockStep over the same %zu frames, images in memory%s; tracking's 2 extraction "
-                  "threads, mapping on the caller's",
-                  stretch.frames.size(), decode.c_str());
+    const std::string decode = stretch.decode_ms > 0
+                                   ? " (PNG decoding, " +
+                                         std::to_string(static_cast<int>(stretch.decode_ms + 0.5)) +
+                                         " ms/frame here, not included)"
+                                   : "";
+    std::snprintf(
+        buf, sizeof buf,
+        "SlamPipeline kLockStep over the same %zu frames, images in memory%s; tracking's 2 extraction "
+        "threads, mapping on the caller's",
+        stretch.frames.size(), decode.c_str());
     fps_row.data = buf;
     fps_row.fmt = "%.2f";
     json["local_ba_per_keyframe_ms_median"] = median(ba);
@@ -552,17 +570,16 @@ int main(int argc, char** argv) {
     json["stretch_keyframes"] = r.keyframes;
   }
 
-  std::printf("\nSLAM timings (SLAM issue goals), median / min / max over runs; a run's value is its mean over "
-              "frames or keyframes, as ORB-SLAM2 reports means (stereo KITTI, i7-4790)\n");
+  std::printf(
+      "\nSLAM timings (SLAM issue goals), median / min / max over runs; a run's value is its mean over "
+      "frames or keyframes, as ORB-SLAM2 reports means (stereo KITTI, i7-4790)\n");
   rows = {extract_row, stereo_row, track_real_row, track_row, mapping_row, fps_row};
   printTable(rows);
 
-  const std::pair<const char*, const Result*> keys[] = {{"orb_extract_ms_median", &extract_row},
-                                                        {"stereo_ms_median", &stereo_row},
-                                                        {"track_frame_real_ms_median", &track_real_row},
-                                                        {"track_frame_ms_median", &track_row},
-                                                        {"mapping_per_keyframe_ms_median", &mapping_row},
-                                                        {"pipeline_fps_median", &fps_row}};
+  const std::pair<const char*, const Result*> keys[] = {
+      {"orb_extract_ms_median", &extract_row},          {"stereo_ms_median", &stereo_row},
+      {"track_frame_real_ms_median", &track_real_row},  {"track_frame_ms_median", &track_row},
+      {"mapping_per_keyframe_ms_median", &mapping_row}, {"pipeline_fps_median", &fps_row}};
   for (const auto& [key, row] : keys)
     if (!row->runs.empty()) json[key] = median(row->runs);
   if (!real.empty()) {
@@ -581,8 +598,8 @@ int main(int argc, char** argv) {
   std::strftime(date, sizeof date, "%Y-%m-%dT%H:%M:%SZ", std::gmtime(&now));
   out << "{\n  \"date\": \"" << date << "\",\n  \"cpu\": " << jsonString(cpuModel())
       << ",\n  \"cores\": " << std::thread::hardware_concurrency() << ",\n  \"runs_real\": " << kRealRuns
-      << ",\n  \"runs_stretch\": " << stretch_runs
-      << ",\n  \"stretch\": " << jsonString(stretch.frames.empty() ? "skipped: " + stretch.skipped : stretch.source);
+      << ",\n  \"runs_stretch\": " << stretch_runs << ",\n  \"stretch\": "
+      << jsonString(stretch.frames.empty() ? "skipped: " + stretch.skipped : stretch.source);
   for (const auto& [k, v] : json) out << ",\n  \"" << k << "\": " << v;
   out << "\n}\n";
   std::printf("\nwrote %s\n", path.c_str());

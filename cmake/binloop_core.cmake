@@ -9,6 +9,12 @@ if(NOT CMAKE_BUILD_TYPE)
   set(CMAKE_BUILD_TYPE RelWithDebInfo)
 endif()
 set(BINLOOP_WARNINGS -Wall -Wextra -Wno-unused-parameter)
+# The project's own builds (scripts/build.sh, hence the tests and CI) turn warnings into errors; a package
+# built by someone else's catkin_make does not, as another compiler may warn about more.
+option(BINLOOP_WERROR "treat warnings as errors" OFF)
+if(BINLOOP_WERROR)
+  list(APPEND BINLOOP_WARNINGS -Werror)
+endif()
 
 find_package(OpenCV REQUIRED COMPONENTS core imgproc imgcodecs features2d calib3d)
 find_package(Eigen3 REQUIRED NO_MODULE)

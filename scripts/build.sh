@@ -12,8 +12,8 @@ mkdir -p "$BINLOOP_WS/src" "$BINLOOP_CORE_BUILD"
 
 if [ "$what" = all ] || [ "$what" = --core ]; then
   echo "build: core (no ROS) -> $BINLOOP_CORE_BUILD"
-  [ -f "$BINLOOP_CORE_BUILD/CMakeCache.txt" ] ||
-    cmake -S "$BINLOOP_ROOT/cmake/core_only" -B "$BINLOOP_CORE_BUILD" -DCMAKE_BUILD_TYPE=Release >/dev/null
+  # Warnings are errors in the project's own builds (cmake/binloop_core.cmake, BINLOOP_WERROR).
+  cmake -S "$BINLOOP_ROOT/cmake/core_only" -B "$BINLOOP_CORE_BUILD" -DCMAKE_BUILD_TYPE=Release -DBINLOOP_WERROR=ON >/dev/null
   cmake --build "$BINLOOP_CORE_BUILD" -j "$BINLOOP_JOBS"
 fi
 
@@ -22,7 +22,7 @@ if [ "$what" = all ] || [ "$what" = --ros ]; then
   ln -sfn "$BINLOOP_ROOT" "$BINLOOP_WS/src/binloop"
   cd "$BINLOOP_WS"
   catkin_make -j"$BINLOOP_JOBS" -DCMAKE_BUILD_TYPE=Release -DPYTHON_EXECUTABLE=/usr/bin/python3 \
-    -DCATKIN_ENABLE_TESTING=ON
+    -DCATKIN_ENABLE_TESTING=ON -DBINLOOP_WERROR=ON
   # Test binaries too, so that `scripts/test.sh` only runs them.
   catkin_make -j"$BINLOOP_JOBS" tests
 fi

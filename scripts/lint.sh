@@ -17,7 +17,11 @@ case "${1:-}" in
   *) echo "lint: unknown option $1" >&2; exit 2 ;;
 esac
 command -v clang-format >/dev/null || { echo "lint: clang-format is not installed (scripts/setup.sh installs it)" >&2; exit 1; }
-mapfile -t files < <(git ls-files '*.cpp' '*.h')
+if git rev-parse --is-inside-work-tree >/dev/null 2>&1; then
+  mapfile -t files < <(git ls-files '*.cpp' '*.h')
+else  # an unpacked copy: every source but the build folder's
+  mapfile -t files < <(find . -path ./.build -prune -o \( -name '*.cpp' -o -name '*.h' \) -print | sed 's|^\./||' | sort)
+fi
 status=0
 if $fix; then clang-format -i "${files[@]}"; fi
 if ! clang-format --dry-run --Werror "${files[@]}" 2>/tmp/binloop_lint_format.$$; then

@@ -70,6 +70,9 @@ if [ "$sanitize" = 1 ]; then
   [ "$f" -eq 0 ] && [ "$tf" -eq 0 ]
   exit
 fi
+echo "== lint"
+lint_p=1 lint_f=0
+"$BINLOOP_ROOT/scripts/lint.sh" || { lint_p=0 lint_f=1; echo "test: lint FAILED (the tests still run)"; }
 "$BINLOOP_ROOT/scripts/build.sh" || { echo "test: build failed"; echo "binloop: 0 passed, 1 failed"; exit 1; }
 mkdir -p "$log"
 
@@ -95,7 +98,7 @@ else
   read -r ros_p ros_f ros_s < <("$BINLOOP_ROOT/scripts/junit_summary.py" "${ros_xml[@]}")
 fi
 
-failed=$((core_f + ros_f))
-echo "core: $core_p passed, $core_f failed, $core_s skipped; ros: $ros_p passed, $ros_f failed, $ros_s skipped (logs in $log)"
-echo "binloop: $((core_p + ros_p)) passed, $failed failed, $((core_s + ros_s)) skipped"
+failed=$((core_f + ros_f + lint_f))
+echo "lint: $([ "$lint_f" -eq 0 ] && echo passed || echo FAILED); core: $core_p passed, $core_f failed, $core_s skipped; ros: $ros_p passed, $ros_f failed, $ros_s skipped (logs in $log)"
+echo "binloop: $((core_p + ros_p + lint_p)) passed, $failed failed, $((core_s + ros_s)) skipped"
 [ "$failed" -eq 0 ]

@@ -40,14 +40,17 @@ class CallbackGuard {
   /// arguments, run through run().
   template <class F>
   auto wrap(std::string what, F f) {
-    return [this, what = std::move(what), f = std::move(f)](const auto&... args) { run(what, [&] { f(args...); }); };
+    return [this, what = std::move(what), f = std::move(f)](const auto&... args) {
+      run(what, [&] { f(args...); });
+    };
   }
 
   /// Subscribes `method` of `obj` to `topic` through the guard.
   template <class Msg, class Obj>
   ros::Subscriber subscribe(ros::NodeHandle& nh, const std::string& topic, uint32_t queue,
                             void (Obj::*method)(const boost::shared_ptr<const Msg>&), Obj* obj) {
-    return nh.subscribe<Msg>(topic, queue, wrap(topic + " callback", [obj, method](const boost::shared_ptr<const Msg>& m) {
+    return nh.subscribe<Msg>(topic, queue,
+                             wrap(topic + " callback", [obj, method](const boost::shared_ptr<const Msg>& m) {
                                (obj->*method)(m);
                              }));
   }

@@ -41,8 +41,8 @@ class FramePublisher {
   const std::string& slamFrame() const { return slam_frame_; }
   /// A tracked frame: its camera pose in the slam frame and that pose's covariance
   /// (msg::TrackedFrame::pose_covariance; zeros: unknown). `camera_frame`: the image's frame id.
-  void tracked(const binloop::Pose3& T_slam_cam, const RobotFrames::Matrix6d& covariance, const ros::Time& stamp,
-               const std::string& camera_frame, bool corrected);
+  void tracked(const binloop::Pose3& T_slam_cam, const RobotFrames::Matrix6d& covariance,
+               const ros::Time& stamp, const std::string& camera_frame, bool corrected);
   /// A frame that was not tracked (lost): keeps map -> odom alive.
   void lost(const ros::Time& stamp);
   /// A reset or a loaded map.
@@ -63,8 +63,8 @@ class FramePublisher {
 
  private:
   void mountCamera(const std::string& camera_frame);
-  void send(const binloop::Pose3& T, const ros::Time& stamp, const std::string& parent, const std::string& child,
-            bool is_static = false);
+  void send(const binloop::Pose3& T, const ros::Time& stamp, const std::string& parent,
+            const std::string& child, bool is_static = false);
 
   std::string map_frame_, odom_frame_, base_frame_, slam_frame_, truth_frame_;
   bool publish_tf_ = true, publish_odom_tf_ = true;

@@ -1,7 +1,6 @@
 #pragma once
-// Writes a KITTI sequence as a ROS 1 bag: mono8 left/right images (or PNG-compressed ones) and CameraInfo with
-// identical stamps,
-// and ground truth as nav_msgs/Odometry when the sequence has poses.
+// Writes a KITTI sequence as a ROS 1 bag: mono8 left/right images (or PNG-compressed ones) and CameraInfo
+// with identical stamps, and ground truth as nav_msgs/Odometry when the sequence has poses.
 #include <functional>
 #include <limits>
 #include <string>
@@ -11,8 +10,8 @@
 namespace binloop_ros {
 
 struct KittiBagOptions {
-  size_t start = 0;                                  // first frame (inclusive)
-  size_t end = std::numeric_limits<size_t>::max();   // last frame (inclusive), clipped to the sequence
+  size_t start = 0;                                 // first frame (inclusive)
+  size_t end = std::numeric_limits<size_t>::max();  // last frame (inclusive), clipped to the sequence
   double stamp_offset_s = 1.0;  // stamp = times.txt + offset; ROS forbids time 0, where KITTI starts
   bool lz4 = false;             // compress chunks
   bool png = false;             // images as PNG sensor_msgs/CompressedImage on <image topic>/compressed, as

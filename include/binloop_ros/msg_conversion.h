@@ -4,10 +4,10 @@
 #include <geometry_msgs/Pose.h>
 #include <geometry_msgs/PoseWithCovariance.h>
 #include <geometry_msgs/TransformStamped.h>
-#include <opencv2/core/mat.hpp>
 #include <ros/time.h>
 #include <sensor_msgs/CameraInfo.h>
 #include <sensor_msgs/Image.h>
+#include <opencv2/core/mat.hpp>
 #include <stdexcept>
 #include <string>
 
@@ -33,7 +33,8 @@ sensor_msgs::CameraInfo toCameraInfo(const binloop::StereoCamera& cam, bool righ
                                      const std::string& frame_id);
 /// Builds the stereo camera from a left/right CameraInfo pair; throws ConversionError when they are not
 /// a rectified pair (different intrinsics or sizes, right Tx not negative).
-binloop::StereoCamera toStereoCamera(const sensor_msgs::CameraInfo& left, const sensor_msgs::CameraInfo& right);
+binloop::StereoCamera toStereoCamera(const sensor_msgs::CameraInfo& left,
+                                     const sensor_msgs::CameraInfo& right);
 /// "" when `info` has no distortion, else a warning that says what binloop assumes: camera_info for
 /// image_rect carries the raw camera's D (image_proc passes it on), and binloop uses only P, which is right
 /// for rectified images and wrong for raw ones.
@@ -47,8 +48,8 @@ binloop::Matrix6d fromCovarianceMsg(const CovarianceMsg& m);
 geometry_msgs::Point toPoint(const Eigen::Vector3d& p);
 binloop::Pose3 toPose3(const geometry_msgs::Pose& msg);
 /// tf's form of the same: `T` as the transform from `parent` to `child` (child's pose in parent).
-geometry_msgs::TransformStamped toTransformMsg(const binloop::Pose3& T, const ros::Time& stamp, const std::string& parent,
-                                               const std::string& child);
+geometry_msgs::TransformStamped toTransformMsg(const binloop::Pose3& T, const ros::Time& stamp,
+                                               const std::string& parent, const std::string& child);
 /// Throws ConversionError as toPose3 does.
 binloop::Pose3 toPose3(const geometry_msgs::Transform& t);
 

@@ -9,8 +9,8 @@
 #include <string>
 #include <vector>
 
-#include "binloop/types/pose.h"
 #include "binloop/pipeline/slam_config.h"
+#include "binloop/types/pose.h"
 
 namespace binloop_ros {
 

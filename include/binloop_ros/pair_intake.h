@@ -1,7 +1,7 @@
 #pragma once
-// Where the Tracking nodelet's stereo pairs wait and are checked before the tracker sees them: the camera_info
-// pair, the queue of pairs waiting for the first camera_info or (in lock-step) for local mapping, and the
-// checks of a pair (left/right stamps and sizes, the stamp against the clock so far).
+// Where the Tracking nodelet's stereo pairs wait and are checked before the tracker sees them: the
+// camera_info pair, the queue of pairs waiting for the first camera_info or (in lock-step) for local mapping,
+// and the checks of a pair (left/right stamps and sizes, the stamp against the clock so far).
 #include <sensor_msgs/CameraInfo.h>
 #include <sensor_msgs/Image.h>
 
@@ -38,8 +38,9 @@ class PairIntake {
   /// Why no camera is known yet.
   std::string noInfo() const;
 
-  /// Queues the pair when it must wait: no camera yet (`has_camera` false) or, in lock-step, keyframes in flight
-  /// or pairs ahead of it. A full queue drops its oldest pair and says why in `dropped`. False: track it now.
+  /// Queues the pair when it must wait: no camera yet (`has_camera` false) or, in lock-step, keyframes in
+  /// flight or pairs ahead of it. A full queue drops its oldest pair and says why in `dropped`. False: track
+  /// it now.
   bool hold(const Pair& p, bool has_camera, size_t in_flight, std::string* dropped);
   /// The next waiting pair that may be tracked now.
   std::optional<Pair> next(bool has_camera, size_t in_flight);

@@ -4,9 +4,9 @@
 // frame (z forward, y down). The robot's `map` and `odom` are z-up like its base (x forward, y left, z up);
 // the base carries the camera at T_base_cam (from the robot's TF, a parameter, or by default the camera's
 // optical axes on a base at the camera). `map` is where the base was when the SLAM's map began, so
-// T_map_slam = T_base_cam. `odom` is continuous: it integrates the base's frame-to-frame motion, except across a
-// loop correction, where the SLAM's pose jumps: there the previous motion is repeated and map -> odom takes the
-// jump.
+// T_map_slam = T_base_cam. `odom` is continuous: it integrates the base's frame-to-frame motion, except
+// across a loop correction, where the SLAM's pose jumps: there the previous motion is repeated and map ->
+// odom takes the jump.
 #include <Eigen/Core>
 
 #include "binloop/types/pose.h"
@@ -37,7 +37,8 @@ class RobotFrames {
   const binloop::Pose3& cameraInBase() const { return T_base_cam_; }
   /// Where the camera is in the slam frame when the base is at T_map_base (a pose given in map).
   binloop::Pose3 cameraInSlam(const binloop::Pose3& T_map_base) const {
-    return binloop::Pose3(T_cam_base_ * T_map_base * T_base_cam_);  // T_slam_map = T_cam_base (map -> slam = mounting)
+    return binloop::Pose3(T_cam_base_ * T_map_base *
+                          T_base_cam_);  // T_slam_map = T_cam_base (map -> slam = mounting)
   }
   /// The static map -> slam transform.
   binloop::Pose3 slamInMap() const { return T_base_cam_; }

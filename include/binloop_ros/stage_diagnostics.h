@@ -18,7 +18,8 @@ class StageDiagnostics {
       : updater_(nh, pnh) {
     updater_.setHardwareID("binloop");
     updater_.add(task, std::move(fill));
-    timer_ = nh.createWallTimer(ros::WallDuration(1.0), [this](const ros::WallTimerEvent&) { updater_.force_update(); });
+    timer_ = nh.createWallTimer(ros::WallDuration(1.0),
+                                [this](const ros::WallTimerEvent&) { updater_.force_update(); });
   }
   StageDiagnostics(const StageDiagnostics&) = delete;
   StageDiagnostics& operator=(const StageDiagnostics&) = delete;

@@ -43,7 +43,8 @@ struct StageServiceHandlers {
 /// Loads `path` into `fresh` (a newly made stage) and returns it, so that the running stage is replaced only
 /// when the load worked (binloop::loadStateFile throws otherwise).
 template <class Stage>
-std::unique_ptr<Stage> loadStage(std::unique_ptr<Stage> fresh, const std::string& path, const std::string& name) {
+std::unique_ptr<Stage> loadStage(std::unique_ptr<Stage> fresh, const std::string& path,
+                                 const std::string& name) {
   binloop::loadStateFile(*fresh, path, name);
   return fresh;
 }

@@ -1,6 +1,6 @@
 #pragma once
-// Which stereo pairs' time stamps tracking takes. A camera's or a bag's clock runs forward in steps of a frame
-// or a few; the field also sends a stamp out of ROS's range, one a million seconds ahead (a bad clock
+// Which stereo pairs' time stamps tracking takes. A camera's or a bag's clock runs forward in steps of a
+// frame or a few; the field also sends a stamp out of ROS's range, one a million seconds ahead (a bad clock
 // sample), a late or repeated pair, and a clock that starts again (a bag played again or looped, simulated
 // time reset). One bad stamp must not stop tracking for good, so a stamp is taken when it comes after the
 // last taken one by at most `max_jump_s`; any other is dropped with its reason, unless `confirm_pairs`
@@ -38,8 +38,8 @@ class StampGate {
   StampGateParams p_;
   bool have_ = false;
   double last_ = 0;
-  int run_ = 0;            // pairs in a row off the clock that agree with each other
-  double run_last_ = 0;    // the last of them
+  int run_ = 0;          // pairs in a row off the clock that agree with each other
+  double run_last_ = 0;  // the last of them
 };
 
 }  // namespace binloop_ros

@@ -23,7 +23,8 @@ sensor_msgs::ImageConstPtr decompress(const sensor_msgs::CompressedImage& m);
 
 class StereoInput {
  public:
-  using PairCallback = std::function<void(const sensor_msgs::ImageConstPtr&, const sensor_msgs::ImageConstPtr&)>;
+  using PairCallback =
+      std::function<void(const sensor_msgs::ImageConstPtr&, const sensor_msgs::ImageConstPtr&)>;
   /// A pair that could not be made into Images (compressed bytes that do not decode), with the reason.
   using BadCallback = std::function<void(const std::string&)>;
 
@@ -37,13 +38,17 @@ class StereoInput {
   struct Pairing {
     message_filters::Subscriber<M> left, right;
     std::unique_ptr<message_filters::Synchronizer<message_filters::sync_policies::ExactTime<M, M>>> exact;
-    std::unique_ptr<message_filters::Synchronizer<message_filters::sync_policies::ApproximateTime<M, M>>> approx;
+    std::unique_ptr<message_filters::Synchronizer<message_filters::sync_policies::ApproximateTime<M, M>>>
+        approx;
   };
   template <class M>
-  void connect(Pairing<M>& p, ros::NodeHandle& nh, const std::string& left, const std::string& right, bool exact,
-               int queue, void (StereoInput::*callback)(const boost::shared_ptr<const M>&, const boost::shared_ptr<const M>&));
+  void connect(Pairing<M>& p, ros::NodeHandle& nh, const std::string& left, const std::string& right,
+               bool exact, int queue,
+               void (StereoInput::*callback)(const boost::shared_ptr<const M>&,
+                                             const boost::shared_ptr<const M>&));
   void onRaw(const sensor_msgs::ImageConstPtr& l, const sensor_msgs::ImageConstPtr& r);
-  void onCompressed(const sensor_msgs::CompressedImageConstPtr& l, const sensor_msgs::CompressedImageConstPtr& r);
+  void onCompressed(const sensor_msgs::CompressedImageConstPtr& l,
+                    const sensor_msgs::CompressedImageConstPtr& r);
 
   PairCallback on_pair_;
   BadCallback on_bad_;

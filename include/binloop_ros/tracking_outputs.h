@@ -1,11 +1,11 @@
 #pragma once
-// What the Tracking nodelet publishes for a tracked pair: the keyframe to local mapping, the tracked frame, the
-// camera's pose and the live path in the slam frame, odometry and tf (FramePublisher), and the debug image
-// (drawn only while someone subscribes).
+// What the Tracking nodelet publishes for a tracked pair: the keyframe to local mapping, the tracked frame,
+// the camera's pose and the live path in the slam frame, odometry and tf (FramePublisher), and the debug
+// image (drawn only while someone subscribes).
 #include <nav_msgs/Path.h>
-#include <opencv2/core.hpp>
 #include <ros/ros.h>
 #include <std_msgs/Header.h>
+#include <opencv2/core.hpp>
 
 #include <memory>
 #include <string>
@@ -30,7 +30,8 @@ class TrackingOutputs {
   /// The tracked frame, and for a tracked one its pose, odometry, tf and live path (a lost one keeps
   /// map -> odom alive). `corrections`: the loop corrections applied so far (when it moved since the last
   /// pose, the slam-frame pose may jump and odometry must not). Returns tf's problem, "" if none.
-  std::string frame(const binloop::msg::TrackedFrame& f, const std_msgs::Header& header, uint64_t corrections);
+  std::string frame(const binloop::msg::TrackedFrame& f, const std_msgs::Header& header,
+                    uint64_t corrections);
   /// The left image with the features of `last` (the tracker's last frame, when it is `f`'s).
   void debugImage(const cv::Mat& gray, const binloop::Frame* last, const binloop::msg::TrackedFrame& f,
                   const std_msgs::Header& header);

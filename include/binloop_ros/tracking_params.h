@@ -13,14 +13,15 @@
 namespace binloop_ros {
 
 struct TrackingParams {
-  binloop::SlamConfig config;                    // ~config, ~seed, ~localize_only, ~reloc_vocab
-  std::optional<binloop::StereoCamera> camera;   // ~camera/{fx,fy,cx,cy,baseline,width,height}: instead of camera_info
-  std::string camera_frame;                      // ~camera_frame; "": the left image's frame_id
-  std::string stereo;                            // ~stereo: the input topics' namespace
+  binloop::SlamConfig config;  // ~config, ~seed, ~localize_only, ~reloc_vocab
+  std::optional<binloop::StereoCamera>
+      camera;                // ~camera/{fx,fy,cx,cy,baseline,width,height}: instead of camera_info
+  std::string camera_frame;  // ~camera_frame; "": the left image's frame_id
+  std::string stereo;        // ~stereo: the input topics' namespace
   std::string transport = "raw", sync = "exact";
   int queue_size = 5;
-  double max_stamp_diff = 0.002;                 // s between left and right
-  StampGateParams stamps;                        // ~max_time_jump, ~time_jump_confirm_pairs
+  double max_stamp_diff = 0.002;  // s between left and right
+  StampGateParams stamps;         // ~max_time_jump, ~time_jump_confirm_pairs
   double keyframe_timeout_s = 5;
   double stale_after_s = 2;
   size_t path_max_poses = 1000;

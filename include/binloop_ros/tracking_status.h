@@ -1,6 +1,6 @@
 #pragma once
-// What the Tracking nodelet has done and what went wrong, counted in one place: reported in its diagnostics and
-// in the statistics service.
+// What the Tracking nodelet has done and what went wrong, counted in one place: reported in its diagnostics
+// and in the statistics service.
 #include <diagnostic_updater/diagnostic_updater.h>
 
 #include <cstdint>
@@ -24,8 +24,8 @@ struct TrackingStatus {
     double cpu_s = 0;
   };
   /// The diagnostics: the worst of what went wrong as the summary, then every count.
-  void report(diagnostic_updater::DiagnosticStatusWrapper& s, const binloop::TrackingStage& stage, const Now& now,
-              const CallbackGuard& guard) const;
+  void report(diagnostic_updater::DiagnosticStatusWrapper& s, const binloop::TrackingStage& stage,
+              const Now& now, const CallbackGuard& guard) const;
 };
 
 }  // namespace binloop_ros

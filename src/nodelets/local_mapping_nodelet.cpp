@@ -3,17 +3,17 @@
 // points (PointCloud2) and the keyframes (PoseArray) for rviz. A short onInit() over binloop::LocalMapper.
 #include <geometry_msgs/PoseArray.h>
 #include <nodelet/nodelet.h>
-#include <pluginlib/class_list_macros.hpp>
 #include <sensor_msgs/PointCloud2.h>
 #include <sensor_msgs/point_cloud2_iterator.h>
+#include <pluginlib/class_list_macros.hpp>
 
 #include <memory>
 
 #include "binloop/mapping/local_mapper.h"
 #include "binloop_ros/callback_guard.h"
 #include "binloop_ros/cpu_meter.h"
-#include "binloop_ros/stage_diagnostics.h"
 #include "binloop_ros/node_params.h"
+#include "binloop_ros/stage_diagnostics.h"
 #include "binloop_ros/stage_msg_conversion.h"
 #include "binloop_ros/stage_services.h"
 
@@ -55,13 +55,15 @@ void LocalMappingNodelet::onInit() {
   try {
     requireKnownParams(pnh, {"config", "slam_frame", "cloud_every"});
     params_ = slamConfigFrom(pnh).mapper;
-    params_.global_ba_in_background = true;  // mapping goes on while it runs (when global_ba_after_loop is on)
+    params_.global_ba_in_background =
+        true;  // mapping goes on while it runs (when global_ba_after_loop is on)
     mapper_ = std::make_unique<binloop::LocalMapper>(params_);
   } catch (const std::exception& e) {
     NODELET_FATAL("binloop/LocalMapping: %s", e.what());
     throw;
   }
-  slam_frame_ = stringParam(pnh, "slam_frame", "slam");  // the SLAM's own frame (tracking publishes map -> slam)
+  slam_frame_ =
+      stringParam(pnh, "slam_frame", "slam");  // the SLAM's own frame (tracking publishes map -> slam)
   cloud_every_ = std::max(1, static_cast<int>(numberParam(pnh, "cloud_every", 5)));
   // A loop stage that subscribes after keyframes were made (a restarted process of the split graph) gets the
   // whole map from here, to it alone; a deep queue, since all of them go at once.
@@ -70,7 +72,8 @@ void LocalMappingNodelet::onInit() {
       guard_.wrap("resending the map", [this](const ros::SingleSubscriberPublisher& to) { resendMap(to); }));
   // A tracking that subscribes after keyframes were made (restarted) gets the whole map, to it alone.
   update_pub_ = nh.advertise<binloop::LocalMapUpdate>(
-      "local_map_update", 100, guard_.wrap("resending the map", [this](const ros::SingleSubscriberPublisher& to) {
+      "local_map_update", 100,
+      guard_.wrap("resending the map", [this](const ros::SingleSubscriberPublisher& to) {
         if (mapper_->keyframeCount() == 0) return;
         std_msgs::Header header;
         header.stamp = ros::Time::now();
@@ -85,9 +88,9 @@ void LocalMappingNodelet::onInit() {
   // A background global BA is merged when it is done, whether or not keyframes come (same queue as them).
   // Wall clock: under simulated time a ROS timer stops with /clock when the bag ends, and the last global BA
   // would never be merged.
-  merge_timer_ = nh.createWallTimer(ros::WallDuration(0.1), guard_.wrap("global BA merge", [this](const ros::WallTimerEvent&) {
-    mergeGlobalBa();
-  }));
+  merge_timer_ = nh.createWallTimer(
+      ros::WallDuration(0.1),
+      guard_.wrap("global BA merge", [this](const ros::WallTimerEvent&) { mergeGlobalBa(); }));
   diag_ = std::make_unique<StageDiagnostics>(
       nh, pnh, "local mapping", [this](diagnostic_updater::DiagnosticStatusWrapper& s) { diagnose(s); });
   StageServiceHandlers h;
@@ -167,8 +170,9 @@ void LocalMappingNodelet::resendMap(const ros::SingleSubscriberPublisher& to) {
   if (kfs.empty()) return;
   for (const auto& kf : kfs) to.publish(toRos(*kf, slam_frame_));
   ++resends_;
-  NODELET_INFO("binloop/LocalMapping: %s subscribed after %zu keyframes: sent them again (%lu corrections applied)",
-               to.getSubscriberName().c_str(), kfs.size(), static_cast<unsigned long>(mapper_->correctionsApplied()));
+  NODELET_INFO(
+      "binloop/LocalMapping: %s subscribed after %zu keyframes: sent them again (%lu corrections applied)",
+      to.getSubscriberName().c_str(), kfs.size(), static_cast<unsigned long>(mapper_->correctionsApplied()));
 }
 
 void LocalMappingNodelet::onCorrection(const binloop::CorrectionConstPtr& m) {

@@ -3,12 +3,12 @@
 // edges (markers coloured by status) out; the add_external_loop service. A short onInit() over
 // binloop::LoopCloser. Across processes the candidates for a keyframe may overtake the keyframe or its
 // update, so they wait here until both have arrived.
-#include <algorithm>
 #include <binloop/AddExternalLoop.h>
 #include <nav_msgs/Path.h>
 #include <nodelet/nodelet.h>
-#include <pluginlib/class_list_macros.hpp>
 #include <visualization_msgs/MarkerArray.h>
+#include <algorithm>
+#include <pluginlib/class_list_macros.hpp>
 
 #include <deque>
 #include <memory>
@@ -18,8 +18,8 @@
 #include "binloop/loop/loop_closer.h"
 #include "binloop_ros/callback_guard.h"
 #include "binloop_ros/cpu_meter.h"
-#include "binloop_ros/stage_diagnostics.h"
 #include "binloop_ros/node_params.h"
+#include "binloop_ros/stage_diagnostics.h"
 #include "binloop_ros/stage_msg_conversion.h"
 #include "binloop_ros/stage_services.h"
 
@@ -78,7 +78,8 @@ void LoopClosingNodelet::onInit() {
     NODELET_FATAL("binloop/LoopClosing: %s", e.what());
     throw;
   }
-  slam_frame_ = stringParam(pnh, "slam_frame", "slam");  // the SLAM's own frame (tracking publishes map -> slam)
+  slam_frame_ =
+      stringParam(pnh, "slam_frame", "slam");  // the SLAM's own frame (tracking publishes map -> slam)
   correction_pub_ = nh.advertise<binloop::Correction>("correction", 10);
   closure_pub_ = nh.advertise<binloop::LoopClosure>("loop_closure", 100);
   path_pub_ = nh.advertise<nav_msgs::Path>("corrected_path", 1, true);
@@ -87,8 +88,10 @@ void LoopClosingNodelet::onInit() {
   update_sub_ = guard_.subscribe(nh, "local_map_update", 1000, &LoopClosingNodelet::onUpdate, this);
   candidates_sub_ = guard_.subscribe(nh, "loop_candidates", 1000, &LoopClosingNodelet::onCandidates, this);
   external_srv_ = nh.advertiseService<binloop::AddExternalLoop::Request, binloop::AddExternalLoop::Response>(
-      "add_external_loop", [this](binloop::AddExternalLoop::Request& req, binloop::AddExternalLoop::Response& res) {
-        return guard_.run("add_external_loop", [&] { onExternalLoop(req, res); });  // false: the caller sees a failed call
+      "add_external_loop",
+      [this](binloop::AddExternalLoop::Request& req, binloop::AddExternalLoop::Response& res) {
+        return guard_.run("add_external_loop",
+                          [&] { onExternalLoop(req, res); });  // false: the caller sees a failed call
       });
   diag_ = std::make_unique<StageDiagnostics>(
       nh, pnh, "loop closing", [this](diagnostic_updater::DiagnosticStatusWrapper& s) { diagnose(s); });
@@ -125,7 +128,8 @@ void LoopClosingNodelet::startOver(std::unique_ptr<binloop::LoopCloser> c) {
   keyframes_seen_.clear();
   updates_seen_.clear();
   edges_.clear();
-  for (const auto& e : closer_->loops()) edges_.push_back({e.query, e.candidate, binloop::msg::LoopStatus::kAccepted});
+  for (const auto& e : closer_->loops())
+    edges_.push_back({e.query, e.candidate, binloop::msg::LoopStatus::kAccepted});
   publishPathAndEdges(ros::Time::now());
 }
 
@@ -158,8 +162,10 @@ void LoopClosingNodelet::onUpdate(const binloop::LocalMapUpdateConstPtr& m) {
   } catch (const std::exception& e) {
     return problem(std::string("local map update dropped: ") + e.what());
   }
-  if (!m->correction) updates_seen_.insert(m->keyframe);
-  else publishPathAndEdges(m->header.stamp);
+  if (!m->correction)
+    updates_seen_.insert(m->keyframe);
+  else
+    publishPathAndEdges(m->header.stamp);
   runPending();
 }
 
@@ -175,7 +181,9 @@ void LoopClosingNodelet::runPending() {
     const auto& m = pending_.front();
     const bool ready = keyframes_seen_.count(m->query) && updates_seen_.count(m->query);
     if (!ready && pending_.size() < 50) return;  // in order: later candidates wait for earlier ones
-    if (!ready) problem("loop candidates for keyframe " + std::to_string(m->query) + " dropped: the keyframe never arrived");
+    if (!ready)
+      problem("loop candidates for keyframe " + std::to_string(m->query) +
+              " dropped: the keyframe never arrived");
     else {
       try {
         handle(closer_->process(fromRos(*m)), m->header);
@@ -196,10 +204,12 @@ void LoopClosingNodelet::handle(const binloop::LoopCloser::Output& out, const st
     // A held loop comes again with its final status: its edge changes colour instead of being drawn twice.
     auto same = std::find_if(edges_.begin(), edges_.end(),
                              [&](const auto& e) { return e.query == c->query && e.match == c->match; });
-    if (same != edges_.end()) same->status = c->status;
-    else edges_.push_back({c->query, c->match, c->status});
-    last_loop_ = c->model + " " + std::to_string(c->query_frame) + " -> " + std::to_string(c->match_frame) + ": " +
-                 binloop::msg::loopStatusName(c->status) + " (" + c->detail + ")";
+    if (same != edges_.end())
+      same->status = c->status;
+    else
+      edges_.push_back({c->query, c->match, c->status});
+    last_loop_ = c->model + " " + std::to_string(c->query_frame) + " -> " + std::to_string(c->match_frame) +
+                 ": " + binloop::msg::loopStatusName(c->status) + " (" + c->detail + ")";
     NODELET_INFO("binloop/LoopClosing: loop %s", last_loop_.c_str());
     closure_pub_.publish(boost::make_shared<binloop::LoopClosure>(toRos(*c, h)));
   }
@@ -252,9 +262,12 @@ void LoopClosingNodelet::publishPathAndEdges(const ros::Time& stamp) {
     std_msgs::ColorRGBA c;
     c.a = 1;
     using binloop::msg::LoopStatus;
-    if (e.status == LoopStatus::kAccepted || e.status == LoopStatus::kAgreed) c.g = 1;  // green
-    else if (e.status == LoopStatus::kHeld) c.r = c.g = 1;                            // yellow
-    else c.r = 1;                                  // red: rejected, whatever the reason
+    if (e.status == LoopStatus::kAccepted || e.status == LoopStatus::kAgreed)
+      c.g = 1;  // green
+    else if (e.status == LoopStatus::kHeld)
+      c.r = c.g = 1;  // yellow
+    else
+      c.r = 1;  // red: rejected, whatever the reason
     for (const auto* p : {&q->second, &m->second}) {
       geometry_msgs::Point gp;
       gp.x = p->x();

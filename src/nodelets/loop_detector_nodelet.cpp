@@ -1,7 +1,7 @@
 // binloop/LoopDetector: refined keyframes in, LoopCandidates out (one per keyframe; shadow models on their
 // own topics). dynamic_reconfigure switches the model (`method`) and sets the detection rules and model
-// thresholds; the new index is built from the stored keyframes at the next keyframe, without stopping. A short
-// onInit() over binloop::LoopDetector.
+// thresholds; the new index is built from the stored keyframes at the next keyframe, without stopping. A
+// short onInit() over binloop::LoopDetector.
 #include <binloop/LoopDetectorConfig.h>
 #include <dynamic_reconfigure/server.h>
 #include <nodelet/nodelet.h>
@@ -17,8 +17,8 @@
 #include "binloop_ros/callback_guard.h"
 #include "binloop_ros/candidate_markers.h"
 #include "binloop_ros/cpu_meter.h"
-#include "binloop_ros/stage_diagnostics.h"
 #include "binloop_ros/node_params.h"
+#include "binloop_ros/stage_diagnostics.h"
 #include "binloop_ros/stage_msg_conversion.h"
 #include "binloop_ros/stage_services.h"
 
@@ -63,9 +63,9 @@ void LoopDetectorNodelet::onInit() {
   ros::NodeHandle& nh = getNodeHandle();
   ros::NodeHandle& pnh = getPrivateNodeHandle();
   try {
-    requireKnownParams(pnh, {"config", "vocab_dir", "force_extractor", "method", "consistency", "max_reference",
-                             "ignore_recent", "hbow_min_bar", "fabmap_l2_offset", "vladpq_shared_slack",
-                             "shadow"});
+    requireKnownParams(
+        pnh, {"config", "vocab_dir", "force_extractor", "method", "consistency", "max_reference",
+              "ignore_recent", "hbow_min_bar", "fabmap_l2_offset", "vladpq_shared_slack", "shadow"});
     config_ = slamConfigFrom(pnh);
   } catch (const std::exception& e) {
     NODELET_FATAL("binloop/LoopDetector: %s", e.what());
@@ -79,7 +79,8 @@ void LoopDetectorNodelet::onInit() {
   if (!pnh.hasParam("ignore_recent")) pnh.setParam("ignore_recent", config_.detector.ignore_recent);
   if (!pnh.hasParam("hbow_min_bar")) pnh.setParam("hbow_min_bar", config_.models.hbow_min_bar);
   if (!pnh.hasParam("fabmap_l2_offset")) pnh.setParam("fabmap_l2_offset", config_.models.fabmap_l2_offset);
-  if (!pnh.hasParam("vladpq_shared_slack")) pnh.setParam("vladpq_shared_slack", config_.models.vladpq_shared_slack);
+  if (!pnh.hasParam("vladpq_shared_slack"))
+    pnh.setParam("vladpq_shared_slack", config_.models.vladpq_shared_slack);
   candidates_pub_ = nh.advertise<binloop::LoopCandidates>("loop_candidates", 100);
   markers_pub_ = nh.advertise<visualization_msgs::MarkerArray>("loop_candidate_markers", 10);
   diag_ = std::make_unique<StageDiagnostics>(
@@ -111,7 +112,8 @@ void LoopDetectorNodelet::onInit() {
     detector_ = makeDetector();
   };
   h.statistics = [this] {
-    StageStatistics s{{"queries", std::to_string(queries_)}, {"candidates_accepted", std::to_string(accepted_)}};
+    StageStatistics s{{"queries", std::to_string(queries_)},
+                      {"candidates_accepted", std::to_string(accepted_)}};
     if (detector_) {
       s.emplace_back("model", detector_->activeModel());
       s.emplace_back("keyframes", std::to_string(detector_->keyframeCount()));
@@ -131,9 +133,9 @@ std::unique_ptr<binloop::LoopDetector> LoopDetectorNodelet::makeDetector() const
 }
 
 std::string LoopDetectorNodelet::counts() const {
-  return std::to_string(detector_->keyframeCount()) + " keyframes, " + detector_->activeModel() + " index of " +
-         std::to_string(detector_->indexSize()) + " keyframes (" + std::to_string(detector_->indexBytes() >> 10) +
-         " kB)";
+  return std::to_string(detector_->keyframeCount()) + " keyframes, " + detector_->activeModel() +
+         " index of " + std::to_string(detector_->indexSize()) + " keyframes (" +
+         std::to_string(detector_->indexBytes() >> 10) + " kB)";
 }
 
 void LoopDetectorNodelet::onReconfigure(binloop::LoopDetectorConfig& c, uint32_t) {
@@ -150,7 +152,8 @@ void LoopDetectorNodelet::onReconfigure(binloop::LoopDetectorConfig& c, uint32_t
   auto make = binloop::modelFileFactory(vocab_dir_, config_.tracker.orb, force_, options);
   try {
     std::vector<std::string> skipped;
-    const std::vector<std::string> shadow = binloop::shadowModelNames(c.shadow, p.model, vocab_dir_, &skipped);
+    const std::vector<std::string> shadow =
+        binloop::shadowModelNames(c.shadow, p.model, vocab_dir_, &skipped);
     for (const std::string& n : skipped)
       NODELET_WARN("binloop/LoopDetector: shadow model %s skipped: no %s.bin in %s", n.c_str(), n.c_str(),
                    vocab_dir_.c_str());
@@ -177,7 +180,10 @@ void LoopDetectorNodelet::onReconfigure(binloop::LoopDetectorConfig& c, uint32_t
 ros::Publisher& LoopDetectorNodelet::shadowPublisher(const std::string& model) {
   auto it = shadow_pubs_.find(model);
   if (it == shadow_pubs_.end())
-    it = shadow_pubs_.emplace(model, getNodeHandle().advertise<binloop::LoopCandidates>("shadow/" + model + "/loop_candidates", 100)).first;
+    it = shadow_pubs_
+             .emplace(model, getNodeHandle().advertise<binloop::LoopCandidates>(
+                                 "shadow/" + model + "/loop_candidates", 100))
+             .first;
   return it->second;
 }
 
@@ -211,9 +217,12 @@ void LoopDetectorNodelet::onKeyframe(const binloop::KeyFrameConstPtr& m) {
 }
 
 void LoopDetectorNodelet::diagnose(diagnostic_updater::DiagnosticStatusWrapper& s) {
-  if (!detector_) s.summary(diagnostic_msgs::DiagnosticStatus::ERROR, "no usable model: " + last_problem_);
-  else if (!last_problem_.empty()) s.summary(diagnostic_msgs::DiagnosticStatus::WARN, last_problem_);
-  else s.summary(diagnostic_msgs::DiagnosticStatus::OK, "detecting with " + detector_->activeModel());
+  if (!detector_)
+    s.summary(diagnostic_msgs::DiagnosticStatus::ERROR, "no usable model: " + last_problem_);
+  else if (!last_problem_.empty())
+    s.summary(diagnostic_msgs::DiagnosticStatus::WARN, last_problem_);
+  else
+    s.summary(diagnostic_msgs::DiagnosticStatus::OK, "detecting with " + detector_->activeModel());
   s.add("active model", detector_ ? detector_->activeModel() : std::string("none"));
   s.add("index size (keyframes)", detector_ ? detector_->keyframeCount() : 0);
   s.add("queries", queries_);

@@ -15,7 +15,8 @@ void TrackingNodelet::onInit() {
     p_ = TrackingParams::read(pnh);
     stage_ = std::make_unique<binloop::TrackingStage>(p_.config.tracker, p_.camera, p_.keyframe_timeout_s);
     out_ = std::make_unique<TrackingOutputs>(nh, pnh, p_.path_max_poses);
-    intake_ = std::make_unique<PairIntake>(topics::StereoTopics(p_.stereo), p_.max_stamp_diff, p_.lockstep, p_.stamps);
+    intake_ = std::make_unique<PairIntake>(topics::StereoTopics(p_.stereo), p_.max_stamp_diff, p_.lockstep,
+                                           p_.stamps);
     update_sub_ = guard_.subscribe(nh, "local_map_update", 100, &TrackingNodelet::onUpdate, this);
     // rviz's 2D Pose Estimate (and a robot's own fix): where to relocalise while lost.
     initial_pose_sub_ = guard_.subscribe(nh, "/initialpose", 2, &TrackingNodelet::onInitialPose, this);
@@ -26,7 +27,9 @@ void TrackingNodelet::onInit() {
     });
     input_ = std::make_unique<StereoInput>(
         nh, in.left_image, in.right_image, p_.transport, p_.sync, p_.queue_size,
-        [this](const ImageConstPtr& l, const ImageConstPtr& r) { guard_.run("stereo pair", [&] { onImages(l, r); }); },
+        [this](const ImageConstPtr& l, const ImageConstPtr& r) {
+          guard_.run("stereo pair", [&] { onImages(l, r); });
+        },
         [this](const std::string& why) { guard_.run("stereo pair", [&] { reject(why); }); });
   } catch (const std::exception& e) {
     NODELET_FATAL("binloop/Tracking: %s", e.what());
@@ -34,7 +37,8 @@ void TrackingNodelet::onInit() {
   }
   diag_ = std::make_unique<StageDiagnostics>(
       nh, pnh, "tracking", [this](diagnostic_updater::DiagnosticStatusWrapper& s) { diagnose(s); });
-  services_ = std::make_unique<StageServices>(pnh, "tracking", trackingServiceHandlers(*stage_, st_, [this] { startedOver(); }));
+  services_ = std::make_unique<StageServices>(
+      pnh, "tracking", trackingServiceHandlers(*stage_, st_, [this] { startedOver(); }));
   last_pair_wall_ = ros::WallTime::now();  // no pair at all for ~stale_after_s is reported too
   const topics::StereoTopics in(p_.stereo);
   NODELET_INFO("binloop/Tracking: %s sync on %s + %s, map frame '%s'", p_.sync.c_str(), in.left_image.c_str(),
@@ -46,9 +50,10 @@ void TrackingNodelet::adopted(binloop::TrackingStage::Adopted how) {
   using Adopted = binloop::TrackingStage::Adopted;
   if (how == Adopted::kKept || how == Adopted::kIgnored) return;
   if (how == Adopted::kTakenAfterStartOver) startedOver();
-  NODELET_INFO("binloop/Tracking: took local mapping's map (%zu keyframes, %zu points): lost until the next frames "
-               "are relocalised in it",
-               stage_->tracker()->map().keyframeCount(), stage_->tracker()->map().pointCount());
+  NODELET_INFO(
+      "binloop/Tracking: took local mapping's map (%zu keyframes, %zu points): lost until the next frames "
+      "are relocalised in it",
+      stage_->tracker()->map().keyframeCount(), stage_->tracker()->map().pointCount());
 }
 
 void TrackingNodelet::startedOver() {
@@ -103,13 +108,15 @@ std::string TrackingNodelet::check(const sensor_msgs::Image& left, const sensor_
 void TrackingNodelet::onImages(const ImageConstPtr& left, const ImageConstPtr& right) {
   CpuMeter::Scope cpu(cpu_);
   last_pair_wall_ = ros::WallTime::now();
-  const std::string given_up = stage_->inFlight().giveUpIfStale(last_pair_wall_.toSec(), out_->keyframesHeard());
+  const std::string given_up =
+      stage_->inFlight().giveUpIfStale(last_pair_wall_.toSec(), out_->keyframesHeard());
   if (!given_up.empty()) {
     problem(given_up);
     trackWaiting();
   }
   std::string dropped;
-  if (!intake_->hold({left, right}, hasCamera(), stage_->inFlight().count(), &dropped)) return track(left, right);
+  if (!intake_->hold({left, right}, hasCamera(), stage_->inFlight().count(), &dropped))
+    return track(left, right);
   if (!dropped.empty()) reject(dropped);
 }
 
@@ -163,7 +170,8 @@ void TrackingNodelet::onUpdate(const binloop::LocalMapUpdateConstPtr& m) {
   CpuMeter::Scope cpu(cpu_);
   try {
     binloop::msg::LocalMapUpdate u = fromRos(*m);
-    if (u.whole_map) return adopted(stage_->adopt(std::make_shared<const binloop::msg::LocalMapUpdate>(std::move(u))));
+    if (u.whole_map)
+      return adopted(stage_->adopt(std::make_shared<const binloop::msg::LocalMapUpdate>(std::move(u))));
     stage_->apply(u, ros::WallTime::now().toSec());
     trackWaiting();
   } catch (const std::exception& e) {
@@ -175,7 +183,9 @@ void TrackingNodelet::onUpdate(const binloop::LocalMapUpdateConstPtr& m) {
 
 void TrackingNodelet::diagnose(diagnostic_updater::DiagnosticStatusWrapper& s) {
   const double quiet_s = last_pair_wall_.isZero() ? 0 : (ros::WallTime::now() - last_pair_wall_).toSec();
-  st_.report(s, *stage_, {quiet_s, p_.stale_after_s, intake_->waiting(), intake_->lastStampDiff(), cpu_.seconds()}, guard_);
+  st_.report(s, *stage_,
+             {quiet_s, p_.stale_after_s, intake_->waiting(), intake_->lastStampDiff(), cpu_.seconds()},
+             guard_);
 }
 
 }  // namespace binloop_ros

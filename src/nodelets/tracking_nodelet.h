@@ -1,11 +1,11 @@
 #pragma once
-// binloop/Tracking, the nodelet: stereo images in, the camera's pose out (pose, odometry, path, tf), keyframes
-// to local mapping; local mapping's updates back in. It wires ROS to binloop::TrackingStage (the tracker, its
-// map's lifecycle and the keyframes in flight, without ROS) through adapters of their own: the parameters
-// (tracking_params.h), the pairs' checks and queue (pair_intake.h), what is published (tracking_outputs.h),
-// the counts and diagnostics (tracking_status.h) and the map services (tracking_services.h). Every callback
-// runs through one CallbackGuard: a bad message is reported (log + diagnostics) and dropped, and the nodelet
-// goes on.
+// binloop/Tracking, the nodelet: stereo images in, the camera's pose out (pose, odometry, path, tf),
+// keyframes to local mapping; local mapping's updates back in. It wires ROS to binloop::TrackingStage (the
+// tracker, its map's lifecycle and the keyframes in flight, without ROS) through adapters of their own: the
+// parameters (tracking_params.h), the pairs' checks and queue (pair_intake.h), what is published
+// (tracking_outputs.h), the counts and diagnostics (tracking_status.h) and the map services
+// (tracking_services.h). Every callback runs through one CallbackGuard: a bad message is reported (log +
+// diagnostics) and dropped, and the nodelet goes on.
 #include <binloop/LocalMapUpdate.h>
 #include <geometry_msgs/PoseWithCovarianceStamped.h>
 #include <nodelet/nodelet.h>

@@ -1,5 +1,5 @@
-// map_services: the graph-wide map services, /binloop/save_map, load_map, reset and statistics. Each stage owns
-// its state and saves or loads only that (~save_state, ~load_state, ~reset, ~statistics of each nodelet,
+// map_services: the graph-wide map services, /binloop/save_map, load_map, reset and statistics. Each stage
+// owns its state and saves or loads only that (~save_state, ~load_state, ~reset, ~statistics of each nodelet,
 // include/binloop_ros/stage_services.h); this node asks the stages in pipeline order, whether they share one
 // manager or run in four processes, and answers with what each said. Save and load are transactions
 // (binloop/io/map_folder.h): a save has every stage write into a new folder that replaces the old only when
@@ -50,8 +50,8 @@ Reached callStage(const std::string& stage, const std::string& service, Srv& srv
 // Calls `service` of every stage in order; stops at the first that cannot be reached. `success` and `message`
 // gather the stages' answers (services without them, such as Statistics, leave them as they are).
 template <class Srv>
-void callEach(const std::string& service, const typename Srv::Request& req, bool* success, std::string* message,
-              std::vector<typename Srv::Response>* answers = nullptr) {
+void callEach(const std::string& service, const typename Srv::Request& req, bool* success,
+              std::string* message, std::vector<typename Srv::Response>* answers = nullptr) {
   *success = true;
   message->clear();
   for (const std::string& stage : g_stages) {
@@ -127,7 +127,8 @@ bool onLoadMap(binloop::LoadMap::Request& req, binloop::LoadMap::Response& res) 
     srv.request.map_id = map_id;
     if (!call(stage, srv)) ok = false;  // a commit cannot fail but for a stage gone meanwhile
   }
-  if (!ok && prepared.size() < g_stages.size()) say(&res.message, "nothing loaded: every stage keeps its map");
+  if (!ok && prepared.size() < g_stages.size())
+    say(&res.message, "nothing loaded: every stage keeps its map");
   res.success = ok;
   res.map_id = map_id;
   ROS_INFO("binloop/map_services: load_map %s (map save %s): %s\n%s", req.directory.c_str(),

@@ -43,13 +43,15 @@ visualization_msgs::MarkerArray CandidateMarkers::markers(const binloop::LoopCan
 
   const auto query = positions_.find(q.query);
   if (query != positions_.end()) {
-    label.pose.position = toPoint(query->second + Eigen::Vector3d(0, -3, 0));  // above it (y points down in slam)
+    label.pose.position =
+        toPoint(query->second + Eigen::Vector3d(0, -3, 0));  // above it (y points down in slam)
     for (size_t i = 0; i < q.candidates.size() && i < kMaxLines; ++i) {
       const auto c = positions_.find(q.candidates[i].id);
       if (c == positions_.end()) continue;
       const bool accepted = q.candidates[i].id == q.accepted;
       const float fade = 1.f - 0.15f * static_cast<float>(i);
-      const std_msgs::ColorRGBA col = accepted ? colour(0.1f, 0.9f, 0.1f) : colour(fade, 0.55f * fade, 0.1f, 0.8f);
+      const std_msgs::ColorRGBA col =
+          accepted ? colour(0.1f, 0.9f, 0.1f) : colour(fade, 0.55f * fade, 0.1f, 0.8f);
       lines.points.push_back(toPoint(query->second));
       lines.points.push_back(toPoint(c->second));
       lines.colors.push_back(col);

@@ -11,10 +11,9 @@
 
 namespace binloop_ros {
 
-
 const std::vector<std::string>& FramePublisher::parameterNames() {
-  static const std::vector<std::string> names = {"map_frame",       "odom_frame",  "base_frame",
-                                                 "slam_frame",      "camera_in_base", "publish_tf",
+  static const std::vector<std::string> names = {"map_frame",       "odom_frame",        "base_frame",
+                                                 "slam_frame",      "camera_in_base",    "publish_tf",
                                                  "publish_odom_tf", "ground_truth_frame"};
   return names;
 }
@@ -49,14 +48,16 @@ void FramePublisher::mountCamera(const std::string& camera_frame) {
     T_base_cam = *mounting_param_;
   } else if (buffer_) {
     try {
-      T_base_cam = toPose3(buffer_->lookupTransform(base_frame_, camera_frame, ros::Time(0), ros::Duration(0.1)).transform);
+      T_base_cam = toPose3(
+          buffer_->lookupTransform(base_frame_, camera_frame, ros::Time(0), ros::Duration(0.1)).transform);
       from_tf = true;
     } catch (const tf2::TransformException&) {  // the robot does not publish it: binloop does
     }
   }
   ROS_INFO("binloop/Tracking: camera '%s' on '%s' %s", camera_frame.c_str(), base_frame_.c_str(),
-           from_tf ? "as the robot's TF has it" : mounting_param_ ? "as ~camera_in_base says" :
-                                                                  "with its optical axes on the base (no ~camera_in_base, none in TF)");
+           from_tf           ? "as the robot's TF has it"
+           : mounting_param_ ? "as ~camera_in_base says"
+                             : "with its optical axes on the base (no ~camera_in_base, none in TF)");
   frames_ = RobotFrames(T_base_cam);
   if (!static_tf_) return;
   send(frames_.slamInMap(), ros::Time(0), map_frame_, slam_frame_, true);
@@ -121,23 +122,26 @@ void FramePublisher::tracked(const binloop::Pose3& T_slam_cam, const RobotFrames
   } catch (const tf2::TransformException& e) {
     if (!last_map_odom_ || (stamp - last_robot_odom_).toSec() > 1.0)
       problem_ = std::string("no ") + odom_frame_ + " -> " + base_frame_ +
-                 " from the robot's odometry at the image's stamp (" + e.what() + "): map -> " + odom_frame_ + " kept";
+                 " from the robot's odometry at the image's stamp (" + e.what() + "): map -> " + odom_frame_ +
+                 " kept";
   }
   if (last_map_odom_) send(*last_map_odom_, stamp, map_frame_, odom_frame_);
 }
 
 binloop::Pose3 FramePublisher::hintInSlam(const std::string& frame, const binloop::Pose3& T) const {
-  if (!mounted_) throw ConversionError("a pose hint before the first tracked frame: nothing to relocalise in yet");
+  if (!mounted_)
+    throw ConversionError("a pose hint before the first tracked frame: nothing to relocalise in yet");
   const std::string f = !frame.empty() && frame[0] == '/' ? frame.substr(1) : frame;
   if (f == map_frame_) return frames_.cameraInSlam(T);
   if (f == slam_frame_) return T;
-  throw ConversionError("a pose hint in frame '" + frame + "': give it in '" + map_frame_ + "' (the base's pose) or '" +
-                        slam_frame_ + "' (the camera's)");
+  throw ConversionError("a pose hint in frame '" + frame + "': give it in '" + map_frame_ +
+                        "' (the base's pose) or '" + slam_frame_ + "' (the camera's)");
 }
 
 PoseHint FramePublisher::hint(const geometry_msgs::PoseWithCovarianceStamped& m) const {
   const double var = std::max(m.pose.covariance[0], m.pose.covariance[7]);
-  return {hintInSlam(m.header.frame_id, toPose3(m.pose.pose)), std::clamp(3 * std::sqrt(std::max(var, 0.0)), 5.0, 50.0)};
+  return {hintInSlam(m.header.frame_id, toPose3(m.pose.pose)),
+          std::clamp(3 * std::sqrt(std::max(var, 0.0)), 5.0, 50.0)};
 }
 
 void FramePublisher::clockWentBack() {

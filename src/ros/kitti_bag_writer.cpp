@@ -1,10 +1,10 @@
 #include "binloop_ros/kitti_bag_writer.h"
 
-#include <filesystem>
 #include <nav_msgs/Odometry.h>
-#include <opencv2/imgcodecs.hpp>
 #include <rosbag/bag.h>
 #include <sensor_msgs/CompressedImage.h>
+#include <filesystem>
+#include <opencv2/imgcodecs.hpp>
 
 #include "binloop_ros/msg_conversion.h"
 #include "binloop_ros/topics.h"
@@ -49,11 +49,13 @@ KittiBagSummary writeKittiBag(const binloop::KittiSequence& seq, const std::stri
       const auto frame = seq.load(i);
       const ros::Time stamp = toRosTime(frame.stamp_s + opt.stamp_offset_s);
       if (opt.png) {
-        bag.write(std::string(topics::kLeftImage) + "/compressed", stamp, pngMsg(frame.left, stamp, topics::kLeftFrame));
-        bag.write(std::string(topics::kRightImage) + "/compressed", stamp, pngMsg(frame.right, stamp, topics::kRightFrame));
+        bag.write(std::string(topics::kLeftImage) + "/compressed", stamp,
+                  pngMsg(frame.left, stamp, topics::kLeftFrame));
+        bag.write(std::string(topics::kRightImage) + "/compressed", stamp,
+                  pngMsg(frame.right, stamp, topics::kRightFrame));
       } else {
         bag.write(topics::kLeftImage, stamp, toImageMsg(frame.left, stamp, topics::kLeftFrame));
-        }
+      }
       left_info.header.stamp = right_info.header.stamp = stamp;
       bag.write(topics::kLeftInfo, stamp, left_info);
       bag.write(topics::kRightImage, stamp, toImageMsg(frame.right, stamp, topics::kRightFrame));

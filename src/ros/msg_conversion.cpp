@@ -2,8 +2,8 @@
 
 #include <cmath>
 
-#include <opencv2/imgproc.hpp>
 #include <sensor_msgs/image_encodings.h>
+#include <opencv2/imgproc.hpp>
 
 namespace binloop_ros {
 
@@ -47,8 +47,9 @@ cv::Mat toGray(const sensor_msgs::Image& msg) {
     throw ConversionError("image step " + std::to_string(msg.step) + " is less than width x pixel size " +
                           std::to_string(msg.width * pixel_bytes));
   if (msg.data.size() < static_cast<size_t>(msg.step) * msg.height)
-    throw ConversionError("image data holds " + std::to_string(msg.data.size()) + " bytes, expected step x height = " +
-                          std::to_string(static_cast<size_t>(msg.step) * msg.height));
+    throw ConversionError(
+        "image data holds " + std::to_string(msg.data.size()) +
+        " bytes, expected step x height = " + std::to_string(static_cast<size_t>(msg.step) * msg.height));
   const cv::Mat view(msg.height, msg.width, fmt->type, const_cast<uint8_t*>(msg.data.data()), msg.step);
   cv::Mat gray;
   if (fmt->code < 0) {
@@ -84,20 +85,26 @@ std::string distortionWarning(const sensor_msgs::CameraInfo& info) {
     d += (d.empty() ? "" : ", ") + std::to_string(v);
   }
   if (!distorted) return "";
-  return "camera_info of '" + info.header.frame_id + "' has distortion (" + info.distortion_model + " D = [" + d +
-         "]): binloop uses only its P and takes the images as rectified (image_rect); raw, distorted images would "
+  return "camera_info of '" + info.header.frame_id + "' has distortion (" + info.distortion_model + " D = [" +
+         d +
+         "]): binloop uses only its P and takes the images as rectified (image_rect); raw, distorted images "
+         "would "
          "give wrong poses";
 }
 
-binloop::StereoCamera toStereoCamera(const sensor_msgs::CameraInfo& left, const sensor_msgs::CameraInfo& right) {
+binloop::StereoCamera toStereoCamera(const sensor_msgs::CameraInfo& left,
+                                     const sensor_msgs::CameraInfo& right) {
   if (left.width != right.width || left.height != right.height)
     throw ConversionError("left and right camera_info sizes differ");
   for (int i : {0, 2, 5, 6})
     if (std::abs(left.P[i] - right.P[i]) > 1e-6 * std::max(1.0, std::abs(left.P[i])))
-      throw ConversionError("left and right camera_info P differ in fx/fy/cx/cy: images are not a rectified pair");
-  if (left.P[0] <= 0 || left.P[5] <= 0) throw ConversionError("camera_info P has a non-positive focal length");
+      throw ConversionError(
+          "left and right camera_info P differ in fx/fy/cx/cy: images are not a rectified pair");
+  if (left.P[0] <= 0 || left.P[5] <= 0)
+    throw ConversionError("camera_info P has a non-positive focal length");
   if (right.P[3] >= 0)
-    throw ConversionError("right camera_info P[3] must be -fx*baseline (negative); got " + std::to_string(right.P[3]));
+    throw ConversionError("right camera_info P[3] must be -fx*baseline (negative); got " +
+                          std::to_string(right.P[3]));
   binloop::StereoCamera cam;
   cam.fx = left.P[0];
   cam.cx = left.P[2];
@@ -156,8 +163,8 @@ binloop::Pose3 toPose3(const geometry_msgs::Pose& msg) {
   return T;
 }
 
-geometry_msgs::TransformStamped toTransformMsg(const binloop::Pose3& T, const ros::Time& stamp, const std::string& parent,
-                                               const std::string& child) {
+geometry_msgs::TransformStamped toTransformMsg(const binloop::Pose3& T, const ros::Time& stamp,
+                                               const std::string& parent, const std::string& child) {
   geometry_msgs::TransformStamped t;
   t.header.stamp = stamp;
   t.header.frame_id = parent;

@@ -33,7 +33,8 @@ bool PairIntake::hold(const Pair& p, bool has_camera, size_t in_flight, std::str
                " (or give ~camera)";
   } else if (waiting_.size() > max_waiting_) {
     waiting_.pop_front();
-    *dropped = "lock-step: " + std::to_string(max_waiting_) + " pairs already wait for local mapping; the oldest is dropped";
+    *dropped = "lock-step: " + std::to_string(max_waiting_) +
+               " pairs already wait for local mapping; the oldest is dropped";
   }
   return true;
 }
@@ -48,8 +49,9 @@ std::optional<PairIntake::Pair> PairIntake::next(bool has_camera, size_t in_flig
 std::string PairIntake::pairProblem(const sensor_msgs::Image& left, const sensor_msgs::Image& right) {
   last_stamp_diff_ = std::abs((left.header.stamp - right.header.stamp).toSec());
   if (last_stamp_diff_ > max_stamp_diff_)
-    return "left and right stamps differ by " + std::to_string(last_stamp_diff_) + " s (more than ~max_stamp_diff " +
-           std::to_string(max_stamp_diff_) + " s): not a synchronised pair";
+    return "left and right stamps differ by " + std::to_string(last_stamp_diff_) +
+           " s (more than ~max_stamp_diff " + std::to_string(max_stamp_diff_) +
+           " s): not a synchronised pair";
   if (left.width != right.width || left.height != right.height)
     return "left is " + std::to_string(left.width) + "x" + std::to_string(left.height) + ", right " +
            std::to_string(right.width) + "x" + std::to_string(right.height);

@@ -4,7 +4,8 @@
 
 namespace binloop_ros {
 
-RobotFrames::RobotFrames(const binloop::Pose3& T_base_cam) : T_base_cam_(T_base_cam), T_cam_base_(T_base_cam.inverse()) {}
+RobotFrames::RobotFrames(const binloop::Pose3& T_base_cam)
+    : T_base_cam_(T_base_cam), T_cam_base_(T_base_cam.inverse()) {}
 
 binloop::Pose3 RobotFrames::opticalOnBase() {
   binloop::Pose3 T = binloop::Pose3::Identity();
@@ -26,7 +27,8 @@ void RobotFrames::update(const binloop::Pose3& T_slam_cam, const Matrix6d& cov_s
     return;
   }
   // The camera's errors in slam (dc, dtheta) are the base's in odom after a change of axes, R_odom_slam, and
-  // the lever from the camera to the base: the base at c + R_odom_cam t_cam_base moves by dtheta x that lever.
+  // the lever from the camera to the base: the base at c + R_odom_cam t_cam_base moves by dtheta x that
+  // lever.
   const Eigen::Matrix3d R_odom_cam = T_odom_base_.linear() * T_base_cam_.linear();
   const Eigen::Matrix3d R_odom_slam = R_odom_cam * T_slam_cam.linear().transpose();
   const Eigen::Vector3d lever = R_odom_cam * T_cam_base_.translation();
@@ -48,7 +50,8 @@ void RobotFrames::update(const binloop::Pose3& T_slam_cam, double stamp_s, bool 
   // T_map_base = T_map_slam * T_slam_cam * T_cam_base, with T_map_slam = T_base_cam.
   const binloop::Pose3 T_map_base(T_base_cam_ * T_slam_cam * T_cam_base_);
   if (have_last_) {
-    const binloop::Pose3 motion = corrected ? last_motion_ : binloop::Pose3(T_map_base_.inverse() * T_map_base);
+    const binloop::Pose3 motion =
+        corrected ? last_motion_ : binloop::Pose3(T_map_base_.inverse() * T_map_base);
     T_odom_base_ = T_odom_base_ * motion;
     const double dt = stamp_s - last_stamp_s_;
     if (dt > 1e-6) {

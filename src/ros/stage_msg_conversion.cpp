@@ -28,7 +28,8 @@ constexpr uint32_t kMaxImageSide = 16384;
 
 void checkSize(size_t got, size_t want, const std::string& what) {
   if (got != want)
-    throw ConversionError(what + " has " + std::to_string(got) + " entries, expected " + std::to_string(want));
+    throw ConversionError(what + " has " + std::to_string(got) + " entries, expected " +
+                          std::to_string(want));
 }
 
 binloop::MapPoint toRos(const core::MapPoint& p) {
@@ -103,7 +104,8 @@ void convertAllBack(const RosList& in, CoreList* out) {
   for (const auto& x : in) out->push_back(fromRos(x));
 }
 
-std::vector<binloop::MapPointPair> toRosPairs(const std::vector<std::pair<binloop::MapPointId, binloop::MapPointId>>& in) {
+std::vector<binloop::MapPointPair> toRosPairs(
+    const std::vector<std::pair<binloop::MapPointId, binloop::MapPointId>>& in) {
   std::vector<binloop::MapPointPair> out(in.size());
   for (size_t i = 0; i < in.size(); ++i) {
     out[i].removed = in[i].first;
@@ -112,7 +114,8 @@ std::vector<binloop::MapPointPair> toRosPairs(const std::vector<std::pair<binloo
   return out;
 }
 
-std::vector<std::pair<binloop::MapPointId, binloop::MapPointId>> fromRosPairs(const std::vector<binloop::MapPointPair>& in) {
+std::vector<std::pair<binloop::MapPointId, binloop::MapPointId>> fromRosPairs(
+    const std::vector<binloop::MapPointPair>& in) {
   std::vector<std::pair<binloop::MapPointId, binloop::MapPointId>> out;
   out.reserve(in.size());
   for (const auto& p : in) out.emplace_back(p.removed, p.kept);
@@ -150,7 +153,8 @@ binloop::KeyFrame toRos(const core::KeyFrame& kf, const std::string& frame_id) {
   }
   m.descriptors.resize(kf.descriptors.size() * binloop::Desc256::kBytes);
   for (size_t i = 0; i < kf.descriptors.size(); ++i)
-    std::memcpy(&m.descriptors[i * binloop::Desc256::kBytes], kf.descriptors[i].w.data(), binloop::Desc256::kBytes);
+    std::memcpy(&m.descriptors[i * binloop::Desc256::kBytes], kf.descriptors[i].w.data(),
+                binloop::Desc256::kBytes);
   m.state = toRos(kf.state);
   convertAll(kf.new_points, &m.new_points);
   m.corrections_seen = kf.corrections_seen;
@@ -161,17 +165,21 @@ binloop::KeyFrame toRos(const core::KeyFrame& kf, const std::string& frame_id) {
 core::KeyFrame fromRos(const binloop::KeyFrame& m) {
   requireId(m.id, "KeyFrame.id");
   const size_t n = m.keypoints.size();
-  checkSize(m.descriptors.size(), n * binloop::Desc256::kBytes, "KeyFrame.descriptors (bytes, 32 per keypoint)");
+  checkSize(m.descriptors.size(), n * binloop::Desc256::kBytes,
+            "KeyFrame.descriptors (bytes, 32 per keypoint)");
   if (!m.state.point_ids.empty()) checkSize(m.state.point_ids.size(), n, "KeyFrame.state.point_ids");
   if (m.state.id != m.id) throw ConversionError("KeyFrame.state.id differs from KeyFrame.id");
   requireFinite({m.camera.fx, m.camera.fy, m.camera.cx, m.camera.cy, m.camera.baseline_m, m.scale_factor},
                 "KeyFrame.camera or scale_factor");
   if (m.camera.fx <= 0 || m.camera.fy <= 0 || m.camera.baseline_m <= 0)
     throw ConversionError("KeyFrame.camera has a non-positive focal length or baseline");
-  if (m.camera.width == 0 || m.camera.height == 0 || m.camera.width > kMaxImageSide || m.camera.height > kMaxImageSide)
-    throw ConversionError("KeyFrame.camera is " + std::to_string(m.camera.width) + "x" + std::to_string(m.camera.height) +
-                          " px (1 to " + std::to_string(kMaxImageSide) + " a side)");
-  if (m.scale_factor <= 1 || m.levels == 0) throw ConversionError("KeyFrame.scale_factor must be > 1 and levels > 0");
+  if (m.camera.width == 0 || m.camera.height == 0 || m.camera.width > kMaxImageSide ||
+      m.camera.height > kMaxImageSide)
+    throw ConversionError("KeyFrame.camera is " + std::to_string(m.camera.width) + "x" +
+                          std::to_string(m.camera.height) + " px (1 to " + std::to_string(kMaxImageSide) +
+                          " a side)");
+  if (m.scale_factor <= 1 || m.levels == 0)
+    throw ConversionError("KeyFrame.scale_factor must be > 1 and levels > 0");
   core::KeyFrame kf;
   kf.id = m.id;
   kf.revision = m.revision;
@@ -189,12 +197,15 @@ core::KeyFrame fromRos(const binloop::KeyFrame& m) {
   kf.keypoints.resize(n);
   for (size_t i = 0; i < n; ++i) {
     const auto& mk = m.keypoints[i];
-    if (mk.octave >= m.levels) throw ConversionError("KeyFrame.keypoints[" + std::to_string(i) + "].octave beyond levels");
-    requireFinite({mk.x, mk.y, mk.angle, mk.right_x, mk.depth}, "KeyFrame.keypoints[" + std::to_string(i) + "]");
+    if (mk.octave >= m.levels)
+      throw ConversionError("KeyFrame.keypoints[" + std::to_string(i) + "].octave beyond levels");
+    requireFinite({mk.x, mk.y, mk.angle, mk.right_x, mk.depth},
+                  "KeyFrame.keypoints[" + std::to_string(i) + "]");
     kf.keypoints[i] = {mk.x, mk.y, mk.angle, mk.octave, mk.right_x, mk.depth};
   }
   kf.descriptors.resize(n);
-  for (size_t i = 0; i < n; ++i) kf.descriptors[i] = binloop::descriptorFromBytes(&m.descriptors[i * binloop::Desc256::kBytes]);
+  for (size_t i = 0; i < n; ++i)
+    kf.descriptors[i] = binloop::descriptorFromBytes(&m.descriptors[i * binloop::Desc256::kBytes]);
   kf.state = fromRos(m.state);
   convertAllBack(m.new_points, &kf.new_points);
   kf.corrections_seen = m.corrections_seen;
@@ -412,7 +423,8 @@ core::TrackedFrame fromRos(const binloop::TrackedFrame& m) {
   f.reference = m.reference;
   f.T_ref_c = toPose3(m.reference_to_camera);
   f.pose_covariance = fromCovarianceMsg(m.pose_covariance);
-  if (!f.pose_covariance.allFinite()) throw ConversionError("TrackedFrame.pose_covariance has a NaN or infinite number");
+  if (!f.pose_covariance.allFinite())
+    throw ConversionError("TrackedFrame.pose_covariance has a NaN or infinite number");
   f.new_keyframe = m.new_keyframe;
   f.features = m.features;
   f.stereo_matches = m.stereo_matches;

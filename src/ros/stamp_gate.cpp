@@ -36,21 +36,28 @@ StampGate::Decision StampGate::check(double t) {
     return d;
   }
   // Off the clock: the start or the continuation of a run that may be a new clock.
-  if (run_ > 0 && t > run_last_ && t - run_last_ <= p_.max_jump_s) ++run_;
-  else run_ = 1;
+  if (run_ > 0 && t > run_last_ && t - run_last_ <= p_.max_jump_s)
+    ++run_;
+  else
+    run_ = 1;
   run_last_ = t;
   const bool back = t <= last_;
   if (run_ >= p_.confirm_pairs) {
     d.verdict = back ? Verdict::kRestart : Verdict::kJumpedForward;
-    d.reason = std::string("the clock ") + (back ? "went back" : "jumped forward") + " from " + seconds(last_) +
-               " to " + seconds(t) + " (" + std::to_string(run_) + " pairs in a row agree)";
+    d.reason = std::string("the clock ") + (back ? "went back" : "jumped forward") + " from " +
+               seconds(last_) + " to " + seconds(t) + " (" + std::to_string(run_) + " pairs in a row agree)";
     last_ = t;
     run_ = 0;
     return d;
   }
-  if (t == last_) d.reason = "stamp " + seconds(t) + " repeats the previous pair's";
-  else if (back) d.reason = "stamp " + seconds(t) + " comes before the previous pair's " + seconds(last_) + " (late, or the clock started again)";
-  else d.reason = "stamp " + seconds(t) + " is " + seconds(t - last_) + " after the previous pair's (more than ~max_time_jump, " + seconds(p_.max_jump_s) + ")";
+  if (t == last_)
+    d.reason = "stamp " + seconds(t) + " repeats the previous pair's";
+  else if (back)
+    d.reason = "stamp " + seconds(t) + " comes before the previous pair's " + seconds(last_) +
+               " (late, or the clock started again)";
+  else
+    d.reason = "stamp " + seconds(t) + " is " + seconds(t - last_) +
+               " after the previous pair's (more than ~max_time_jump, " + seconds(p_.max_jump_s) + ")";
   return d;
 }
 

@@ -1,8 +1,8 @@
 #include "binloop_ros/tracking_outputs.h"
 
 #include <geometry_msgs/PoseStamped.h>
-#include <opencv2/imgproc.hpp>
 #include <sensor_msgs/Image.h>
+#include <opencv2/imgproc.hpp>
 
 #include <binloop/KeyFrame.h>
 #include <binloop/TrackedFrame.h>
@@ -33,7 +33,8 @@ std::string TrackingOutputs::frame(const binloop::msg::TrackedFrame& f, const st
     frames_->lost(header.stamp);
     return "";
   }
-  frames_->tracked(f.T_w_c, f.pose_covariance, header.stamp, header.frame_id, corrections != corrections_at_last_);
+  frames_->tracked(f.T_w_c, f.pose_covariance, header.stamp, header.frame_id,
+                   corrections != corrections_at_last_);
   corrections_at_last_ = corrections;
 
   // The camera's pose in the slam frame, as the SLAM's other outputs.
@@ -48,15 +49,16 @@ std::string TrackingOutputs::frame(const binloop::msg::TrackedFrame& f, const st
   path_.header = pose.header;
   path_.poses.push_back(pose);
   if (path_.poses.size() > path_max_poses_)
-    path_.poses.erase(path_.poses.begin(), path_.poses.begin() + static_cast<long>(path_.poses.size() - path_max_poses_));
+    path_.poses.erase(path_.poses.begin(),
+                      path_.poses.begin() + static_cast<long>(path_.poses.size() - path_max_poses_));
   if (path_pub_.getNumSubscribers() > 0) path_pub_.publish(path_);
   return frames_->takeProblem();
 }
 
-// Green tracked (matched to a map point and an inlier), orange matched but rejected as an outlier, blue with a
-// stereo match only, grey the rest; the state and counts on top.
-void TrackingOutputs::debugImage(const cv::Mat& gray, const binloop::Frame* last, const binloop::msg::TrackedFrame& f,
-                                 const std_msgs::Header& header) {
+// Green tracked (matched to a map point and an inlier), orange matched but rejected as an outlier, blue with
+// a stereo match only, grey the rest; the state and counts on top.
+void TrackingOutputs::debugImage(const cv::Mat& gray, const binloop::Frame* last,
+                                 const binloop::msg::TrackedFrame& f, const std_msgs::Header& header) {
   if (debug_pub_.getNumSubscribers() == 0) return;
   cv::Mat img;
   cv::cvtColor(gray, img, cv::COLOR_GRAY2BGR);
@@ -64,14 +66,18 @@ void TrackingOutputs::debugImage(const cv::Mat& gray, const binloop::Frame* last
     for (size_t i = 0; i < last->size(); ++i) {
       const auto& k = last->keypoints[i];
       cv::Scalar colour(150, 150, 150);
-      if (last->points[i] != binloop::kNoId) colour = last->outlier[i] ? cv::Scalar(0, 140, 255) : cv::Scalar(0, 220, 0);
-      else if (k.right_x >= 0) colour = cv::Scalar(255, 120, 0);
+      if (last->points[i] != binloop::kNoId)
+        colour = last->outlier[i] ? cv::Scalar(0, 140, 255) : cv::Scalar(0, 220, 0);
+      else if (k.right_x >= 0)
+        colour = cv::Scalar(255, 120, 0);
       cv::circle(img, cv::Point2f(k.x, k.y), 2 + k.octave, colour, 1, cv::LINE_AA);
     }
   }
-  const std::string text = std::string(binloop::msg::toString(f.state)) + "  features " + std::to_string(f.features) +
-                           "  stereo " + std::to_string(f.stereo_matches) + "  tracked " + std::to_string(f.tracked_points);
-  cv::putText(img, text, cv::Point(10, 25), cv::FONT_HERSHEY_SIMPLEX, 0.7, cv::Scalar(0, 255, 255), 2, cv::LINE_AA);
+  const std::string text = std::string(binloop::msg::toString(f.state)) + "  features " +
+                           std::to_string(f.features) + "  stereo " + std::to_string(f.stereo_matches) +
+                           "  tracked " + std::to_string(f.tracked_points);
+  cv::putText(img, text, cv::Point(10, 25), cv::FONT_HERSHEY_SIMPLEX, 0.7, cv::Scalar(0, 255, 255), 2,
+              cv::LINE_AA);
   auto msg = boost::make_shared<sensor_msgs::Image>();
   msg->header = header;
   msg->height = img.rows;

@@ -11,9 +11,23 @@
 namespace binloop_ros {
 
 TrackingParams TrackingParams::read(const ros::NodeHandle& pnh) {
-  std::vector<std::string> known = {"config", "reloc_vocab", "force_extractor", "sync", "queue_size", "max_stamp_diff",
-                                    "camera_frame", "camera", "seed", "lockstep", "max_time_jump", "transport", "stereo",
-                                    "time_jump_confirm_pairs", "stale_after_s", "path_max_poses", "keyframe_timeout_s",
+  std::vector<std::string> known = {"config",
+                                    "reloc_vocab",
+                                    "force_extractor",
+                                    "sync",
+                                    "queue_size",
+                                    "max_stamp_diff",
+                                    "camera_frame",
+                                    "camera",
+                                    "seed",
+                                    "lockstep",
+                                    "max_time_jump",
+                                    "transport",
+                                    "stereo",
+                                    "time_jump_confirm_pairs",
+                                    "stale_after_s",
+                                    "path_max_poses",
+                                    "keyframe_timeout_s",
                                     "localize_only"};
   known.insert(known.end(), FramePublisher::parameterNames().begin(), FramePublisher::parameterNames().end());
   requireKnownParams(pnh, known);
@@ -29,8 +43,8 @@ TrackingParams TrackingParams::read(const ros::NodeHandle& pnh) {
   // "" or "none": relocalisation tries only the most recent keyframes.
   const std::string reloc = stringParam(pnh, "reloc_vocab", binloop::packagePath(binloop::kRelocVocab));
   if (!reloc.empty() && reloc != "none") {
-    p.config.tracker.vocabulary =
-        binloop::loadRelocalisationVocabulary(reloc, p.config.tracker.orb, boolParam(pnh, "force_extractor", false));
+    p.config.tracker.vocabulary = binloop::loadRelocalisationVocabulary(
+        reloc, p.config.tracker.orb, boolParam(pnh, "force_extractor", false));
     p.config.tracker.vocabulary_identity = binloop::modelFileIdentity(reloc);
   }
   if (pnh.hasParam("camera")) {  // calibration from YAML (rosparam) instead of camera_info

@@ -10,7 +10,8 @@ StageServiceHandlers trackingServiceHandlers(binloop::TrackingStage& stage, cons
                                              std::function<void()> started_over) {
   auto counts = [&stage] {
     const binloop::Tracker& t = *stage.tracker();
-    return std::to_string(t.map().keyframeCount()) + " keyframes, " + std::to_string(t.map().pointCount()) + " map points";
+    return std::to_string(t.map().keyframeCount()) + " keyframes, " + std::to_string(t.map().pointCount()) +
+           " map points";
   };
   StageServiceHandlers h;
   h.save = [&stage, counts](const std::string& path, uint64_t map_id) {
@@ -19,10 +20,11 @@ StageServiceHandlers trackingServiceHandlers(binloop::TrackingStage& stage, cons
     return counts() + " in its replica";
   };
   h.prepare = [&stage, counts, started_over](const std::string& path) {
-    // Without a camera yet, the map's own: the first camera_info must then agree with it (image sizes are checked).
+    // Without a camera yet, the map's own: the first camera_info must then agree with it (image sizes are
+    // checked).
     const binloop::Tracker* t = stage.tracker();
-    auto fresh = std::make_shared<std::unique_ptr<binloop::Tracker>>(
-        loadStage(stage.freshTracker(t ? t->camera() : binloop::Tracker::savedCamera(path)), path, "tracking"));
+    auto fresh = std::make_shared<std::unique_ptr<binloop::Tracker>>(loadStage(
+        stage.freshTracker(t ? t->camera() : binloop::Tracker::savedCamera(path)), path, "tracking"));
     return PreparedLoad{[&stage, fresh, counts, started_over] {
       stage.startOver(std::move(*fresh));
       started_over();
@@ -34,7 +36,8 @@ StageServiceHandlers trackingServiceHandlers(binloop::TrackingStage& stage, cons
     started_over();
   };
   h.statistics = [&stage, &status] {
-    StageStatistics s{{"frames", std::to_string(status.frames)}, {"frames_lost", std::to_string(status.lost)},
+    StageStatistics s{{"frames", std::to_string(status.frames)},
+                      {"frames_lost", std::to_string(status.lost)},
                       {"input_dropped", std::to_string(status.rejected)},
                       {"keyframes_sent", std::to_string(status.keyframes_sent)}};
     if (const binloop::Tracker* t = stage.tracker()) {

@@ -2,18 +2,26 @@
 
 namespace binloop_ros {
 
-void TrackingStatus::report(diagnostic_updater::DiagnosticStatusWrapper& s, const binloop::TrackingStage& stage,
-                            const Now& now, const CallbackGuard& guard) const {
+void TrackingStatus::report(diagnostic_updater::DiagnosticStatusWrapper& s,
+                            const binloop::TrackingStage& stage, const Now& now,
+                            const CallbackGuard& guard) const {
   using diagnostic_msgs::DiagnosticStatus;
   const binloop::KeyframesInFlight& in_flight = stage.inFlight();
-  if (!stage.tracker()) s.summary(DiagnosticStatus::WARN, "waiting for camera_info");
+  if (!stage.tracker())
+    s.summary(DiagnosticStatus::WARN, "waiting for camera_info");
   else if (now.quiet_s > now.stale_after_s)
-    s.summary(DiagnosticStatus::WARN, "no stereo pair for " + std::to_string(static_cast<int>(now.quiet_s)) + " s");
-  else if (guard.failures() > 0) s.summary(DiagnosticStatus::WARN, "tracking; a callback failed");
-  else if (in_flight.givenUp() > 0) s.summary(DiagnosticStatus::WARN, "tracking; local mapping did not answer some keyframes");
-  else if (stage.tracker()->state() == binloop::msg::TrackingState::kLost) s.summary(DiagnosticStatus::WARN, "lost");
-  else if (rejected > 0) s.summary(DiagnosticStatus::WARN, "tracking; some input dropped");
-  else s.summary(DiagnosticStatus::OK, "tracking");
+    s.summary(DiagnosticStatus::WARN,
+              "no stereo pair for " + std::to_string(static_cast<int>(now.quiet_s)) + " s");
+  else if (guard.failures() > 0)
+    s.summary(DiagnosticStatus::WARN, "tracking; a callback failed");
+  else if (in_flight.givenUp() > 0)
+    s.summary(DiagnosticStatus::WARN, "tracking; local mapping did not answer some keyframes");
+  else if (stage.tracker()->state() == binloop::msg::TrackingState::kLost)
+    s.summary(DiagnosticStatus::WARN, "lost");
+  else if (rejected > 0)
+    s.summary(DiagnosticStatus::WARN, "tracking; some input dropped");
+  else
+    s.summary(DiagnosticStatus::OK, "tracking");
   s.add("frames tracked", frames);
   s.add("frames lost", lost);
   s.add("input dropped", rejected);

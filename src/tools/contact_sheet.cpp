@@ -8,7 +8,8 @@
 #include "binloop/util/cli_args.h"
 
 int main(int argc, char** argv) {
-  binloop::CliArgs args("contact-sheet", "contact-sheet --out sheet.png --image <path>:<caption> ... [options]");
+  binloop::CliArgs args("contact-sheet",
+                        "contact-sheet --out sheet.png --image <path>:<caption> ... [options]");
   args.option("out", "PNG to write")
       .option("image", "an image and its caption, 'path:caption' (repeat; shown in order)")
       .option("columns", "images per row", "2")
@@ -16,7 +17,8 @@ int main(int argc, char** argv) {
   return binloop::runTool("contact-sheet", [&] {
     if (!args.parse(argc, argv)) return 0;
     const auto items = args.all("image");
-    if (items.empty() || !args.has("out")) throw binloop::CliError("--out and at least one --image are needed");
+    if (items.empty() || !args.has("out"))
+      throw binloop::CliError("--out and at least one --image are needed");
     const int cols = static_cast<int>(args.integer("columns"));
     const double scale = args.number("scale");
     std::vector<cv::Mat> tiles;
@@ -33,7 +35,8 @@ int main(int argc, char** argv) {
       cv::resize(img, small, cv::Size(), scale, scale, cv::INTER_AREA);
       cv::cvtColor(small, small, cv::COLOR_GRAY2BGR);
       cv::rectangle(small, cv::Rect(0, 0, small.cols, 22), cv::Scalar(0, 0, 0), cv::FILLED);
-      cv::putText(small, caption, {6, 16}, cv::FONT_HERSHEY_SIMPLEX, 0.5, cv::Scalar(255, 255, 255), 1, cv::LINE_AA);
+      cv::putText(small, caption, {6, 16}, cv::FONT_HERSHEY_SIMPLEX, 0.5, cv::Scalar(255, 255, 255), 1,
+                  cv::LINE_AA);
       tiles.push_back(small);
     }
     const cv::Size sz = tiles[0].size();
@@ -42,8 +45,8 @@ int main(int argc, char** argv) {
     for (size_t i = 0; i < tiles.size(); ++i) {
       cv::Mat t;
       cv::resize(tiles[i], t, sz);
-      t.copyTo(sheet(cv::Rect(static_cast<int>(i % cols) * (sz.width + 4), static_cast<int>(i / cols) * (sz.height + 4),
-                              sz.width, sz.height)));
+      t.copyTo(sheet(cv::Rect(static_cast<int>(i % cols) * (sz.width + 4),
+                              static_cast<int>(i / cols) * (sz.height + 4), sz.width, sz.height)));
     }
     if (!cv::imwrite(args.str("out"), sheet)) throw std::runtime_error(args.str("out") + ": cannot write");
     std::cout << "contact-sheet: " << tiles.size() << " images -> " << args.str("out") << "\n";

@@ -11,7 +11,8 @@
 #include "binloop/util/cli_args.h"
 
 int main(int argc, char** argv) {
-  binloop::CliArgs args("descriptor-stats", "descriptor-stats --images <dir>... [--patterns orb,gaussian] [options]");
+  binloop::CliArgs args("descriptor-stats",
+                        "descriptor-stats --images <dir>... [--patterns orb,gaussian] [options]");
   args.option("images", "folder of images or KITTI-layout sequence (image_0/ is used); repeat for more")
       .option("every", "use every n-th image of each folder", "1")
       .option("patterns", "comma list of BRIEF patterns to compare (--pattern is ignored)", "orb,gaussian")
@@ -29,7 +30,8 @@ int main(int argc, char** argv) {
       const auto files = binloop::listImages(dir);
       for (size_t i = 0; i < files.size(); i += every) paths.push_back(files[i]);
     }
-    std::cout << "| pattern | images | descriptors | mean abs(P(1) - 0.5) | median abs(corr) | mean abs(corr) | max abs(corr) "
+    std::cout << "| pattern | images | descriptors | mean abs(P(1) - 0.5) | median abs(corr) | mean "
+                 "abs(corr) | max abs(corr) "
                  "| random pairs, bits apart |\n|---|---|---|---|---|---|---|---|\n";
     eo.skip_unreadable = args.has("skip-unreadable");
     std::stringstream list(args.str("patterns"));
@@ -48,7 +50,8 @@ int main(int argc, char** argv) {
         for (const auto& why : skipped) std::cerr << "descriptor-stats: skipped " << why << "\n";
       const size_t images = paths.size() - skipped.size();
       if (images == 0) throw binloop::CliError("no readable images");
-      const binloop::BitStatistics s = binloop::bitStatistics(all, static_cast<uint64_t>(args.integer("seed")));
+      const binloop::BitStatistics s =
+          binloop::bitStatistics(all, static_cast<uint64_t>(args.integer("seed")));
       std::cout << std::fixed << std::setprecision(3) << "| " << name << " | " << images << " | "
                 << s.descriptors << " | " << s.mean_bias << " | " << s.median_abs_correlation << " | "
                 << s.mean_abs_correlation << " | " << s.max_abs_correlation << " | " << std::setprecision(1)

@@ -44,32 +44,50 @@ struct ModelRun {
 }  // namespace
 
 int main(int argc, char** argv) {
-  CliArgs args("eval-loops", "eval-loops --sequence <dir> --gt <pairs.txt> --vocab-dir <dir> --out <dir> [options]");
-  args.option("sequence", "KITTI-layout sequence (image_0/ is used) or a folder of png/jpg images in natural order")
-      .option("gt", "ground-truth loop pairs, 'query ref' frame indices per line, # comments (default: from the poses)")
+  CliArgs args("eval-loops",
+               "eval-loops --sequence <dir> --gt <pairs.txt> --vocab-dir <dir> --out <dir> [options]");
+  args.option("sequence",
+              "KITTI-layout sequence (image_0/ is used) or a folder of png/jpg images in natural order")
+      .option(
+          "gt",
+          "ground-truth loop pairs, 'query ref' frame indices per line, # comments (default: from the poses)")
       .option("gt-radius", "without --gt: frames within this many metres (poses) are loops", "6")
       .option("models", "comma-separated models, or all", "all")
-      .option("vocab-dir", "folder holding <model>.bin for each model; default: the package's", packagePath(kShippedModelDir))
+      .option("vocab-dir", "folder holding <model>.bin for each model; default: the package's",
+              packagePath(kShippedModelDir))
       .option("out", "folder for the results")
       .option("step", "keyframe every step-th frame", "1")
       .option("window", "frames before a query that are never candidates (temporal neighbours)", "300")
-      .option("reference", "previous keyframes that set each query's bar (the covisible neighbours of SLAM)", "3")
+      .option("reference", "previous keyframes that set each query's bar (the covisible neighbours of SLAM)",
+              "3")
       .option("poses", "poses for same/reverse direction (default: <sequence>/poses.txt when present)")
-      .option("consistency", "also score each model behind ORB-SLAM2's consistency check over this many consecutive keyframes (0 = off)", "3")
+      .option("consistency",
+              "also score each model behind ORB-SLAM2's consistency check over this many consecutive "
+              "keyframes (0 = off)",
+              "3")
       .option("segment-gap", "frames between ground-truth queries that start a new revisit segment", "50")
-      .option("fabmap-l2-offset", "offset added to the closest reference's L2 distance in fabmap's pre-filter", "0.05")
+      .option("fabmap-l2-offset",
+              "offset added to the closest reference's L2 distance in fabmap's pre-filter", "0.05")
       .option("hbow-min-bar", "hbow's bar never goes below this L1 score", "0.005")
-      .option("vladpq-slack", "vladpq's pre-filter passes keyframes sharing this many (word, code) pairs fewer than the best reference", "1")
+      .option("vladpq-slack",
+              "vladpq's pre-filter passes keyframes sharing this many (word, code) pairs fewer than the best "
+              "reference",
+              "1")
       .option("rank-floor", "ranking: an L1-score bar (hbow) counts as at least this", "0.03")
-      .option("rank-cap", "ranking: a distance bar (vlad, hmvlad, vladpq) counts as at most this fraction of the bits", "0.35")
-      .option("dump-ranked", "also write ranked_<model>.csv: each query's bar and its N best keyframes by raw score", "0")
-      .flag("force-extractor", "use a model trained with other extractor settings than these (warns instead of refusing)");
+      .option("rank-cap",
+              "ranking: a distance bar (vlad, hmvlad, vladpq) counts as at most this fraction of the bits",
+              "0.35")
+      .option("dump-ranked",
+              "also write ranked_<model>.csv: each query's bar and its N best keyframes by raw score", "0")
+      .flag("force-extractor",
+            "use a model trained with other extractor settings than these (warns instead of refusing)");
   declareExtractOptions(args);
   return runTool("eval-loops", [&] {
     if (!args.parse(argc, argv)) return 0;
     for (const char* o : {"sequence", "out"})
       if (!args.has(o)) throw CliError(std::string("--") + o + " is required");
-    const int step = static_cast<int>(args.integer("step")), window = static_cast<int>(args.integer("window"));
+    const int step = static_cast<int>(args.integer("step")),
+              window = static_cast<int>(args.integer("window"));
     const int nref = static_cast<int>(args.integer("reference"));
     const int consistency = static_cast<int>(args.integer("consistency"));
     if (step < 1 || window < 0 || nref < 1 || consistency < 0)
@@ -97,33 +115,40 @@ int main(int argc, char** argv) {
     const bool binloop_orb = first.extractor.kind == ExtractorKind::kBinloopOrb ||
                              first.extractor.kind == ExtractorKind::kBinloopOrbRbrief;
     if (binloop_orb && !args.has("pattern")) {
-      eo.orb.pattern = first.extractor.kind == ExtractorKind::kBinloopOrbRbrief ? BriefPatternKind::kOrbLearned
-                                                                               : BriefPatternKind::kGaussian;
+      eo.orb.pattern = first.extractor.kind == ExtractorKind::kBinloopOrbRbrief
+                           ? BriefPatternKind::kOrbLearned
+                           : BriefPatternKind::kGaussian;
       if (eo.orb.pattern != OrbSlamParams{}.pattern)
         std::cout << "eval-loops: " << modelFile(models.front()) << " was trained on descriptors with "
-                  << briefPatternName(eo.orb.pattern) << " BRIEF tests; queries use them too (--pattern to choose)\n";
+                  << briefPatternName(eo.orb.pattern)
+                  << " BRIEF tests; queries use them too (--pattern to choose)\n";
     }
     if (binloop_orb && !args.has("max-side") && first.extractor.max_side > 0) {
       eo.max_side = static_cast<int>(first.extractor.max_side);
-      std::cout << "eval-loops: " << modelFile(models.front()) << " was trained on images scaled to a longer side <= "
-                << eo.max_side << " px; queries are scaled the same way (--max-side 0: full size)\n";
+      std::cout << "eval-loops: " << modelFile(models.front())
+                << " was trained on images scaled to a longer side <= " << eo.max_side
+                << " px; queries are scaled the same way (--max-side 0: full size)\n";
     }
     // Every model file must have been trained on descriptors of these settings (or --force-extractor):
     // checked from the headers alone, below.
     ExtractorCheck extractor_check;
     extractor_check.expected = extractorSettings(eo);
     extractor_check.force = args.has("force-extractor");
-    extractor_check.warn = [](const std::string& line) { std::cerr << "eval-loops: warning: " << line << "\n"; };
+    extractor_check.warn = [](const std::string& line) {
+      std::cerr << "eval-loops: warning: " << line << "\n";
+    };
     const auto images = listImages(args.str("sequence"));
     std::vector<Pose3> poses;
-    const std::string poses_path = args.has("poses") ? args.str("poses") : (fs::path(args.str("sequence")) / "poses.txt").string();
+    const std::string poses_path =
+        args.has("poses") ? args.str("poses") : (fs::path(args.str("sequence")) / "poses.txt").string();
     if (fs::exists(poses_path)) poses = readKittiPoses(poses_path);
     std::vector<std::pair<int, int>> pairs;
     if (args.has("gt")) {
       pairs = readIndexPairs(args.str("gt"));
     } else if (poses.size() == images.size()) {
       pairs = loopPairsFromPoses(poses, args.number("gt-radius"), window);
-      std::cout << "ground truth: frames within " << args.number("gt-radius") << " m of each other in " << poses_path << "\n";
+      std::cout << "ground truth: frames within " << args.number("gt-radius") << " m of each other in "
+                << poses_path << "\n";
     } else {
       throw CliError("--gt is required when there are no poses for every image (" + poses_path + ")");
     }
@@ -137,8 +162,8 @@ int main(int argc, char** argv) {
     std::set<int> positives, same_dir, reverse_dir;
     for (const auto& [q, r] : pairs) {
       if (q < 0 || r < 0 || q >= static_cast<int>(images.size()) || r >= static_cast<int>(images.size()))
-        throw DataError((args.has("gt") ? args.str("gt") : poses_path) + ": pair " + std::to_string(q) + " " + std::to_string(r) + " is outside the " +
-                        std::to_string(images.size()) + " images");
+        throw DataError((args.has("gt") ? args.str("gt") : poses_path) + ": pair " + std::to_string(q) + " " +
+                        std::to_string(r) + " is outside the " + std::to_string(images.size()) + " images");
       truth.insert({q, r});
       if (!kf_set.count(q) || !kf_set.count(r) || r > q - window || r >= q) continue;
       positives.insert(q);
@@ -150,7 +175,8 @@ int main(int argc, char** argv) {
     for (int q : reverse_dir) same_dir.erase(q);  // a query with both kinds counts as a reverse revisit
     std::vector<std::set<int>> segments;
     for (int q : positives) {
-      if (segments.empty() || q - *segments.back().rbegin() > args.integer("segment-gap")) segments.emplace_back();
+      if (segments.empty() || q - *segments.back().rbegin() > args.integer("segment-gap"))
+        segments.emplace_back();
       segments.back().insert(q);
     }
 
@@ -181,8 +207,8 @@ int main(int argc, char** argv) {
         if (foundAt(run.predictions, truth, seg, t, tier) > 0) {
           run.segments_found++;
         } else {
-          run.missed_segments += (run.missed_segments.empty() ? "" : " ") + std::to_string(*seg.begin()) + "-" +
-                                 std::to_string(*seg.rbegin());
+          run.missed_segments += (run.missed_segments.empty() ? "" : " ") + std::to_string(*seg.begin()) +
+                                 "-" + std::to_string(*seg.rbegin());
         }
       }
       std::ofstream pr(fs::path(args.str("out")) / ("pr_" + run.name + ".csv"));
@@ -225,13 +251,15 @@ int main(int argc, char** argv) {
         }
         run.signature_ms.push_back(rec->add(static_cast<KeyframeId>(f), desc[i]));
         QueryScope scope;
-        for (size_t j = i; j-- > 0 && scope.reference.size() < static_cast<size_t>(nref);) scope.reference.push_back(kf_frames[j]);
+        for (size_t j = i; j-- > 0 && scope.reference.size() < static_cast<size_t>(nref);)
+          scope.reference.push_back(kf_frames[j]);
         for (size_t j = i; j-- > 0 && kf_frames[j] > f - window;) scope.ignore.push_back(kf_frames[j]);
         scope.max_ranked = dump_ranked;
         const QueryResult r = rec->query(static_cast<KeyframeId>(f), scope);
         if (dump_ranked) {
           rcsv << f << "," << statusName(r.status) << "," << r.threshold << ",";
-          for (size_t c = 0; c < r.ranked.size(); ++c) rcsv << (c ? ";" : "") << r.ranked[c].id << ":" << r.ranked[c].score;
+          for (size_t c = 0; c < r.ranked.size(); ++c)
+            rcsv << (c ? ";" : "") << r.ranked[c].id << ":" << r.ranked[c].score;
           rcsv << "\n";
         }
         run.query_ms.push_back(r.total_ms);
@@ -242,14 +270,17 @@ int main(int argc, char** argv) {
         }
         run.predictions.push_back(p);
         offers.push_back({f, {}});
-        for (const auto& c : r.candidates) offers.back().offers.push_back({static_cast<int>(c.id), c.confidence, true});
+        for (const auto& c : r.candidates)
+          offers.back().offers.push_back({static_cast<int>(c.id), c.confidence, true});
         if (r.has_best_rejected)
-          offers.back().offers.push_back({static_cast<int>(r.best_rejected.id), r.best_rejected.confidence, false});
+          offers.back().offers.push_back(
+              {static_cast<int>(r.best_rejected.id), r.best_rejected.confidence, false});
         std::string detail = r.detail;
         std::replace(detail.begin(), detail.end(), ',', ';');
-        qcsv << f << "," << statusName(r.status) << "," << (p.candidate >= 0 ? std::to_string(p.candidate) : "") << ","
-             << p.confidence << "," << (p.candidate >= 0 && truth.count({f, p.candidate}) ? 1 : 0) << ","
-             << run.signature_ms.back() << "," << r.total_ms << "," << detail << "\n";
+        qcsv << f << "," << statusName(r.status) << ","
+             << (p.candidate >= 0 ? std::to_string(p.candidate) : "") << "," << p.confidence << ","
+             << (p.candidate >= 0 && truth.count({f, p.candidate}) ? 1 : 0) << "," << run.signature_ms.back()
+             << "," << r.total_ms << "," << detail << "\n";
         bar.update(i + 1);
       }
       bar.finish();
@@ -268,37 +299,45 @@ int main(int argc, char** argv) {
 
     std::vector<PrSeries> series;
     for (const auto& r : runs) series.push_back({r.name, r.metrics.curve});
-    writePrPlot((fs::path(args.str("out")) / "pr.png").string(), fs::path(args.str("sequence")).filename().string(), series);
+    writePrPlot((fs::path(args.str("out")) / "pr.png").string(),
+                fs::path(args.str("sequence")).filename().string(), series);
     std::ofstream sum(fs::path(args.str("out")) / "summary.csv");
-    sum << "model,r_at_100p,auc,signature_ms_median,query_ms_median,bytes_per_kf,signature_ms_p95,query_ms_p95,"
-           "precision_at_bar,recall_at_bar,same_direction_r_at_100p,reverse_direction_r_at_100p,segments_found,segments,"
+    sum << "model,r_at_100p,auc,signature_ms_median,query_ms_median,bytes_per_kf,signature_ms_p95,query_ms_"
+           "p95,"
+           "precision_at_bar,recall_at_bar,same_direction_r_at_100p,reverse_direction_r_at_100p,segments_"
+           "found,segments,"
            "positives,keyframes\n";
     std::ostringstream table;
-    table << std::left << std::setw(10) << "model" << std::right << std::setw(8) << "R@100P" << std::setw(7) << "AUC"
-          << std::setw(9) << "same" << std::setw(9) << "reverse" << std::setw(10) << "segments" << std::setw(10)
-          << "sig ms" << std::setw(9) << "p95" << std::setw(10) << "query ms" << std::setw(9) << "p95" << std::setw(10)
-          << "B/kf" << "  P/R at bar\n";
+    table << std::left << std::setw(10) << "model" << std::right << std::setw(8) << "R@100P" << std::setw(7)
+          << "AUC" << std::setw(9) << "same" << std::setw(9) << "reverse" << std::setw(10) << "segments"
+          << std::setw(10) << "sig ms" << std::setw(9) << "p95" << std::setw(10) << "query ms" << std::setw(9)
+          << "p95" << std::setw(10) << "B/kf"
+          << "  P/R at bar\n";
     for (const auto& r : runs) {
       const auto& m = r.metrics;
       const double same = same_dir.empty() ? 0 : double(r.same_found) / same_dir.size();
       const double rev = reverse_dir.empty() ? 0 : double(r.reverse_found) / reverse_dir.size();
       sum << r.name << "," << m.r_at_100p << "," << m.auc << "," << percentile(r.signature_ms, 0.5) << ","
-          << percentile(r.query_ms, 0.5) << "," << r.bytes_per_kf << "," << percentile(r.signature_ms, 0.95) << ","
-          << percentile(r.query_ms, 0.95) << "," << m.precision_at_bar << "," << m.recall_at_bar << ","
+          << percentile(r.query_ms, 0.5) << "," << r.bytes_per_kf << "," << percentile(r.signature_ms, 0.95)
+          << "," << percentile(r.query_ms, 0.95) << "," << m.precision_at_bar << "," << m.recall_at_bar << ","
           << (same_dir.empty() ? std::string("") : std::to_string(same)) << ","
           << (reverse_dir.empty() ? std::string("") : std::to_string(rev)) << "," << r.segments_found << ","
           << segments.size() << "," << m.positives << "," << kf_frames.size() << "\n";
       char line[256];
-      std::snprintf(line, sizeof line, "%-10s%8.3f%7.3f%9s%9s%10s%10.3f%9.3f%10.4f%9.4f%10zu  %.2f/%.2f\n", r.name.c_str(),
-                    m.r_at_100p, m.auc, same_dir.empty() ? "-" : std::to_string(same).substr(0, 5).c_str(),
+      std::snprintf(line, sizeof line, "%-10s%8.3f%7.3f%9s%9s%10s%10.3f%9.3f%10.4f%9.4f%10zu  %.2f/%.2f\n",
+                    r.name.c_str(), m.r_at_100p, m.auc,
+                    same_dir.empty() ? "-" : std::to_string(same).substr(0, 5).c_str(),
                     reverse_dir.empty() ? "-" : std::to_string(rev).substr(0, 5).c_str(),
                     (std::to_string(r.segments_found) + "/" + std::to_string(segments.size())).c_str(),
-                    percentile(r.signature_ms, 0.5), percentile(r.signature_ms, 0.95), percentile(r.query_ms, 0.5),
-                    percentile(r.query_ms, 0.95), r.bytes_per_kf, m.precision_at_bar, m.recall_at_bar);
+                    percentile(r.signature_ms, 0.5), percentile(r.signature_ms, 0.95),
+                    percentile(r.query_ms, 0.5), percentile(r.query_ms, 0.95), r.bytes_per_kf,
+                    m.precision_at_bar, m.recall_at_bar);
       table << line;
-      if (!r.missed_segments.empty()) table << "            missed at 100 % precision: segments " << r.missed_segments << "\n";
+      if (!r.missed_segments.empty())
+        table << "            missed at 100 % precision: segments " << r.missed_segments << "\n";
     }
-    std::cout << table.str() << "results in " << args.str("out") << " (summary.csv, pr.png, pr_<model>.csv, queries_<model>.csv)\n";
+    std::cout << table.str() << "results in " << args.str("out")
+              << " (summary.csv, pr.png, pr_<model>.csv, queries_<model>.csv)\n";
     return 0;
   });
 }

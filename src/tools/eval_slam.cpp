@@ -25,8 +25,8 @@
 #include "binloop/io/trajectory_io.h"
 #include "binloop/pipeline/loop_log.h"
 #include "binloop/place/place_recognizer.h"
-#include "binloop/util/fixed_decimals.h"
 #include "binloop/util/cli_args.h"
+#include "binloop/util/fixed_decimals.h"
 
 namespace fs = std::filesystem;
 using namespace binloop;
@@ -35,7 +35,8 @@ namespace {
 
 std::vector<std::string> split(const std::string& s, const std::string& separators) {
   std::vector<std::string> out;
-  for (size_t i = s.find_first_not_of(separators); i != std::string::npos; i = s.find_first_not_of(separators, i)) {
+  for (size_t i = s.find_first_not_of(separators); i != std::string::npos;
+       i = s.find_first_not_of(separators, i)) {
     const size_t e = s.find_first_of(separators, i);
     out.push_back(s.substr(i, e - i));
     i = e;
@@ -66,9 +67,7 @@ double jsonNumber(const std::string& text, const std::string& key) {
   return v.empty() || *end ? NAN : d;
 }
 
-std::string fixed(double v, int decimals) {
-  return std::isfinite(v) ? fixedDecimals(v, decimals) : "n/a";
-}
+std::string fixed(double v, int decimals) { return std::isfinite(v) ? fixedDecimals(v, decimals) : "n/a"; }
 
 // Starts `argv` with stdin from /dev/null and stdout and stderr into `log` (after a line naming the command).
 pid_t launch(const std::vector<std::string>& argv, const std::string& log) {
@@ -110,13 +109,15 @@ struct Row {
   int lost_frames = 0;
   TrajectoryMetrics tm;
   LoopScore loops;
-  double detect_median = NAN, detect_p95 = NAN, query_median = NAN, signature_median = NAN, verify_median = NAN;
+  double detect_median = NAN, detect_p95 = NAN, query_median = NAN, signature_median = NAN,
+         verify_median = NAN;
   std::vector<Pose3> aligned;
   int first_frame = 0, last_frame = 0;
   bool pose_judged = false;  // loops.csv had every accepted loop's relative pose
 };
 
-void score(Row& row, const fs::path& dir, const std::vector<Pose3>& gt, const std::vector<RevisitSegment>& segments) {
+void score(Row& row, const fs::path& dir, const std::vector<Pose3>& gt,
+           const std::vector<RevisitSegment>& segments) {
   if (!fs::is_directory(dir)) throw DataError(dir.string() + ": no such folder");
   const fs::path summary = dir / "summary.json";
   std::ifstream in(summary);
@@ -150,7 +151,8 @@ void score(Row& row, const fs::path& dir, const std::vector<Pose3>& gt, const st
   row.pose_judged = all_posed;
   row.loops = all_posed ? scoreLoops(accepted, poses, gt, segments) : scoreLoops(accepted, gt, segments);
 
-  const double lost = jsonNumber(json, "lost_frames");  // NaN when a summary lacks it: casting that is undefined
+  const double lost =
+      jsonNumber(json, "lost_frames");  // NaN when a summary lacks it: casting that is undefined
   row.lost_frames = std::isfinite(lost) ? static_cast<int>(lost) : 0;
   row.detect_median = jsonNumber(json, "detect_" + row.model + "_ms_median");
   row.detect_p95 = jsonNumber(json, "detect_" + row.model + "_ms_p95");
@@ -169,30 +171,35 @@ std::string csvCell(const std::string& s) {
 }  // namespace
 
 int main(int argc, char** argv) {
-  CliArgs args("eval-slam",
-               "scripts/binloop eval-slam --sequence <dir> --out <dir> [--detectors all|hbow,fabmap,...,none]\n"
-               "    [--loop-gt loops.txt] [--jobs N] [--config config/kitti.yaml] [--lockstep] [--run-args \"...\"]\n"
-               "    [--score-only] [--runs N] [--reference <peer dir>]\n"
-               "Runs the SLAM (the run tool) once per detector into <out>/<detector>/ (its output in run.log there),\n"
-               "scores each against <sequence>/poses.txt and the loop ground truth, and writes <out>/summary.csv\n"
-               "(also printed) and <out>/trajectories.png. With --runs N > 1 each detector runs N times into\n"
-               "<out>/<detector>/run-<k>/ and <out>/accuracy.csv sums them up (median, min-max, loops wrong in any\n"
-               "run, revisits closed in every run), beside a peer's runs when --reference names their folder.\n"
-               "Exits 1 when a run failed or could not be scored.");
+  CliArgs args(
+      "eval-slam",
+      "scripts/binloop eval-slam --sequence <dir> --out <dir> [--detectors all|hbow,fabmap,...,none]\n"
+      "    [--loop-gt loops.txt] [--jobs N] [--config config/kitti.yaml] [--lockstep] [--run-args \"...\"]\n"
+      "    [--score-only] [--runs N] [--reference <peer dir>]\n"
+      "Runs the SLAM (the run tool) once per detector into <out>/<detector>/ (its output in run.log there),\n"
+      "scores each against <sequence>/poses.txt and the loop ground truth, and writes <out>/summary.csv\n"
+      "(also printed) and <out>/trajectories.png. With --runs N > 1 each detector runs N times into\n"
+      "<out>/<detector>/run-<k>/ and <out>/accuracy.csv sums them up (median, min-max, loops wrong in any\n"
+      "run, revisits closed in every run), beside a peer's runs when --reference names their folder.\n"
+      "Exits 1 when a run failed or could not be scored.");
   args.option("sequence", "KITTI-layout sequence folder with poses.txt (the ground truth)")
       .option("out", "output folder: one folder per detector, summary.csv, trajectories.png")
-      .option("detectors", "comma list of hbow, fabmap, vlad, hmvlad, vladpq, none (no loop closing); 'all' stands "
-                           "for the five models", "all")
-      .option("loop-gt", "loop ground truth, 'query_frame ref_frame' per line ('#' comments); default: pairs of "
-                         "poses within 6 m and more than 300 frames apart")
+      .option("detectors",
+              "comma list of hbow, fabmap, vlad, hmvlad, vladpq, none (no loop closing); 'all' stands "
+              "for the five models",
+              "all")
+      .option("loop-gt",
+              "loop ground truth, 'query_frame ref_frame' per line ('#' comments); default: pairs of "
+              "poses within 6 m and more than 300 frames apart")
       .option("jobs", "runs at the same time (default: the number of cores)")
       .option("config", "passed to run")
       .flag("lockstep", "passed to run")
       .option("run-args", "more arguments for run, split at spaces (no quoting), e.g. \"--end 60 --seed 2\"")
       .flag("score-only", "run nothing: score the <out>/<detector>/ folders already there")
       .option("runs", "runs of each detector; more than 1: median and range in <out>/accuracy.csv", "1")
-      .option("reference", "a peer's run folders to score by the same rules (sub-folders with CameraTrajectory.txt, "
-                           "loops.txt, TrackingTimes.txt, e.g. ORB-SLAM2's reference results for this sequence)");
+      .option("reference",
+              "a peer's run folders to score by the same rules (sub-folders with CameraTrajectory.txt, "
+              "loops.txt, TrackingTimes.txt, e.g. ORB-SLAM2's reference results for this sequence)");
   return runTool("eval-slam", [&] {
     if (!args.parse(argc, argv)) return 0;
     for (const char* o : {"sequence", "out"})
@@ -200,26 +207,33 @@ int main(int argc, char** argv) {
     std::vector<std::string> models;
     const auto& names = placeModelNames();
     for (const auto& m : split(args.str("detectors"), ","))
-      if (m == "all") models.insert(models.end(), names.begin(), names.end());
-      else models.push_back(m);
+      if (m == "all")
+        models.insert(models.end(), names.begin(), names.end());
+      else
+        models.push_back(m);
     if (models.empty()) throw CliError("--detectors is empty");
     for (size_t i = 0; i < models.size(); ++i) {
       if (models[i] != "none" && std::find(names.begin(), names.end(), models[i]) == names.end())
-        throw CliError("--detectors: unknown detector '" + models[i] + "': not one of hbow, fabmap, vlad, hmvlad, "
+        throw CliError("--detectors: unknown detector '" + models[i] +
+                       "': not one of hbow, fabmap, vlad, hmvlad, "
                        "vladpq, none (or all)");
       if (std::find(models.begin(), models.begin() + i, models[i]) != models.begin() + i)
         throw CliError("--detectors: '" + models[i] + "' is named twice");
     }
     const long runs = args.integer("runs");
     if (runs < 1) throw CliError("--runs must be >= 1");
-    const long jobs = args.has("jobs") ? args.integer("jobs") : std::max(1u, std::thread::hardware_concurrency());
+    const long jobs =
+        args.has("jobs") ? args.integer("jobs") : std::max(1u, std::thread::hardware_concurrency());
     if (jobs < 1) throw CliError("--jobs must be >= 1");
     const std::vector<std::string> run_args = split(args.str("run-args"), " \t");
     for (const auto& a : run_args) {
       const std::string name = a.substr(0, a.find('='));
-      if (name == "--out" || name == "--detector") throw CliError("--run-args: " + name + " is set by eval-slam");
+      if (name == "--out" || name == "--detector")
+        throw CliError("--run-args: " + name + " is set by eval-slam");
       if (name == "--start")
-        throw CliError("--run-args: --start is not supported (trajectory.kitti.txt's lines are scored as frames 0, 1, ...)");
+        throw CliError(
+            "--run-args: --start is not supported (trajectory.kitti.txt's lines are scored as frames 0, 1, "
+            "...)");
     }
 
     // The ground truth and the revisits before any run: their errors should not wait for the SLAM.
@@ -227,7 +241,8 @@ int main(int argc, char** argv) {
     if (!fs::is_directory(seq)) throw DataError(seq.string() + ": no such folder");
     const fs::path poses_path = seq / "poses.txt";
     if (!fs::exists(poses_path))
-      throw DataError(poses_path.string() + ": no such file (eval-slam scores against the sequence's ground truth)");
+      throw DataError(poses_path.string() +
+                      ": no such file (eval-slam scores against the sequence's ground truth)");
     const std::vector<Pose3> gt = readGroundTruthPoses(poses_path.string());
     std::vector<std::pair<int, int>> pairs;
     std::string gt_source;
@@ -236,8 +251,9 @@ int main(int argc, char** argv) {
       pairs = readIndexPairs(gt_source);
       for (const auto& [q, r] : pairs)
         if (q >= static_cast<int>(gt.size()) || r >= static_cast<int>(gt.size()))
-          throw DataError(gt_source + ": pair " + std::to_string(q) + " " + std::to_string(r) + " is outside the " +
-                          std::to_string(gt.size()) + " poses of " + poses_path.string());
+          throw DataError(gt_source + ": pair " + std::to_string(q) + " " + std::to_string(r) +
+                          " is outside the " + std::to_string(gt.size()) + " poses of " +
+                          poses_path.string());
     } else {
       pairs = loopPairsFromPoses(gt, 6.0, 300);
       gt_source = "poses within 6 m, more than 300 frames apart";
@@ -264,7 +280,8 @@ int main(int argc, char** argv) {
       if (ec) self = fs::absolute(argv[0]);
       const fs::path run_bin = self.parent_path() / "run";
       if (::access(run_bin.c_str(), X_OK) != 0)
-        throw DataError(run_bin.string() + ": the run tool is not there (eval-slam runs the one beside itself)");
+        throw DataError(run_bin.string() +
+                        ": the run tool is not there (eval-slam runs the one beside itself)");
       std::map<pid_t, size_t> running;
       std::map<size_t, std::chrono::steady_clock::time_point> started;
       size_t next = 0;
@@ -274,13 +291,15 @@ int main(int argc, char** argv) {
           fs::create_directories(dir);
           // A failed run must not leave an earlier run's results to be scored as its own.
           for (const char* f : {"trajectory.kitti.txt", "loops.csv", "summary.json"}) fs::remove(dir / f);
-          std::vector<std::string> cmd{run_bin.string(), seq.string(), "--out", dir.string(), "--detector", rows[next].model};
+          std::vector<std::string> cmd{run_bin.string(), seq.string(), "--out",
+                                       dir.string(),     "--detector", rows[next].model};
           if (args.has("lockstep")) cmd.push_back("--lockstep");
           if (args.has("config")) cmd.insert(cmd.end(), {"--config", args.str("config")});
           cmd.insert(cmd.end(), run_args.begin(), run_args.end());
           running[launch(cmd, (dir / "run.log").string())] = next;
           started[next] = std::chrono::steady_clock::now();
-          std::cerr << "eval-slam: " << rows[next].name << ": running (log " << (dir / "run.log").string() << ")\n";
+          std::cerr << "eval-slam: " << rows[next].name << ": running (log " << (dir / "run.log").string()
+                    << ")\n";
           ++next;
         }
         int status = 0;
@@ -292,7 +311,8 @@ int main(int argc, char** argv) {
         const auto it = running.find(pid);
         if (it == running.end()) continue;
         Row& row = rows[it->second];
-        const double secs = std::chrono::duration<double>(std::chrono::steady_clock::now() - started[it->second]).count();
+        const double secs =
+            std::chrono::duration<double>(std::chrono::steady_clock::now() - started[it->second]).count();
         const std::string log = (row.dir / "run.log").string();
         if (WIFEXITED(status) && WEXITSTATUS(status) == 0)
           std::cerr << "eval-slam: " << row.name << ": done in " << fixed(secs, 0) << " s\n";
@@ -314,9 +334,20 @@ int main(int argc, char** argv) {
     }
 
     // The table: printed aligned, written as CSV.
-    const std::vector<std::string> header{"model", "ate_m", "t_rel_pct", "r_rel_deg_100m", "loops_accepted",
-                                          "loops_correct", "loops_wrong_pose", "segments_closed", "detect_ms_median", "detect_ms_p95",
-                                          "query_ms_median", "signature_ms_median", "verify_ms_median", "status"};
+    const std::vector<std::string> header{"model",
+                                          "ate_m",
+                                          "t_rel_pct",
+                                          "r_rel_deg_100m",
+                                          "loops_accepted",
+                                          "loops_correct",
+                                          "loops_wrong_pose",
+                                          "segments_closed",
+                                          "detect_ms_median",
+                                          "detect_ms_p95",
+                                          "query_ms_median",
+                                          "signature_ms_median",
+                                          "verify_ms_median",
+                                          "status"};
     std::vector<std::vector<std::string>> cells{header};
     for (const Row& r : rows) {
       if (!r.failure.empty()) {
@@ -329,7 +360,8 @@ int main(int argc, char** argv) {
       const RelativeErrors& rel = r.tm.relative;
       cells.push_back({r.name, fixed(r.tm.ate_rmse_m, 3), fixed(rel.valid ? rel.t_rel_pct : NAN, 3),
                        fixed(rel.valid ? rel.r_rel_deg_per_100m : NAN, 4), std::to_string(r.loops.accepted),
-                       std::to_string(r.loops.correct), r.pose_judged ? std::to_string(r.loops.wrong_pose) : "n/a",
+                       std::to_string(r.loops.correct),
+                       r.pose_judged ? std::to_string(r.loops.wrong_pose) : "n/a",
                        std::to_string(r.loops.segmentsClosed()) + "/" + std::to_string(segments.size()),
                        fixed(r.detect_median, 2), fixed(r.detect_p95, 2), fixed(r.query_median, 2),
                        fixed(r.signature_median, 2), fixed(r.verify_median, 2), "ok"});
@@ -343,7 +375,8 @@ int main(int argc, char** argv) {
     for (const auto& line : cells) {
       for (size_t i = 0; i < line.size(); ++i) {
         csv << (i ? "," : "") << csvCell(line[i]);
-        std::cout << line[i] << (i + 1 == line.size() ? "\n" : std::string(width[i] - line[i].size() + 2, ' '));
+        std::cout << line[i]
+                  << (i + 1 == line.size() ? "\n" : std::string(width[i] - line[i].size() + 2, ' '));
       }
       csv << "\n";
     }
@@ -363,7 +396,9 @@ int main(int argc, char** argv) {
         acc.insert(acc.end(), peer.begin(), peer.end());
       }
       std::cout << "\naccuracy over " << runs << " run" << (runs == 1 ? "" : "s") << " per detector"
-                << (args.has("reference") ? " and the peer's runs in " + args.str("reference") : std::string()) << ":\n"
+                << (args.has("reference") ? " and the peer's runs in " + args.str("reference")
+                                          : std::string())
+                << ":\n"
                 << formatAccuracyTable(acc, false);
       const fs::path acc_path = out / "accuracy.csv";
       std::ofstream acc_csv(acc_path);
@@ -388,7 +423,8 @@ int main(int argc, char** argv) {
       const std::string title = "SLAM per loop detector on " + name.filename().string() + ", frames " +
                                 std::to_string(first) + "-" + std::to_string(last);
       const fs::path png = out / "trajectories.png";
-      writeTrajectoriesPlot(png.string(), title, std::vector<Pose3>(gt.begin() + first, gt.begin() + last + 1), aligned);
+      writeTrajectoriesPlot(png.string(), title,
+                            std::vector<Pose3>(gt.begin() + first, gt.begin() + last + 1), aligned);
       std::cout << "plot: " << png.string() << "\n";
     }
 
@@ -397,8 +433,8 @@ int main(int argc, char** argv) {
     for (const Row& r : rows)
       if (!r.failure.empty()) failed += (n_failed++ ? ", " : "") + r.name;
     if (n_failed)
-      throw DataError(std::to_string(n_failed) + " of " + std::to_string(rows.size()) + " models failed: " + failed +
-                      " (see the status column)");
+      throw DataError(std::to_string(n_failed) + " of " + std::to_string(rows.size()) +
+                      " models failed: " + failed + " (see the status column)");
     return 0;
   });
 }

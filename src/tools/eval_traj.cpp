@@ -47,14 +47,18 @@ int main(int argc, char** argv) {
                "eval-traj --gt <poses.txt> --est <trajectory.txt> [--times times.txt] [--match index|time] "
                "[--plot out.png] [--json]");
   args.option("gt", "ground truth, KITTI format (12 numbers per line, one line per frame)")
-      .option("est", "estimate: KITTI (12 numbers per line; line i = frame i) or TUM (stamp tx ty tz qx qy qz qw; "
-                     "any subset of frames, e.g. keyframes); the format is told by the first line")
+      .option("est",
+              "estimate: KITTI (12 numbers per line; line i = frame i) or TUM (stamp tx ty tz qx qy qz qw; "
+              "any subset of frames, e.g. keyframes); the format is told by the first line")
       .option("times", "the ground truth's times.txt: TUM stamps are matched to it")
-      .option("match", "how TUM stamps find their frames: 'time' (needs --times) or 'index' (stamps are frame "
-                       "indices); default: time with --times, else an error. KITTI files are always by index")
+      .option("match",
+              "how TUM stamps find their frames: 'time' (needs --times) or 'index' (stamps are frame "
+              "indices); default: time with --times, else an error. KITTI files are always by index")
       .option("tolerance-ms", "time matching: largest difference between a stamp and its frame's time", "1")
-      .option("stamp-offset", "time matching: the estimate's stamps are times.txt + this many seconds "
-                              "(1 for trajectories made from kitti2bag's bags)", "0")
+      .option("stamp-offset",
+              "time matching: the estimate's stamps are times.txt + this many seconds "
+              "(1 for trajectories made from kitti2bag's bags)",
+              "0")
       .option("plot", "write a top view (x-z plane) of both trajectories to this PNG")
       .flag("json", "print one JSON object instead of 'key: value' lines");
   return runTool("eval-traj", [&] {
@@ -68,11 +72,14 @@ int main(int argc, char** argv) {
 
     std::string match = args.str("match");
     if (match.empty()) match = kitti || !args.has("times") ? "index" : "time";
-    if (match != "index" && match != "time") throw CliError("--match must be 'index' or 'time', not '" + match + "'");
-    if (kitti && match == "time") throw CliError("--match time: KITTI files carry no stamps (line i is frame i)");
+    if (match != "index" && match != "time")
+      throw CliError("--match must be 'index' or 'time', not '" + match + "'");
+    if (kitti && match == "time")
+      throw CliError("--match time: KITTI files carry no stamps (line i is frame i)");
     if (!kitti && !args.has("match") && !args.has("times"))
-      throw CliError(est_path + " is a TUM file: give the ground truth's --times to match its stamps, or "
-                                "--match index when its stamps are frame indices");
+      throw CliError(est_path +
+                     " is a TUM file: give the ground truth's --times to match its stamps, or "
+                     "--match index when its stamps are frame indices");
     if (match == "time" && !args.has("times")) throw CliError("--match time needs --times");
 
     MatchedPoses m;
@@ -85,7 +92,8 @@ int main(int argc, char** argv) {
         m = matchByTime(gt, times, est, o, est_path);
       } catch (const DataError& e) {
         // A constant offset (kitti2bag's bags run 1 s ahead of times.txt) is the likely cause: name it.
-        if (times.empty() || std::string(e.what()).find("nearest ground-truth time") == std::string::npos) throw;
+        if (times.empty() || std::string(e.what()).find("nearest ground-truth time") == std::string::npos)
+          throw;
         throw DataError(std::string(e.what()) + "; the first stamp is " +
                         fmt(est.poses.front().stamp_s - o.stamp_offset_s - times.front()) +
                         " s after the first time: if every stamp is offset by as much, pass --stamp-offset");
@@ -94,8 +102,8 @@ int main(int argc, char** argv) {
       m = matchByFrameIndex(gt, est, est_path);
     }
     if (kitti && est.poses.size() < gt.size())
-      std::cerr << "eval-traj: note: " << est_path << " has " << est.poses.size() << " poses for " << gt.size()
-                << " ground-truth frames, so it is taken as frames 0.." << est.poses.size() - 1
+      std::cerr << "eval-traj: note: " << est_path << " has " << est.poses.size() << " poses for "
+                << gt.size() << " ground-truth frames, so it is taken as frames 0.." << est.poses.size() - 1
                 << " (an estimate of keyframes only must be a TUM file)\n";
     const TrajectoryMetrics tm = evaluateTrajectory(m);
     const RelativeErrors& rel = tm.relative;
@@ -105,23 +113,26 @@ int main(int argc, char** argv) {
       for (const auto& T : m.est) aligned.push_back(tm.T_gt_est * T);
       const std::string title = std::filesystem::path(est_path).filename().string() + " vs " +
                                 std::filesystem::path(gt_path).filename().string() + ", " +
-                                std::to_string(m.frames.size()) + " of " + std::to_string(gt.size()) + " frames";
+                                std::to_string(m.frames.size()) + " of " + std::to_string(gt.size()) +
+                                " frames";
       // The ground truth the estimate covers (all of it unless the estimate starts late or stops early).
       const std::vector<Pose3> gt_span(gt.begin() + m.frames.front(), gt.begin() + m.frames.back() + 1);
       writeTrajectoryPlot(args.str("plot"), title, gt_span, aligned, tm);
     }
 
-    const std::string format = std::string(formatName(est.format)) + (kitti ? " (12 numbers per line)" : " (8 numbers per line)");
-    const std::string matched = m.rule + ", " + std::to_string(m.frames.size()) + " of " + std::to_string(gt.size()) +
-                                " ground-truth frames";
+    const std::string format =
+        std::string(formatName(est.format)) + (kitti ? " (12 numbers per line)" : " (8 numbers per line)");
+    const std::string matched = m.rule + ", " + std::to_string(m.frames.size()) + " of " +
+                                std::to_string(gt.size()) + " ground-truth frames";
     std::ostringstream out;
     if (args.has("json")) {
       auto num = [](double v) { return std::isfinite(v) ? fmt(v) : std::string("null"); };
       out << "{\"gt\": " << jsonString(gt_path) << ", \"est\": " << jsonString(est_path)
-          << ", \"format\": " << jsonString(formatName(est.format)) << ", \"matched\": " << jsonString(matched)
-          << ", \"frames\": " << m.frames.size() << ", \"gt_frames\": " << gt.size()
-          << ", \"path_length_m\": " << num(rel.path_length_m) << ", \"segments\": " << rel.segments
-          << ", \"ate_rmse_m\": " << num(tm.ate_rmse_m) << ", \"t_rel_pct\": " << num(rel.t_rel_pct)
+          << ", \"format\": " << jsonString(formatName(est.format))
+          << ", \"matched\": " << jsonString(matched) << ", \"frames\": " << m.frames.size()
+          << ", \"gt_frames\": " << gt.size() << ", \"path_length_m\": " << num(rel.path_length_m)
+          << ", \"segments\": " << rel.segments << ", \"ate_rmse_m\": " << num(tm.ate_rmse_m)
+          << ", \"t_rel_pct\": " << num(rel.t_rel_pct)
           << ", \"r_rel_deg_per_100m\": " << num(rel.r_rel_deg_per_100m);
       if (!rel.valid) out << ", \"relative_note\": " << jsonString(rel.reason);
       if (args.has("plot")) out << ", \"plot\": " << jsonString(args.str("plot"));

@@ -30,20 +30,21 @@ int main(int argc, char** argv) {
     opt.png = args.has("png");
     opt.overwrite = args.has("force");
     std::cout << "kitti2bag: " << seq.directory() << ": " << seq.size() << " frames, camera "
-              << seq.camera().describe() << (seq.hasPoses() ? ", with ground truth" : ", no ground truth") << "\n";
+              << seq.camera().describe() << (seq.hasPoses() ? ", with ground truth" : ", no ground truth")
+              << "\n";
     binloop::ProgressBar bar("kitti2bag");
-    const auto summary = binloop_ros::writeKittiBag(seq, args.str("out.bag"), opt,
-                                                    [&](size_t done, size_t total) { bar.update(done, total); });
+    const auto summary = binloop_ros::writeKittiBag(
+        seq, args.str("out.bag"), opt, [&](size_t done, size_t total) { bar.update(done, total); });
     bar.finish();
     namespace t = binloop_ros::topics;
     std::cout << "kitti2bag: wrote " << args.str("out.bag") << " (" << summary.bytes / 1e6 << " MB)\n"
-              << "  " << summary.frames << " stereo frames, stamps " << std::fixed << summary.first_stamp << " .. "
-              << summary.last_stamp << " s\n"
+              << "  " << summary.frames << " stereo frames, stamps " << std::fixed << summary.first_stamp
+              << " .. " << summary.last_stamp << " s\n"
               << "  " << t::kLeftImage << ", " << t::kRightImage << " (mono8), " << t::kLeftInfo << ", "
               << t::kRightInfo << "\n";
     if (summary.ground_truth)
-      std::cout << "  " << t::kGroundTruth << " (nav_msgs/Odometry, " << summary.ground_truth << " poses, frame '"
-                << t::kGroundTruthFrame << "')\n";
+      std::cout << "  " << t::kGroundTruth << " (nav_msgs/Odometry, " << summary.ground_truth
+                << " poses, frame '" << t::kGroundTruthFrame << "')\n";
     return 0;
   });
 }

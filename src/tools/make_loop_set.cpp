@@ -10,7 +10,8 @@
 namespace fs = std::filesystem;
 
 int main(int argc, char** argv) {
-  binloop::CliArgs args("make-loop-set", "make-loop-set --list <places.txt> --out <dir> [--seed N] [--shared <dir>]");
+  binloop::CliArgs args("make-loop-set",
+                        "make-loop-set --list <places.txt> --out <dir> [--seed N] [--shared <dir>]");
   args.option("list", "places, one per line: '<name> <image A> [<image B> | = | -]'")
       .option("out", "folder for the frames (NNNNNN.png), loops.txt and frames.txt")
       .option("shared", "what $SHARED stands for in the list", "../shared/data")
@@ -23,11 +24,13 @@ int main(int argc, char** argv) {
     if (fs::exists(out)) fs::remove_all(out);
     const auto set = binloop::makeLoopSet(places, out.string(), static_cast<uint64_t>(args.integer("seed")));
     std::ofstream loops(out / "loops.txt"), frames(out / "frames.txt");
-    loops << "# query ref: every revisit frame with every first-visit frame of its place (" << args.str("list") << ")\n";
+    loops << "# query ref: every revisit frame with every first-visit frame of its place ("
+          << args.str("list") << ")\n";
     for (const auto& [q, r] : set.loops) loops << q << " " << r << "\n";
     frames << "# frame place revisit source\n";
     for (size_t i = 0; i < set.frames.size(); ++i)
-      frames << i << " " << set.frames[i].place << " " << set.frames[i].revisit << " " << set.frames[i].source << "\n";
+      frames << i << " " << set.frames[i].place << " " << set.frames[i].revisit << " " << set.frames[i].source
+             << "\n";
     std::cout << "make-loop-set: " << places.size() << " places, " << set.frames.size() << " frames, "
               << set.loops.size() << " loop pairs -> " << out.string() << "\n";
     return 0;

@@ -87,8 +87,10 @@ struct Recorder {
     auto c = std::make_shared<const msg::LoopCandidates>(binloop_ros::fromRos(*m));
     last_message = ros::WallTime::now();
     auto& e = entryOf(c->query);
-    if (c->shadow) e.shadow.push_back(c);
-    else e.active = c;
+    if (c->shadow)
+      e.shadow.push_back(c);
+    else
+      e.active = c;
   }
   void onClosure(const binloop::LoopClosureConstPtr& m) {
     auto c = std::make_shared<const msg::LoopClosure>(binloop_ros::fromRos(*m));
@@ -133,15 +135,16 @@ struct Recorder {
     for (const auto& e : loops)
       for (const auto& c : e.closures) ++by_status[msg::loopStatusName(c->status)];
     std::ofstream js(out / "summary.json");
-    js << "{\n  \"source\": \"ros graph (record-run)\",\n  \"frames\": " << frames.size() << ",\n  \"lost_frames\": " << lost
-       << ",\n  \"keyframes\": " << live << ",\n  \"loops_by_status\": {";
+    js << "{\n  \"source\": \"ros graph (record-run)\",\n  \"frames\": " << frames.size()
+       << ",\n  \"lost_frames\": " << lost << ",\n  \"keyframes\": " << live << ",\n  \"loops_by_status\": {";
     bool first = true;
     for (const auto& [s, n] : by_status) {
       js << (first ? "" : ", ") << "\"" << s << "\": " << n;
       first = false;
     }
-    js << "},\n  \"latency_ms_median\": " << percentile(latency_ms, 0.5) << ",\n  \"latency_ms_p95\": "
-       << percentile(latency_ms, 0.95) << ",\n  \"tracking_ms_median\": " << percentile(track_ms, 0.5)
+    js << "},\n  \"latency_ms_median\": " << percentile(latency_ms, 0.5)
+       << ",\n  \"latency_ms_p95\": " << percentile(latency_ms, 0.95)
+       << ",\n  \"tracking_ms_median\": " << percentile(track_ms, 0.5)
        << ",\n  \"tracking_ms_p95\": " << percentile(track_ms, 0.95) << ",\n  \"diagnostics\": {";
     bool first_status = true;
     for (const auto& [name, values] : diagnostics) {
@@ -163,15 +166,18 @@ struct Recorder {
 int main(int argc, char** argv) {
   CliArgs args("record-run",
                "usage: record-run --out <dir> [--ns /binloop]\n"
-               "Records what a running binloop graph publishes; on SIGINT/SIGTERM writes trajectory.kitti.txt/.tum.txt,\n"
+               "Records what a running binloop graph publishes; on SIGINT/SIGTERM writes "
+               "trajectory.kitti.txt/.tum.txt,\n"
                "keyframes.kitti.txt, loops.csv and summary.json into <dir> (the offline runner's files).");
   args.option("out", "folder to write")
       .option("ns", "namespace of the graph's topics", "/binloop")
-      .option("quiet-s", "after the stop signal, write once the graph has published nothing for this long", "3");
+      .option("quiet-s", "after the stop signal, write once the graph has published nothing for this long",
+              "3");
   return runTool("record-run", [&] {
     if (!args.parse(argc, argv)) return 0;
     if (!args.has("out")) throw CliError("--out is required");
-    ros::init(argc, argv, "record_run", ros::init_options::NoSigintHandler | ros::init_options::AnonymousName);
+    ros::init(argc, argv, "record_run",
+              ros::init_options::NoSigintHandler | ros::init_options::AnonymousName);
     std::signal(SIGINT, onSignal);
     std::signal(SIGTERM, onSignal);
     ros::NodeHandle nh(args.str("ns"));

@@ -13,7 +13,9 @@
 
 int main(int argc, char** argv) {
   binloop::CliArgs args("render", "render --route <poses.txt> --out <sequence_dir> [options]");
-  args.option("route", "ground-truth poses of the route (KITTI format, T_w_c per frame), or 'loop' for the built-in 1.3 laps of a 120x200 m block")
+  args.option("route",
+              "ground-truth poses of the route (KITTI format, T_w_c per frame), or 'loop' for the built-in "
+              "1.3 laps of a 120x200 m block")
       .option("times", "times.txt of the route (default: 10 Hz)")
       .option("out", "sequence folder to write (image_0/, image_1/, calib.txt, times.txt, poses.txt)")
       .option("start", "first route frame", "0")
@@ -29,18 +31,25 @@ int main(int argc, char** argv) {
       .option("blur", "optical blur sigma in pixels", "0.6")
       .option("textures", "extra folder of photos for façade textures (added to the Debian photos)")
       .flag("procedural", "use procedural textures only (no photos)")
-      .flag("level-revisits", "give revisits the height of the earlier pass (ground truth that disagrees in height between passes, e.g. KITTI 02)")
-      .flag("aperiodic-ground", "a road texture that never repeats (by default it repeats every 8 m, as every render measured before it)")
+      .flag("level-revisits",
+            "give revisits the height of the earlier pass (ground truth that disagrees in height between "
+            "passes, e.g. KITTI 02)")
+      .flag("aperiodic-ground",
+            "a road texture that never repeats (by default it repeats every 8 m, as every render measured "
+            "before it)")
       .flag("force", "write into an existing non-empty folder");
   return binloop::runTool("render", [&] {
     if (!args.parse(argc, argv)) return 0;
     if (!args.has("route") || !args.has("out")) throw binloop::CliError("--route and --out are required");
-    auto route = args.str("route") == "loop" ? binloop::sim::loopRoute() : binloop::readKittiPoses(args.str("route"));
+    auto route =
+        args.str("route") == "loop" ? binloop::sim::loopRoute() : binloop::readKittiPoses(args.str("route"));
     if (route.size() < 2) throw binloop::CliError("--route needs at least 2 poses");
     if (args.has("level-revisits")) {
       binloop::sim::LevelResult level = binloop::sim::levelRevisits(route);
-      std::cout << "render: levelled " << level.revisit_frames << " revisiting frames to the height of the earlier pass, "
-                << "heights changed by up to " << level.max_shift_m << " m (poses.txt has the levelled route)\n";
+      std::cout << "render: levelled " << level.revisit_frames
+                << " revisiting frames to the height of the earlier pass, "
+                << "heights changed by up to " << level.max_shift_m
+                << " m (poses.txt has the levelled route)\n";
       route = std::move(level.route);
     }
     std::vector<double> times;
@@ -60,7 +69,8 @@ int main(int argc, char** argv) {
       cam.cy = cam.height * 0.4926;
     }
     if (args.has("baseline")) cam.baseline_m = args.number("baseline");
-    if (cam.width < 16 || cam.height < 16 || cam.baseline_m <= 0) throw binloop::CliError("bad image size or baseline");
+    if (cam.width < 16 || cam.height < 16 || cam.baseline_m <= 0)
+      throw binloop::CliError("bad image size or baseline");
 
     binloop::sim::SequenceJob job;
     job.route = route;
@@ -82,12 +92,14 @@ int main(int argc, char** argv) {
       }
     }
     auto bank = binloop::sim::TextureBank::build(photos, seed);
-    std::cout << "render: " << (bank.photos_used ? std::to_string(bank.photos_used) + " photos" : "procedural")
-              << " -> " << bank.textures.size() << " textures; camera " << cam.describe() << "\n";
+    std::cout << "render: "
+              << (bank.photos_used ? std::to_string(bank.photos_used) + " photos" : "procedural") << " -> "
+              << bank.textures.size() << " textures; camera " << cam.describe() << "\n";
     binloop::sim::WorldParams wp;
     wp.aperiodic_ground = args.has("aperiodic-ground");
     const auto world = binloop::sim::World::build(route, std::move(bank), wp, seed);
-    std::cout << "render: world of " << world.quads().size() << " quads along " << route.size() << " route poses\n";
+    std::cout << "render: world of " << world.quads().size() << " quads along " << route.size()
+              << " route poses\n";
     binloop::sim::RenderOptions ropt;
     ropt.noise_sigma = args.number("noise");
     ropt.exposure_swing = args.number("lighting");

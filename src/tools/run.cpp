@@ -9,15 +9,15 @@
 #include <sstream>
 #include <thread>
 
+#include "binloop/features/orb_slam_extractor.h"
 #include "binloop/io/data_error.h"
 #include "binloop/io/kitti_sequence.h"
 #include "binloop/io/trajectory_io.h"
-#include "binloop/pipeline/slam_config.h"
-#include "binloop/place/hbow_recognizer.h"
-#include "binloop/features/orb_slam_extractor.h"
 #include "binloop/pipeline/loop_log.h"
 #include "binloop/pipeline/model_files.h"
+#include "binloop/pipeline/slam_config.h"
 #include "binloop/pipeline/slam_pipeline.h"
+#include "binloop/place/hbow_recognizer.h"
 #include "binloop/util/cli_args.h"
 #include "binloop/util/package_paths.h"
 #include "binloop/util/percentile.h"
@@ -44,36 +44,52 @@ std::string jsonEscape(const std::string& s) {
 }  // namespace
 
 int main(int argc, char** argv) {
-  CliArgs args("run",
-               "scripts/binloop run <sequence_dir> --out <dir> [--config config/kitti.yaml]\n"
-               "    [--detector hmvlad|hbow|fabmap|vlad|vladpq|none] [--shadow all|M,M] [--switch-detector-at KF:M]\n"
-               "    [--lockstep | --rate R] [--seed N] [--start N] [--end N] [--reloc-vocab <hbow.bin>|none]\n"
-               "    [--load-map <dir> [--localize-only]] [--save-map <dir>]\n"
-               "Tracks and maps a KITTI-layout stereo sequence (image_0/, image_1/, calib.txt, times.txt), closes loops,\n"
-               "and writes trajectory.kitti.txt / .tum.txt (every frame, loop-corrected), keyframes.kitti.txt / .tum.txt,\n"
-               "timing.csv, loops.csv (one row per keyframe and model queried), summary.json.");
+  CliArgs args(
+      "run",
+      "scripts/binloop run <sequence_dir> --out <dir> [--config config/kitti.yaml]\n"
+      "    [--detector hmvlad|hbow|fabmap|vlad|vladpq|none] [--shadow all|M,M] [--switch-detector-at KF:M]\n"
+      "    [--lockstep | --rate R] [--seed N] [--start N] [--end N] [--reloc-vocab <hbow.bin>|none]\n"
+      "    [--load-map <dir> [--localize-only]] [--save-map <dir>]\n"
+      "Tracks and maps a KITTI-layout stereo sequence (image_0/, image_1/, calib.txt, times.txt), closes "
+      "loops,\n"
+      "and writes trajectory.kitti.txt / .tum.txt (every frame, loop-corrected), keyframes.kitti.txt / "
+      ".tum.txt,\n"
+      "timing.csv, loops.csv (one row per keyframe and model queried), summary.json.");
   args.positional("sequence_dir", "KITTI-layout sequence folder")
       .option("out", "output folder (created)")
-      .option("config", "SLAM settings (YAML; see config/kitti.yaml); default: the built-in defaults, which that file repeats")
-      .option("detector", "loop detector: hmvlad, hbow, fabmap, vlad, vladpq, or none (no loop closing)", "hmvlad")
-      .option("vocab-dir", "where the detectors' model files are (<dir>/<model>.bin); default: the package's", packagePath(kShippedModelDir))
+      .option("config",
+              "SLAM settings (YAML; see config/kitti.yaml); default: the built-in defaults, which that file "
+              "repeats")
+      .option("detector", "loop detector: hmvlad, hbow, fabmap, vlad, vladpq, or none (no loop closing)",
+              "hmvlad")
+      .option("vocab-dir", "where the detectors' model files are (<dir>/<model>.bin); default: the package's",
+              packagePath(kShippedModelDir))
       .option("shadow", "models run beside the active one and only logged: 'all' or a comma list")
-      .option("switch-detector-at", "KF:model[,KF:model...]: switch the active detector when it has seen KF keyframes")
-      .flag("lockstep", "map every keyframe before the next frame (bit-identical reruns); default: mapping on its own thread")
+      .option("switch-detector-at",
+              "KF:model[,KF:model...]: switch the active detector when it has seen KF keyframes")
+      .flag("lockstep",
+            "map every keyframe before the next frame (bit-identical reruns); default: mapping on its own "
+            "thread")
       .option("rate",
-              "threaded: frames go in no faster than R times the sequence's clock (times.txt), as from a camera or "
-              "a bag played at R x; 0: as fast as tracking takes them", "0")
+              "threaded: frames go in no faster than R times the sequence's clock (times.txt), as from a "
+              "camera or "
+              "a bag played at R x; 0: as fast as tracking takes them",
+              "0")
       .option("seed", "seed for every random choice (recorded in summary.json)", "1")
       .option("start", "first frame", "0")
       .option("end", "one past the last frame (default: all)", "-1")
       .option("reloc-vocab",
-              "hbow vocabulary that indexes the keyframes for relocalisation anywhere in the map; 'none': only the "
+              "hbow vocabulary that indexes the keyframes for relocalisation anywhere in the map; 'none': "
+              "only the "
               "most recent keyframes are tried; default: the package's shipped k=8 L=5 vocabulary",
               packagePath(kRelocVocab))
-      .option("load-map", "start in a map saved by --save-map or the ROS save_map service (tracking relocalises in it)")
+      .option("load-map",
+              "start in a map saved by --save-map or the ROS save_map service (tracking relocalises in it)")
       .option("save-map", "save the map at the end (one state file per stage, as the ROS save_map service)")
-      .flag("localize-only", "with --load-map: track in the loaded map and make no keyframe (the map stays as loaded)")
-      .flag("force-extractor", "use a vocabulary trained with other extractor settings than config's orb section");
+      .flag("localize-only",
+            "with --load-map: track in the loaded map and make no keyframe (the map stays as loaded)")
+      .flag("force-extractor",
+            "use a vocabulary trained with other extractor settings than config's orb section");
   return runTool("run", [&] {
     if (!args.parse(argc, argv)) return 0;
     if (!args.has("out")) throw CliError("--out is required");
@@ -87,7 +103,8 @@ int main(int argc, char** argv) {
     SlamConfig config = args.has("config") ? loadSlamConfig(args.str("config")) : SlamConfig{};
     config.tracker.seed = static_cast<uint64_t>(args.integer("seed"));
     if (args.has("localize-only")) {
-      if (!args.has("load-map")) throw CliError("--localize-only needs a map to localise in: give --load-map");
+      if (!args.has("load-map"))
+        throw CliError("--localize-only needs a map to localise in: give --load-map");
       config.tracker.localize_only = true;
     }
     const std::string reloc_vocab = args.str("reloc-vocab");
@@ -106,8 +123,10 @@ int main(int argc, char** argv) {
     fs::create_directories(out);
     const bool lockstep = args.has("lockstep");
     const double rate = args.number("rate");
-    if (!(rate >= 0) || rate > 1000) throw CliError("--rate " + args.str("rate") + ": 0 (flat out) or a factor up to 1000");
-    if (rate > 0 && lockstep) throw CliError("--rate paces a threaded run; --lockstep waits for mapping at every keyframe");
+    if (!(rate >= 0) || rate > 1000)
+      throw CliError("--rate " + args.str("rate") + ": 0 (flat out) or a factor up to 1000");
+    if (rate > 0 && lockstep)
+      throw CliError("--rate paces a threaded run; --lockstep waits for mapping at every keyframe");
     std::cerr << "run: " << seq.directory() << ", frames " << start << "-" << end - 1 << ", "
               << (lockstep ? "lock-step" : "threaded") << "\n"
               << seq.camera().describe();
@@ -126,14 +145,16 @@ int main(int argc, char** argv) {
         std::vector<std::string> skipped;
         l.shadow = shadowModelNames(args.str("shadow"), detector, args.str("vocab-dir"), &skipped);
         for (const std::string& n : skipped)
-          std::cerr << "run: shadow model " << n << " skipped: no " << n << ".bin in " << args.str("vocab-dir") << "\n";
+          std::cerr << "run: shadow model " << n << " skipped: no " << n << ".bin in "
+                    << args.str("vocab-dir") << "\n";
       }
       if (args.has("switch-detector-at")) {
         std::stringstream ss(args.str("switch-detector-at"));
         std::string item;
         while (std::getline(ss, item, ',')) {
           const auto colon = item.find(':');
-          if (colon == std::string::npos) throw CliError("--switch-detector-at '" + item + "': expected KF:model");
+          if (colon == std::string::npos)
+            throw CliError("--switch-detector-at '" + item + "': expected KF:model");
           size_t at = 0;
           try {
             at = std::stoul(item.substr(0, colon));
@@ -156,11 +177,14 @@ int main(int argc, char** argv) {
     double max_lag_s = 0;  // with --rate: how far behind the sequence's clock a frame went in
     for (long i = start; i < end; ++i) {
       if (rate > 0) {
-        const auto due = t0 + std::chrono::duration_cast<std::chrono::steady_clock::duration>(
-                                  std::chrono::duration<double>((seq.times()[i] - seq.times()[start]) / rate));
+        const auto due =
+            t0 + std::chrono::duration_cast<std::chrono::steady_clock::duration>(
+                     std::chrono::duration<double>((seq.times()[i] - seq.times()[start]) / rate));
         const auto now = std::chrono::steady_clock::now();
-        if (now < due) std::this_thread::sleep_until(due);
-        else max_lag_s = std::max(max_lag_s, std::chrono::duration<double>(now - due).count());
+        if (now < due)
+          std::this_thread::sleep_until(due);
+        else
+          max_lag_s = std::max(max_lag_s, std::chrono::duration<double>(now - due).count());
       }
       msg::TrackedFrame tf;
       try {
@@ -172,7 +196,8 @@ int main(int argc, char** argv) {
         if (!frames.empty()) tf.T_w_c = frames.back().T_w_c;
         tf.problem = std::string(e.what()) + "; frame skipped";
       }
-      if (!tf.problem.empty() && problems++ < 20) std::cerr << "\nrun: frame " << i << ": " << tf.problem << "\n";
+      if (!tf.problem.empty() && problems++ < 20)
+        std::cerr << "\nrun: frame " << i << ": " << tf.problem << "\n";
       frames.push_back(tf);
       const double secs = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
       std::ostringstream st;
@@ -195,7 +220,8 @@ int main(int argc, char** argv) {
     Trajectory tum;
     for (const msg::TrackedFrame& tf : frames) {
       Pose3 T = tf.T_w_c, T_ref;
-      if (tf.state != msg::TrackingState::kLost && tf.reference != kNoId && mapper.keyframePose(tf.reference, &T_ref))
+      if (tf.state != msg::TrackingState::kLost && tf.reference != kNoId &&
+          mapper.keyframePose(tf.reference, &T_ref))
         T = T_ref * tf.T_ref_c;
       poses.push_back(T);
       tum.push_back({tf.stamp_s, T});
@@ -214,16 +240,19 @@ int main(int argc, char** argv) {
     std::map<SlamKeyframeId, const SlamPipeline::MappingTime*> map_time;
     for (const auto& m : slam.mappingTimes()) map_time[m.keyframe] = &m;
     std::ofstream timing(out / "timing.csv");
-    timing << "frame,state,features,stereo_matches,tracked_points,keyframe,extract_ms,stereo_ms,track_ms,mapping_ms,ba_ms,triangulation_ms,points_triangulated\n";
+    timing << "frame,state,features,stereo_matches,tracked_points,keyframe,extract_ms,stereo_ms,track_ms,"
+              "mapping_ms,ba_ms,triangulation_ms,points_triangulated\n";
     std::vector<double> ex, stt, tr, mp, ba, tri;
     int lost = 0, relocalized = 0;
     for (const msg::TrackedFrame& tf : frames) {
       const auto it = map_time.find(tf.new_keyframe);
       const bool kf = tf.new_keyframe != kNoId && it != map_time.end();
-      timing << tf.frame_index << "," << msg::toString(tf.state) << "," << tf.features << "," << tf.stereo_matches << ","
-             << tf.tracked_points << "," << (tf.new_keyframe != kNoId) << "," << tf.extract_ms << "," << tf.stereo_ms
-             << "," << tf.track_ms << "," << (kf ? it->second->total_ms : 0) << "," << (kf ? it->second->ba_ms : 0)
-             << "," << (kf ? it->second->triangulation_ms : 0) << "," << (kf ? it->second->points_triangulated : 0) << "\n";
+      timing << tf.frame_index << "," << msg::toString(tf.state) << "," << tf.features << ","
+             << tf.stereo_matches << "," << tf.tracked_points << "," << (tf.new_keyframe != kNoId) << ","
+             << tf.extract_ms << "," << tf.stereo_ms << "," << tf.track_ms << ","
+             << (kf ? it->second->total_ms : 0) << "," << (kf ? it->second->ba_ms : 0) << ","
+             << (kf ? it->second->triangulation_ms : 0) << "," << (kf ? it->second->points_triangulated : 0)
+             << "\n";
       if (tf.features > 0) {
         ex.push_back(tf.extract_ms);
         stt.push_back(tf.stereo_ms);
@@ -240,7 +269,8 @@ int main(int argc, char** argv) {
     std::ofstream js(out / "summary.json");
     js << std::setprecision(6) << "{\n  \"sequence\": \"" << jsonEscape(seq.directory()) << "\",\n"
        << "  \"frames\": " << frames.size() << ",\n  \"start\": " << start << ",\n  \"end\": " << end << ",\n"
-       << "  \"keyframes\": " << mapper.keyframeCount() << ",\n  \"keyframes_made\": " << slam.mappingTimes().size()
+       << "  \"keyframes\": " << mapper.keyframeCount()
+       << ",\n  \"keyframes_made\": " << slam.mappingTimes().size()
        << ",\n  \"map_points\": " << mapper.pointCount() << ",\n  \"lost_frames\": " << lost
        << ",\n  \"relocalizations\": " << relocalized << ",\n  \"problems\": " << problems
        << ",\n  \"wall_s\": " << wall_s << ",\n  \"frames_per_s\": " << frames.size() / std::max(wall_s, 1e-9)
@@ -316,8 +346,8 @@ int main(int argc, char** argv) {
       if (g.started > 0)  // threaded: in the background
         js << "  \"global_ba_background\": {\"started\": " << g.started << ", \"merged\": " << g.merged
            << ", \"stopped_by_a_loop\": " << g.aborted << ", \"last_ms\": " << g.last_ms
-           << ", \"last_keyframes\": " << g.last_keyframes << ", \"last_added_meanwhile\": "
-           << g.last_added_meanwhile << "},\n";
+           << ", \"last_keyframes\": " << g.last_keyframes
+           << ", \"last_added_meanwhile\": " << g.last_added_meanwhile << "},\n";
       std::cout << "loops_accepted: " << by_status["accepted"] << "\n";
     }
     js << "  \"settings\": {";
@@ -332,8 +362,8 @@ int main(int argc, char** argv) {
     js << "\n  }\n}\n";
     std::cout << "frames: " << frames.size() << "\nkeyframes: " << mapper.keyframeCount()
               << "\nmap_points: " << mapper.pointCount() << "\nlost_frames: " << lost
-              << "\nframes_per_s: " << std::fixed << std::setprecision(1) << frames.size() / std::max(wall_s, 1e-9)
-              << "\nresults: " << out.string() << "\n";
+              << "\nframes_per_s: " << std::fixed << std::setprecision(1)
+              << frames.size() / std::max(wall_s, 1e-9) << "\nresults: " << out.string() << "\n";
     return 0;
   });
 }

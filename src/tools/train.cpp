@@ -12,9 +12,10 @@
 #include "binloop/util/progress_bar.h"
 
 int main(int argc, char** argv) {
-  binloop::CliArgs args("train",
-                        "train <hbow|fabmap|vlad|hmvlad|vladpq> --images <dir|sequence_dir>... --out <model.bin> [options]\n"
-                        "       train hbow --import <ORBvoc.txt|voc.yml.gz> --out <model.bin>");
+  binloop::CliArgs args(
+      "train",
+      "train <hbow|fabmap|vlad|hmvlad|vladpq> --images <dir|sequence_dir>... --out <model.bin> [options]\n"
+      "       train hbow --import <ORBvoc.txt|voc.yml.gz> --out <model.bin>");
   args.positional("model", "model type")
       .option("images", "folder of images or KITTI-layout sequence (image_0/ is used); repeat for more")
       .option("every", "use every n-th image of each folder", "1")
@@ -75,10 +76,12 @@ int main(int argc, char** argv) {
     o.max_descriptors = static_cast<size_t>(args.integer("max-descriptors"));
     o.extractor = binloop::extractorSettings(eo);  // recorded in the header; loaders compare it
     binloop::ProgressBar bar("training " + args.str("model"));
-    const auto h = binloop::trainModel(type, images, o, args.str("out"), [&](size_t d, size_t n) { bar.update(d, n); });
+    const auto h =
+        binloop::trainModel(type, images, o, args.str("out"), [&](size_t d, size_t n) { bar.update(d, n); });
     bar.finish();
     const double s = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
-    std::cout << args.str("out") << ": " << h.describe() << "; " << paths.size() << " images, " << s << " s\n";
+    std::cout << args.str("out") << ": " << h.describe() << "; " << paths.size() << " images, " << s
+              << " s\n";
     return 0;
   });
 }

@@ -34,7 +34,7 @@ TEST(CandidateMarkers, LinesGoFromTheQueryToEachKnownCandidateAndTheAcceptedOneI
   EXPECT_DOUBLE_EQ(lines.points[0].z, 80);
   EXPECT_DOUBLE_EQ(lines.points[1].z, 20);
   EXPECT_DOUBLE_EQ(lines.points[3].z, 30);
-  EXPECT_GT(lines.colors[0].g, 0.8f);  // accepted: green
+  EXPECT_GT(lines.colors[0].g, 0.8f);               // accepted: green
   EXPECT_LT(lines.colors[2].g, lines.colors[2].r);  // the other: orange
   EXPECT_EQ(m.markers[1].text, "hmvlad: found (3 candidates, best 0.910, accepted)");
 

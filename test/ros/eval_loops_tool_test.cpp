@@ -1,4 +1,5 @@
-// eval-loops as a user runs it: the summary it writes for a real image pair, and one clear line for bad input.
+// eval-loops as a user runs it: the summary it writes for a real image pair, and one clear line for bad
+// input.
 #include <algorithm>
 #include <fstream>
 #include <sstream>
@@ -10,9 +11,10 @@ binloop::test::CommandResult run(const std::string& args) {
   return binloop::test::runCommand(std::string(BINLOOP_TOOL_DIR) + "/eval-loops " + args);
 }
 /// A VLAD model trained on `images` with `options` (extractor settings), written to `out`.
-binloop::test::CommandResult trainVlad(const std::string& images, const std::string& options, const std::string& out) {
-  return binloop::test::runCommand(std::string(BINLOOP_TOOL_DIR) + "/train vlad --images " + images + " " + options +
-                                   " --out " + out);
+binloop::test::CommandResult trainVlad(const std::string& images, const std::string& options,
+                                       const std::string& out) {
+  return binloop::test::runCommand(std::string(BINLOOP_TOOL_DIR) + "/train vlad --images " + images + " " +
+                                   options + " --out " + out);
 }
 }  // namespace
 
@@ -25,12 +27,16 @@ TEST(EvalLoopsTool, WritesSummaryCurvesAndQueriesForAPlainImageFolder) {
   BINLOOP_REQUIRE_DATA(vocab + "/vlad.bin");
   binloop::test::TempDir tmp;
   binloop::test::writeText(tmp / "gt.txt", "# desk 10 revisits desk 1\n9 0\n");
-  const auto r = run("--sequence " + desk + " --gt " + (tmp / "gt.txt") + " --models vlad,vladpq --vocab-dir " + vocab +
-                     " --window 0 --reference 1 --consistency 2 --out " + (tmp / "out"));
+  const auto r =
+      run("--sequence " + desk + " --gt " + (tmp / "gt.txt") + " --models vlad,vladpq --vocab-dir " + vocab +
+          " --window 0 --reference 1 --consistency 2 --out " + (tmp / "out"));
   ASSERT_EQ(r.code, 0) << r.out;
-  EXPECT_NE(r.out.find("10 images, 10 keyframes (step 1), 1 keyframes with a findable loop in 1 segments"), std::string::npos) << r.out;
+  EXPECT_NE(r.out.find("10 images, 10 keyframes (step 1), 1 keyframes with a findable loop in 1 segments"),
+            std::string::npos)
+      << r.out;
   const std::string summary = binloop::test::readText(tmp / "out/summary.csv");
-  EXPECT_EQ(summary.rfind("model,r_at_100p,auc,signature_ms_median,query_ms_median,bytes_per_kf,", 0), 0u) << summary;
+  EXPECT_EQ(summary.rfind("model,r_at_100p,auc,signature_ms_median,query_ms_median,bytes_per_kf,", 0), 0u)
+      << summary;
   for (const char* row : {"\nvlad,", "\nvlad+c2,", "\nvladpq,", "\nvladpq+c2,"})
     EXPECT_NE(summary.find(row), std::string::npos) << row << " missing from\n" << summary;
   for (const char* f : {"pr.png", "pr_vlad.csv", "pr_vlad+c2.csv", "queries_vlad.csv", "queries_vladpq.csv"})
@@ -46,13 +52,16 @@ TEST(EvalLoopsTool, BadInputGivesOneClearLine) {
   binloop::test::TempDir tmp;
   const auto no_gt = run("--sequence " + desk + " --out " + (tmp / "o"));
   EXPECT_EQ(no_gt.code, 2) << no_gt.out;
-  EXPECT_NE(no_gt.out.find("eval-loops: --gt is required when there are no poses for every image"), std::string::npos)
+  EXPECT_NE(no_gt.out.find("eval-loops: --gt is required when there are no poses for every image"),
+            std::string::npos)
       << no_gt.out;
   binloop::test::writeText(tmp / "gt.txt", "9 0\n12 3\n");
-  const auto outside = run("--sequence " + desk + " --gt " + (tmp / "gt.txt") + " --models vlad --out " + (tmp / "o"));
+  const auto outside =
+      run("--sequence " + desk + " --gt " + (tmp / "gt.txt") + " --models vlad --out " + (tmp / "o"));
   EXPECT_EQ(outside.code, 1) << outside.out;
   EXPECT_NE(outside.out.find("pair 12 3 is outside the 10 images"), std::string::npos) << outside.out;
-  const auto model = run("--sequence " + desk + " --gt " + (tmp / "gt.txt") + " --models hbow,sift --out " + (tmp / "o"));
+  const auto model =
+      run("--sequence " + desk + " --gt " + (tmp / "gt.txt") + " --models hbow,sift --out " + (tmp / "o"));
   EXPECT_NE(model.code, 0);
   EXPECT_NE(model.out.find("sift"), std::string::npos) << model.out;
 }
@@ -65,27 +74,35 @@ TEST(EvalLoopsTool, RefusesAModelOfOtherExtractorSettingsUnlessForced) {
   binloop::test::TempDir tmp;
   const auto train = trainVlad(desk, "--features 500", tmp / "vlad.bin");
   ASSERT_EQ(train.code, 0) << train.out;
-  EXPECT_NE(train.out.find("from binloop ORB with the Gaussian BRIEF pattern (500 features, scale 1.2, 8 levels, FAST 20/7, 30-px cells, full-size images)"),
-            std::string::npos) << train.out;
+  EXPECT_NE(train.out.find("from binloop ORB with the Gaussian BRIEF pattern (500 features, scale 1.2, 8 "
+                           "levels, FAST 20/7, 30-px cells, full-size images)"),
+            std::string::npos)
+      << train.out;
   binloop::test::writeText(tmp / "gt.txt", "9 0\n");
-  const std::string common = "--sequence " + desk + " --gt " + (tmp / "gt.txt") + " --models vlad --vocab-dir " + tmp.path() +
-                             " --window 0 --reference 1 --out " + (tmp / "out");
+  const std::string common = "--sequence " + desk + " --gt " + (tmp / "gt.txt") +
+                             " --models vlad --vocab-dir " + tmp.path() + " --window 0 --reference 1 --out " +
+                             (tmp / "out");
   const auto refused = run(common);
   EXPECT_EQ(refused.code, 1) << refused.out;
-  EXPECT_NE(refused.out.find("eval-loops: error: " + (tmp / "vlad.bin") +
-                             ": trained on descriptors of binloop ORB with the Gaussian BRIEF pattern (500 features, scale "
-                             "1.2, 8 levels, FAST 20/7, 30-px cells, full-size images), but they will come from binloop ORB "
-                             "with the Gaussian BRIEF pattern (2000 features, "
-                             "scale 1.2, 8 levels, FAST 20/7, 30-px cells, full-size images) (differ: features 500 vs "
-                             "2000); a vocabulary only fits descriptors like those it was trained on: retrain it with "
-                             "these settings, or use it anyway with --force-extractor"),
-            std::string::npos)
+  EXPECT_NE(
+      refused.out.find(
+          "eval-loops: error: " + (tmp / "vlad.bin") +
+          ": trained on descriptors of binloop ORB with the Gaussian BRIEF pattern (500 features, scale "
+          "1.2, 8 levels, FAST 20/7, 30-px cells, full-size images), but they will come from binloop ORB "
+          "with the Gaussian BRIEF pattern (2000 features, "
+          "scale 1.2, 8 levels, FAST 20/7, 30-px cells, full-size images) (differ: features 500 vs "
+          "2000); a vocabulary only fits descriptors like those it was trained on: retrain it with "
+          "these settings, or use it anyway with --force-extractor"),
+      std::string::npos)
       << refused.out;
-  EXPECT_EQ(refused.out.find("keyframes"), std::string::npos) << "refused before reading images:\n" << refused.out;
+  EXPECT_EQ(refused.out.find("keyframes"), std::string::npos) << "refused before reading images:\n"
+                                                              << refused.out;
   const auto forced = run(common + " --force-extractor");
   EXPECT_EQ(forced.code, 0) << forced.out;
-  EXPECT_NE(forced.out.find("eval-loops: warning: " + (tmp / "vlad.bin") + ": trained on descriptors of binloop ORB with the Gaussian BRIEF pattern (500"),
-            std::string::npos) << forced.out;
+  EXPECT_NE(forced.out.find("eval-loops: warning: " + (tmp / "vlad.bin") +
+                            ": trained on descriptors of binloop ORB with the Gaussian BRIEF pattern (500"),
+            std::string::npos)
+      << forced.out;
   EXPECT_NE(forced.out.find("used anyway (--force-extractor)"), std::string::npos) << forced.out;
   // The same settings as training: no warning.
   const auto same = run(common + " --features 500");
@@ -105,21 +122,25 @@ TEST(EvalLoopsTool, QueriesFollowThePatternAndImageSizeTheModelRecords) {
   const auto small = trainVlad(desk, "--max-side 320", tmp / "s/vlad.bin");
   ASSERT_EQ(small.code, 0) << small.out;
   binloop::test::writeText(tmp / "gt.txt", "9 0\n");
-  const std::string common = "--sequence " + desk + " --gt " + (tmp / "gt.txt") + " --models vlad --window 0 --reference 1 --out " +
-                             (tmp / "out") + " --vocab-dir ";
+  const std::string common = "--sequence " + desk + " --gt " + (tmp / "gt.txt") +
+                             " --models vlad --window 0 --reference 1 --out " + (tmp / "out") +
+                             " --vocab-dir ";
   const auto follows = run(common + (tmp / "l"));
   EXPECT_EQ(follows.code, 0) << follows.out;
-  EXPECT_NE(follows.out.find("was trained on descriptors with orb BRIEF tests; queries use them too"), std::string::npos)
+  EXPECT_NE(follows.out.find("was trained on descriptors with orb BRIEF tests; queries use them too"),
+            std::string::npos)
       << follows.out;
   const auto refused = run(common + (tmp / "l") + " --pattern gaussian");
   EXPECT_EQ(refused.code, 1) << refused.out;
-  EXPECT_NE(refused.out.find("(differ: extractor binloop ORB with ORB's learned pattern vs binloop ORB with the "
-                             "Gaussian BRIEF pattern)"),
-            std::string::npos)
+  EXPECT_NE(
+      refused.out.find("(differ: extractor binloop ORB with ORB's learned pattern vs binloop ORB with the "
+                       "Gaussian BRIEF pattern)"),
+      std::string::npos)
       << refused.out;
   const auto scaled = run(common + (tmp / "s"));
   EXPECT_EQ(scaled.code, 0) << scaled.out;
-  EXPECT_NE(scaled.out.find("was trained on images scaled to a longer side <= 320 px; queries are scaled the same way"),
+  EXPECT_NE(scaled.out.find(
+                "was trained on images scaled to a longer side <= 320 px; queries are scaled the same way"),
             std::string::npos)
       << scaled.out;
   const auto full = run(common + (tmp / "s") + " --max-side 0");

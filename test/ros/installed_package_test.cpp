@@ -15,12 +15,11 @@ namespace {
 
 const std::string kPrefix = BINLOOP_INSTALL_PREFIX;
 
-
 /// `command` in bash with a clean environment but for the install space's setup (no devel space, no
 /// checkout on ROS_PACKAGE_PATH or LD_LIBRARY_PATH). `command` must not contain single quotes.
 binloop::test::CommandResult inInstallSpace(const std::string& command) {
-  return binloop::test::runCommand("env -i HOME=\"$HOME\" PATH=/usr/bin:/bin LANG=C.UTF-8 bash -c 'source " + kPrefix +
-                                   "/setup.bash && " + command + "'");
+  return binloop::test::runCommand("env -i HOME=\"$HOME\" PATH=/usr/bin:/bin LANG=C.UTF-8 bash -c 'source " +
+                                   kPrefix + "/setup.bash && " + command + "'");
 }
 
 /// Installs the built workspace into its install prefix once per test program (no rebuild: the build is
@@ -42,7 +41,8 @@ TEST(InstalledPackage, ToolsFindTheShippedFilesFromTheInstallSpace) {
   binloop::test::TempDir tmp;
   const auto where = inInstallSpace("rospack find binloop");
   EXPECT_EQ(where.out, kPrefix + "/share/binloop\n");
-  const auto r = inInstallSpace("cd " + tmp.path() + " && rosrun binloop run " + seq + " --out out --lockstep");
+  const auto r =
+      inInstallSpace("cd " + tmp.path() + " && rosrun binloop run " + seq + " --out out --lockstep");
   ASSERT_EQ(r.code, 0) << r.out;
   const std::string summary = binloop::test::readText(tmp / "out/summary.json");
   EXPECT_NE(summary.find("\"detector\": \"hmvlad\""), std::string::npos) << summary;
@@ -88,11 +88,14 @@ int main() {
   std::cout << "features on a black image: " << e.extract(cv::Mat(376, 1241, CV_8UC1, cv::Scalar(0))).keypoints.size() << "\n";
 }
 )");
-  const auto build = inInstallSpace("cd " + ws.path() + " && catkin_make -DPYTHON_EXECUTABLE=/usr/bin/python3 2>&1");
+  const auto build =
+      inInstallSpace("cd " + ws.path() + " && catkin_make -DPYTHON_EXECUTABLE=/usr/bin/python3 2>&1");
   ASSERT_EQ(build.code, 0) << build.out;
   const auto run = inInstallSpace("source " + (ws / "devel/setup.bash") + " && rosrun consumer consumer");
   ASSERT_EQ(run.code, 0) << run.out;
-  EXPECT_NE(run.out.find(kPrefix + "/share/binloop/vocab/kitti08/hmvlad.bin: hmvlad model"), std::string::npos) << run.out;
+  EXPECT_NE(run.out.find(kPrefix + "/share/binloop/vocab/kitti08/hmvlad.bin: hmvlad model"),
+            std::string::npos)
+      << run.out;
   EXPECT_NE(run.out.find("features on a black image: 0"), std::string::npos) << run.out;
 }
 
@@ -105,16 +108,20 @@ TEST(InstalledPackage, TheLaunchFileWithItsDefaultsClosesTheLoopOfABag) {
   const auto render = binloop::test::runCommand(tools + "/render --route " + (tmp / "route.txt") +
                                                 " --calib kitti04 --out " + (tmp / "seq"));
   ASSERT_EQ(render.code, 0) << render.out;
-  const auto bag = binloop::test::runCommand(tools + "/kitti2bag " + (tmp / "seq") + " " + (tmp / "drive.bag"));
+  const auto bag =
+      binloop::test::runCommand(tools + "/kitti2bag " + (tmp / "seq") + " " + (tmp / "drive.bag"));
   ASSERT_EQ(bag.code, 0) << bag.out;
   // Its own master port, so that no other master on the machine is used.
-  const auto r = inInstallSpace("export ROS_MASTER_URI=http://localhost:11391 && cd " + tmp.path() + " && " +
-                                BINLOOP_ROOT_DIR + "/scripts/run_bag.sh " + (tmp / "drive.bag") + " --out out --rate 2");
+  const auto r =
+      inInstallSpace("export ROS_MASTER_URI=http://localhost:11391 && cd " + tmp.path() + " && " +
+                     BINLOOP_ROOT_DIR + "/scripts/run_bag.sh " + (tmp / "drive.bag") + " --out out --rate 2");
   ASSERT_EQ(r.code, 0) << r.out;
-  // Only the install space is sourced, so roslaunch's $(find binloop) and the nodelets are the installed ones.
+  // Only the install space is sourced, so roslaunch's $(find binloop) and the nodelets are the installed
+  // ones.
   const std::string summary = binloop::test::readText(tmp / "out/summary.json");
   const auto at = summary.find("\"accepted\": ");
   ASSERT_NE(at, std::string::npos) << "no loop accepted:\n" << summary << "\n" << r.out;
   EXPECT_GE(std::stoi(summary.substr(at + 12)), 1) << summary;
-  EXPECT_NE(binloop::test::readText(tmp / "out/loops.csv").find(",hmvlad,0,"), std::string::npos) << "the active model was not hmvlad";
+  EXPECT_NE(binloop::test::readText(tmp / "out/loops.csv").find(",hmvlad,0,"), std::string::npos)
+      << "the active model was not hmvlad";
 }

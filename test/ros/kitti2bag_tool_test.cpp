@@ -17,8 +17,9 @@ TEST(Kitti2bagTool, ConvertsThenRefusesToOverwrite) {
   EXPECT_NE(ok.out.find("/ground_truth/odom (nav_msgs/Odometry, 11 poses"), std::string::npos) << ok.out;
   const auto again = run(seq + " " + (tmp / "s.bag"));
   EXPECT_EQ(again.code, 1);
-  EXPECT_NE(again.out.find("kitti2bag: error: " + (tmp / "s.bag") + ": already exists (use --force to overwrite)"),
-            std::string::npos)
+  EXPECT_NE(
+      again.out.find("kitti2bag: error: " + (tmp / "s.bag") + ": already exists (use --force to overwrite)"),
+      std::string::npos)
       << again.out;
   EXPECT_EQ(run(seq + " " + (tmp / "s.bag") + " --force").code, 0);
 }

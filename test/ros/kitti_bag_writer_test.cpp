@@ -2,14 +2,14 @@
 // every topic; a bad frame leaves no bag behind.
 #include "binloop_ros/kitti_bag_writer.h"
 
-#include <filesystem>
 #include <nav_msgs/Odometry.h>
-#include <opencv2/imgcodecs.hpp>
 #include <rosbag/bag.h>
 #include <rosbag/view.h>
 #include <sensor_msgs/CameraInfo.h>
 #include <sensor_msgs/CompressedImage.h>
 #include <sensor_msgs/Image.h>
+#include <filesystem>
+#include <opencv2/imgcodecs.hpp>
 
 #include "binloop/io/data_error.h"
 #include "binloop_ros/msg_conversion.h"
@@ -107,7 +107,8 @@ TEST(KittiBagWriter, RangeAndNoOverwrite) {
                     "already exists (use --force to overwrite)");
   opt.overwrite = true;
   opt.start = 20;
-  EXPECT_THROW_WITH(binloop_ros::writeKittiBag(seq, tmp / "r.bag", opt), std::runtime_error, "past the sequence end");
+  EXPECT_THROW_WITH(binloop_ros::writeKittiBag(seq, tmp / "r.bag", opt), std::runtime_error,
+                    "past the sequence end");
 }
 
 TEST(KittiBagWriter, CorruptFrameLeavesNoBag) {

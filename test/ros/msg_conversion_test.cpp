@@ -18,7 +18,7 @@ TEST(MsgConversion, ImageRoundTripAndColour) {
   rgb.width = 1;
   rgb.height = 1;
   rgb.step = 3;
-  rgb.data = {255, 0, 0};  // pure red
+  rgb.data = {255, 0, 0};                                          // pure red
   EXPECT_NEAR(binloop_ros::toGray(rgb).at<uint8_t>(0, 0), 76, 1);  // 0.299 * 255
 }
 
@@ -32,7 +32,8 @@ TEST(MsgConversion, BadImagesAreRefusedWithAReason) {
   m.encoding = "mono8";
   m.step = 2;
   m.data.resize(3);
-  EXPECT_THROW_WITH(binloop_ros::toGray(m), ConversionError, "image data holds 3 bytes, expected step x height = 4");
+  EXPECT_THROW_WITH(binloop_ros::toGray(m), ConversionError,
+                    "image data holds 3 bytes, expected step x height = 4");
   m.step = 1;
   EXPECT_THROW_WITH(binloop_ros::toGray(m), ConversionError, "step 1 is less than width");
 }
@@ -54,7 +55,9 @@ TEST(MsgConversion, DistortionInCameraInfoIsNamedInAWarning) {
   EXPECT_EQ(binloop_ros::distortionWarning(info), "");
   info.D = {-0.28, 0.07, 0, 0, 0};
   const std::string w = binloop_ros::distortionWarning(info);
-  EXPECT_NE(w.find("camera_info of 'cam' has distortion (plumb_bob D = [-0.280000, 0.070000, 0.000000"), std::string::npos) << w;
+  EXPECT_NE(w.find("camera_info of 'cam' has distortion (plumb_bob D = [-0.280000, 0.070000, 0.000000"),
+            std::string::npos)
+      << w;
   EXPECT_NE(w.find("takes the images as rectified (image_rect)"), std::string::npos) << w;
 }
 

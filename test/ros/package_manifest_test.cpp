@@ -18,7 +18,6 @@ namespace fs = std::filesystem;
 
 namespace {
 
-
 /// Every <depend>, <build_depend>, <exec_depend>, <test_depend>, <buildtool_depend> and the like.
 std::set<std::string> declared() {
   const std::string xml = binloop::test::readText((fs::path(BINLOOP_ROOT_DIR) / "package.xml").string());
@@ -28,7 +27,8 @@ std::set<std::string> declared() {
   return names;
 }
 
-std::vector<fs::path> filesUnder(const std::vector<std::string>& dirs, const std::set<std::string>& extensions) {
+std::vector<fs::path> filesUnder(const std::vector<std::string>& dirs,
+                                 const std::set<std::string>& extensions) {
   std::vector<fs::path> out;
   for (const auto& d : dirs) {
     const fs::path root = fs::path(BINLOOP_ROOT_DIR) / d;
@@ -53,9 +53,9 @@ const std::map<std::string, std::string> kIncludeFamilies = {
 };
 // find_package names and the dependency that provides each ("" = nothing to declare).
 const std::map<std::string, std::string> kCmakePackages = {
-    {"catkin", "catkin"},       {"OpenCV", "libopencv-dev"}, {"Eigen3", "eigen"}, {"Ceres", "libceres-dev"},
-    {"GTest", "gtest"},         {"Threads", ""},             {"rostest", "rostest"}, {"roslaunch", "roslaunch"},
-    {"benchmark", "libbenchmark-dev"},
+    {"catkin", "catkin"},      {"OpenCV", "libopencv-dev"}, {"Eigen3", "eigen"},
+    {"Ceres", "libceres-dev"}, {"GTest", "gtest"},          {"Threads", ""},
+    {"rostest", "rostest"},    {"roslaunch", "roslaunch"},  {"benchmark", "libbenchmark-dev"},
 };
 
 }  // namespace
@@ -90,8 +90,11 @@ TEST(PackageManifest, EveryFindPackageAndCatkinComponentIsDeclared) {
   for (std::sregex_iterator it(cmake.begin(), cmake.end(), fp), end; it != end; ++it, ++found) {
     const std::string name = (*it)[1];
     const auto known = kCmakePackages.find(name);
-    ASSERT_NE(known, kCmakePackages.end()) << "find_package(" << name << "): add it to this test's table and to package.xml";
-    if (!known->second.empty()) EXPECT_TRUE(deps.count(known->second)) << "find_package(" << name << ") needs '" << known->second << "' in package.xml";
+    ASSERT_NE(known, kCmakePackages.end())
+        << "find_package(" << name << "): add it to this test's table and to package.xml";
+    if (!known->second.empty())
+      EXPECT_TRUE(deps.count(known->second))
+          << "find_package(" << name << ") needs '" << known->second << "' in package.xml";
   }
   EXPECT_GE(found, 5);
   // The catkin components: set(BINLOOP_CATKIN_DEPS ...) and message_generation.
@@ -103,7 +106,8 @@ TEST(PackageManifest, EveryFindPackageAndCatkinComponentIsDeclared) {
   ASSERT_FALSE(m.empty()) << "BINLOOP_CATKIN_DEPS not found in CMakeLists.txt";
   std::stringstream list(m[1].str());
   int components = 0;
-  for (std::string c; list >> c; ++components) EXPECT_TRUE(deps.count(c)) << "catkin component " << c << " not in package.xml";
+  for (std::string c; list >> c; ++components)
+    EXPECT_TRUE(deps.count(c)) << "catkin component " << c << " not in package.xml";
   EXPECT_GE(components, 10);
   EXPECT_TRUE(deps.count("message_generation") && deps.count("message_runtime"));
 }
@@ -116,7 +120,8 @@ TEST(PackageManifest, EveryLaunchedPackageIsDeclared) {
     const std::string text = binloop::test::readText(f.string());
     for (std::sregex_iterator it(text.begin(), text.end(), pkg), end; it != end; ++it, ++found) {
       const std::string p = (*it)[1];
-      if (p != "binloop") EXPECT_TRUE(deps.count(p)) << f.string() << " launches a node of '" << p << "', not in package.xml";
+      if (p != "binloop")
+        EXPECT_TRUE(deps.count(p)) << f.string() << " launches a node of '" << p << "', not in package.xml";
     }
   }
   EXPECT_GE(found, 5);

@@ -35,7 +35,7 @@ TEST(RobotFrames, TheMapIsZUpAndTheBaseDrivesAlongItsX) {
   // Turned left: the base's x now points along the map's y, its z still up.
   EXPECT_NEAR((f.baseInMap().linear() * Eigen::Vector3d::UnitX()).y(), 1, 1e-9);
   EXPECT_NEAR((f.baseInMap().linear() * Eigen::Vector3d::UnitZ()).z(), 1, 1e-9);
-  EXPECT_NEAR(f.linearVelocity().x(), 4, 1e-9);       // 2 m in 0.5 s, along the base's x at the start
+  EXPECT_NEAR(f.linearVelocity().x(), 4, 1e-9);      // 2 m in 0.5 s, along the base's x at the start
   EXPECT_NEAR(f.angularVelocity().z(), M_PI, 1e-9);  // 90 degrees in 0.5 s, about the base's z
   // map -> slam is the mounting: the slam frame's z (forward) is the map's x.
   EXPECT_NEAR((f.slamInMap().linear() * Eigen::Vector3d::UnitZ()).x(), 1, 1e-9);
@@ -49,7 +49,8 @@ TEST(RobotFrames, OdomStaysContinuousAcrossACorrectionAndMapToOdomTakesTheJump) 
   for (int i = 0; i <= 10; ++i) f.update(cameraAt(i), i * 0.1, false);
   const Pose3 odom_before = f.baseInOdom();
   expectNear(f.odomInMap() * f.baseInOdom(), f.baseInMap());
-  // A loop correction moves the slam-frame pose 3 m back: odom moves by the last motion (1 m), map -> odom jumps.
+  // A loop correction moves the slam-frame pose 3 m back: odom moves by the last motion (1 m), map -> odom
+  // jumps.
   f.update(cameraAt(11 - 3), 1.1, true);
   EXPECT_NEAR((f.baseInOdom().translation() - odom_before.translation()).norm(), 1, 1e-9);
   EXPECT_NEAR(f.baseInMap().translation().x(), 8, 1e-9);
@@ -101,7 +102,8 @@ TEST(RobotFrames, PoseCovarianceIsTheCamerasCarriedToTheBaseInOdom) {
   c.update(second, d * d.transpose(), 0.1, false);
   const RobotFrames::Matrix6d expected = e * e.transpose();
   EXPECT_LT((c.poseCovariance() - expected).cwiseAbs().maxCoeff(), 1e-3 * expected.cwiseAbs().maxCoeff())
-      << c.poseCovariance() << "\nvs\n" << expected;
+      << c.poseCovariance() << "\nvs\n"
+      << expected;
   EXPECT_EQ(c.twistCovariance()(0, 0), RobotFrames::kUnknown) << "the last pose's covariance was unknown";
 }
 
@@ -115,7 +117,8 @@ TEST(RobotFrames, TwistCovarianceIsTheTwoPosesErrorsOverTheStep) {
   EXPECT_NEAR(f.twistCovariance()(0, 0), 2 * 9e-4 / 0.01, 1e-9);
   EXPECT_NEAR(f.twistCovariance()(1, 1), 2 * 1e-4 / 0.01, 1e-9);
   EXPECT_NEAR(f.twistCovariance()(5, 5), 2 * 4e-6 / 0.01, 1e-9);  // yaw: about the camera's y
-  EXPECT_NEAR(f.poseCovariance()(2, 2), 4e-4, 1e-12);           // odom's z is the camera's -y
+  EXPECT_NEAR(f.poseCovariance()(2, 2), 4e-4, 1e-12);             // odom's z is the camera's -y
   f.update(cameraAt(5.0), cov, 0.2, true);
-  EXPECT_EQ(f.twistCovariance()(0, 0), RobotFrames::kUnknown) << "across a correction the step is not measured";
+  EXPECT_EQ(f.twistCovariance()(0, 0), RobotFrames::kUnknown)
+      << "across a correction the step is not measured";
 }

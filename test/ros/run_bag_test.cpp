@@ -8,10 +8,11 @@
 namespace {
 /// `scripts/binloop run-bag <bag> --out <out> <args>` with its own master on `port`, so that no other
 /// master on the machine is used.
-binloop::test::CommandResult runBag(const std::string& bag, const std::string& out, const std::string& args, int port) {
+binloop::test::CommandResult runBag(const std::string& bag, const std::string& out, const std::string& args,
+                                    int port) {
   return binloop::test::runCommand("export ROS_MASTER_URI=http://localhost:" + std::to_string(port) + " && " +
-                                   std::string(BINLOOP_ROOT_DIR) + "/scripts/binloop run-bag " + bag + " --out " + out +
-                                   " " + args);
+                                   std::string(BINLOOP_ROOT_DIR) + "/scripts/binloop run-bag " + bag +
+                                   " --out " + out + " " + args);
 }
 }  // namespace
 
@@ -19,12 +20,15 @@ TEST(RunBag, ABagOfCompressedImagesIsTrackedWithTransportCompressed) {
   const std::string seq = binloop::test::sharedData("kitti/sample_00");
   BINLOOP_REQUIRE_DATA(seq);
   binloop::test::TempDir tmp;
-  const auto bag = binloop::test::runCommand(std::string(BINLOOP_TOOL_DIR) + "/kitti2bag " + seq + " " + (tmp / "png.bag") + " --png");
+  const auto bag = binloop::test::runCommand(std::string(BINLOOP_TOOL_DIR) + "/kitti2bag " + seq + " " +
+                                             (tmp / "png.bag") + " --png");
   ASSERT_EQ(bag.code, 0) << bag.out;
   const auto r = runBag(tmp / "png.bag", tmp / "out", "--launch-args transport:=compressed", 11392);
   ASSERT_EQ(r.code, 0) << r.out;
   const std::string summary = binloop::test::readText(tmp / "out/summary.json");
-  EXPECT_NE(summary.find("\"frames\": 11,"), std::string::npos) << summary << "\n" << binloop::test::readText(tmp / "out/graph.log");
+  EXPECT_NE(summary.find("\"frames\": 11,"), std::string::npos)
+      << summary << "\n"
+      << binloop::test::readText(tmp / "out/graph.log");
   EXPECT_NE(summary.find("\"lost_frames\": 0,"), std::string::npos) << summary;
 }
 
@@ -34,12 +38,14 @@ TEST(RunBag, TheStereoNamespaceArgumentMovesTheInputs) {
   const std::string seq = binloop::test::sharedData("kitti/sample_00");
   BINLOOP_REQUIRE_DATA(seq);
   binloop::test::TempDir tmp;
-  const auto bag = binloop::test::runCommand(std::string(BINLOOP_TOOL_DIR) + "/kitti2bag " + seq + " " + (tmp / "raw.bag") + " --end 3");
+  const auto bag = binloop::test::runCommand(std::string(BINLOOP_TOOL_DIR) + "/kitti2bag " + seq + " " +
+                                             (tmp / "raw.bag") + " --end 3");
   ASSERT_EQ(bag.code, 0) << bag.out;
   const auto r = runBag(tmp / "raw.bag", tmp / "out", "--launch-args stereo:=/elsewhere", 11393);
   ASSERT_EQ(r.code, 0) << r.out;
   const std::string log = binloop::test::readText(tmp / "out/graph.log");
-  EXPECT_NE(log.find("sync on /elsewhere/left/image_rect + /elsewhere/right/image_rect"), std::string::npos) << log;
+  EXPECT_NE(log.find("sync on /elsewhere/left/image_rect + /elsewhere/right/image_rect"), std::string::npos)
+      << log;
   EXPECT_NE(binloop::test::readText(tmp / "out/summary.json").find("\"frames\": 0,"), std::string::npos);
 }
 
@@ -55,7 +61,8 @@ TEST_P(RunBagModels, TheRenderedLoopIsClosed) {
     const std::string tools = BINLOOP_TOOL_DIR;
     const auto render = binloop::test::runCommand(tools + "/render --route " + (dir / "route.txt") +
                                                   " --calib kitti04 --out " + (dir / "seq"));
-    const auto bag = binloop::test::runCommand(tools + "/kitti2bag " + (dir / "seq") + " " + (dir / "drive.bag"));
+    const auto bag =
+        binloop::test::runCommand(tools + "/kitti2bag " + (dir / "seq") + " " + (dir / "drive.bag"));
     return render.code == 0 && bag.code == 0 ? dir / "drive.bag" : std::string();
   }();
   ASSERT_FALSE(bag.empty()) << "the drive could not be rendered into a bag";

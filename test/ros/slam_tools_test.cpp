@@ -23,8 +23,8 @@ TEST(SlamTools, RunWithADetectorWritesTheLoopLogAndCounts) {
   BINLOOP_REQUIRE_DATA(seq);
   BINLOOP_REQUIRE_DATA(kVocab + "/vladpq.bin");
   binloop::test::TempDir tmp;
-  const auto r = tool("run", seq + " --out " + (tmp / "out") + " --lockstep --detector vladpq --vocab-dir " + kVocab +
-                                 " --shadow vlad --reloc-vocab none");
+  const auto r = tool("run", seq + " --out " + (tmp / "out") + " --lockstep --detector vladpq --vocab-dir " +
+                                 kVocab + " --shadow vlad --reloc-vocab none");
   ASSERT_EQ(r.code, 0) << r.out;
   const std::string log = binloop::test::readText(tmp / "out/loops.csv");
   ASSERT_EQ(log.rfind("keyframe,frame,model,shadow,status,candidates,", 0), 0u) << log;
@@ -48,18 +48,20 @@ TEST(SlamTools, DefaultsAreThePackagesShippedFilesFromAnyFolder) {
   const std::string seq = binloop::test::sharedData("kitti/sample_00");
   BINLOOP_REQUIRE_DATA(seq);
   binloop::test::TempDir tmp;
-  const auto r = binloop::test::runCommand("cd " + tmp.path() + " && " + std::string(BINLOOP_TOOL_DIR) + "/run " + seq +
-                                           " --out out --lockstep");
+  const auto r = binloop::test::runCommand("cd " + tmp.path() + " && " + std::string(BINLOOP_TOOL_DIR) +
+                                           "/run " + seq + " --out out --lockstep");
   ASSERT_EQ(r.code, 0) << r.out;
   const std::string summary = binloop::test::readText(tmp / "out/summary.json");
   EXPECT_NE(summary.find("\"detector\": \"hmvlad\""), std::string::npos) << summary;
   EXPECT_NE(summary.find("\"reloc_vocab\": \"" + kVocab + "/hbow_k8l5.bin\""), std::string::npos) << summary;
   // hbow's vocabulary is not shipped: the error says how to make it.
-  const auto hbow = tool("run", seq + " --out " + (tmp / "h") + " --detector hbow --vocab-dir " + (tmp / "empty"));
+  const auto hbow =
+      tool("run", seq + " --out " + (tmp / "h") + " --detector hbow --vocab-dir " + (tmp / "empty"));
   EXPECT_NE(hbow.code, 0);
-  EXPECT_NE(hbow.out.find((tmp / "empty") + "/hbow.bin: not found: the k=10, L=6 hbow vocabulary (26 MB) is not "
-                          "shipped; vocab/make_vocab.sh hbow makes it"),
-            std::string::npos)
+  EXPECT_NE(
+      hbow.out.find((tmp / "empty") + "/hbow.bin: not found: the k=10, L=6 hbow vocabulary (26 MB) is not "
+                                      "shipped; vocab/make_vocab.sh hbow makes it"),
+      std::string::npos)
       << hbow.out;
 }
 
@@ -69,16 +71,19 @@ TEST(SlamTools, BadLoopOptionsAreOneClearLine) {
   binloop::test::TempDir tmp;
   const auto unknown = tool("run", seq + " --out " + (tmp / "a") + " --detector sift");
   EXPECT_NE(unknown.code, 0);
-  EXPECT_NE(unknown.out.find("--detector 'sift': not one of hbow, fabmap, vlad, hmvlad, vladpq"), std::string::npos)
+  EXPECT_NE(unknown.out.find("--detector 'sift': not one of hbow, fabmap, vlad, hmvlad, vladpq"),
+            std::string::npos)
       << unknown.out;
   const auto sw = tool("run", seq + " --out " + (tmp / "b") + " --detector vladpq --vocab-dir " + kVocab +
                                   " --switch-detector-at 500");
   EXPECT_NE(sw.code, 0);
   EXPECT_NE(sw.out.find("--switch-detector-at '500': expected KF:model"), std::string::npos) << sw.out;
-  const auto missing = tool("run", seq + " --out " + (tmp / "c") + " --detector vladpq --vocab-dir " + (tmp / "none"));
+  const auto missing =
+      tool("run", seq + " --out " + (tmp / "c") + " --detector vladpq --vocab-dir " + (tmp / "none"));
   EXPECT_NE(missing.code, 0);
   EXPECT_NE(missing.out.find("vladpq.bin"), std::string::npos) << missing.out;
-  const auto eval = tool("eval-slam", "--sequence " + seq + " --out " + (tmp / "d") + " --detectors vladpq,sift");
+  const auto eval =
+      tool("eval-slam", "--sequence " + seq + " --out " + (tmp / "d") + " --detectors vladpq,sift");
   EXPECT_NE(eval.code, 0);
   EXPECT_NE(eval.out.find("unknown detector 'sift'"), std::string::npos) << eval.out;
 }
@@ -88,18 +93,24 @@ TEST(SlamTools, EvalSlamScoresEveryDetectorInOneTable) {
   BINLOOP_REQUIRE_DATA(seq);
   BINLOOP_REQUIRE_DATA(kVocab + "/vladpq.bin");
   binloop::test::TempDir tmp;
-  binloop::test::writeText(tmp / "gt.txt", "# no revisit in 11 frames; one made-up pair so there is a segment\n10 0\n");
-  const auto r = tool("eval-slam", "--sequence " + seq + " --out " + (tmp / "out") + " --detectors vladpq,none --jobs 1" +
-                                       " --lockstep --loop-gt " + (tmp / "gt.txt") + " --run-args \"--reloc-vocab none --vocab-dir " +
+  binloop::test::writeText(tmp / "gt.txt",
+                           "# no revisit in 11 frames; one made-up pair so there is a segment\n10 0\n");
+  const auto r = tool("eval-slam", "--sequence " + seq + " --out " + (tmp / "out") +
+                                       " --detectors vladpq,none --jobs 1" + " --lockstep --loop-gt " +
+                                       (tmp / "gt.txt") + " --run-args \"--reloc-vocab none --vocab-dir " +
                                        kVocab + "\"");
   ASSERT_EQ(r.code, 0) << r.out;
   const std::string table = binloop::test::readText(tmp / "out/summary.csv");
-  EXPECT_EQ(table.rfind("model,ate_m,t_rel_pct,r_rel_deg_100m,loops_accepted,loops_correct,loops_wrong_pose,segments_closed,", 0), 0u)
+  EXPECT_EQ(table.rfind("model,ate_m,t_rel_pct,r_rel_deg_100m,loops_accepted,loops_correct,loops_wrong_pose,"
+                        "segments_closed,",
+                        0),
+            0u)
       << table;
   EXPECT_NE(table.find("\nvladpq,"), std::string::npos) << table;
   EXPECT_NE(table.find("\nnone,"), std::string::npos) << table;
-  EXPECT_NE(table.find(",0,0,0,0/1,"), std::string::npos) << "no loop in 11 frames: nothing accepted, the segment open\n"
-                                                         << table;
+  EXPECT_NE(table.find(",0,0,0,0/1,"), std::string::npos)
+      << "no loop in 11 frames: nothing accepted, the segment open\n"
+      << table;
   EXPECT_TRUE(binloop::test::exists(tmp / "out/trajectories.png"));
 }
 
@@ -109,7 +120,8 @@ TEST(SlamTools, RunAtARatePacesFramesByTheSequenceClock) {
   const std::string seq = binloop::test::sharedData("kitti/sample_00");
   BINLOOP_REQUIRE_DATA(seq);
   binloop::test::TempDir tmp;
-  const auto r = tool("run", seq + " --out " + (tmp / "out") + " --detector none --rate 1 --reloc-vocab none");
+  const auto r =
+      tool("run", seq + " --out " + (tmp / "out") + " --detector none --rate 1 --reloc-vocab none");
   ASSERT_EQ(r.code, 0) << r.out;
   const std::string summary = binloop::test::readText(tmp / "out/summary.json");
   EXPECT_NE(summary.find("\"rate\": 1,"), std::string::npos) << summary;

@@ -79,8 +79,9 @@ core::KeyFrame someKeyframe(std::mt19937& rng) {
   kf.stamp_s = 123.456789;
   kf.camera = binloop::kitti00Camera();
   for (int i = 0; i < 50; ++i) {
-    core::KeyPoint k{float(rng() % 1241) + 0.25f, float(rng() % 376) + 0.5f, float(rng() % 360), uint8_t(i % 8),
-                     i % 4 ? 500.125f : -1.f, i % 4 ? 12.5f : -1.f};
+    core::KeyPoint k{float(rng() % 1241) + 0.25f, float(rng() % 376) + 0.5f,
+                     float(rng() % 360),          uint8_t(i % 8),
+                     i % 4 ? 500.125f : -1.f,     i % 4 ? 12.5f : -1.f};
     kf.keypoints.push_back(k);
     binloop::Desc256 d;
     for (auto& w : d.w) w = (uint64_t(rng()) << 32) | rng();

@@ -14,7 +14,8 @@ using binloop_ros::decompress;
 
 namespace {
 
-sensor_msgs::CompressedImage compressed(const cv::Mat& img, const std::string& ext, const std::string& format) {
+sensor_msgs::CompressedImage compressed(const cv::Mat& img, const std::string& ext,
+                                        const std::string& format) {
   sensor_msgs::CompressedImage m;
   m.header.stamp = ros::Time(12.5);
   m.header.frame_id = "cam";
@@ -52,12 +53,14 @@ TEST(StereoInput, PngAndJpegDecodeToGreyImagesWithTheirHeader) {
 TEST(StereoInput, BytesThatAreNotAnImageGiveTheReason) {
   auto m = compressed(gradient(CV_8UC1), ".png", "png");
   m.format = "theora";
-  EXPECT_THROW_WITH(decompress(m), binloop_ros::ConversionError, "format 'theora': only jpeg and png are decoded");
+  EXPECT_THROW_WITH(decompress(m), binloop_ros::ConversionError,
+                    "format 'theora': only jpeg and png are decoded");
   m.format = "png";
   m.data.resize(m.data.size() / 3);
   EXPECT_THROW_WITH(decompress(m), binloop_ros::ConversionError, "does not decode");
   m.data.clear();
   EXPECT_THROW_WITH(decompress(m), binloop_ros::ConversionError, "no bytes");
   cv::Mat deep(8, 8, CV_16UC1, cv::Scalar(1000));
-  EXPECT_THROW_WITH(decompress(compressed(deep, ".png", "png")), binloop_ros::ConversionError, "expected 8-bit");
+  EXPECT_THROW_WITH(decompress(compressed(deep, ".png", "png")), binloop_ros::ConversionError,
+                    "expected 8-bit");
 }

@@ -1,9 +1,10 @@
-// Runs under rostest beside stereo_camera.launch (stereo_camera_bag.test: the live-camera launch file with its
-// defaults, every shadow model on): the rendered drive is played with `rosbag play` as raw image and
+// Runs under rostest beside stereo_camera.launch (stereo_camera_bag.test: the live-camera launch file with
+// its defaults, every shadow model on): the rendered drive is played with `rosbag play` as raw image and
 // camera_info topics in stereo_image_proc's layout, stamped as a camera stamps them, with no /clock. Checks
 // that the graph tracks the drive and closes its revisit with the default model, that every shadow model with
-// a file publishes its own candidates for every keyframe, and that add_external_loop verifies a loop given from
-// outside like a detected one: a true pair accepted, a pair 40 m apart refused, an unknown keyframe named.
+// a file publishes its own candidates for every keyframe, and that add_external_loop verifies a loop given
+// from outside like a detected one: a true pair accepted, a pair 40 m apart refused, an unknown keyframe
+// named.
 #include <binloop/AddExternalLoop.h>
 
 #include <set>
@@ -27,10 +28,10 @@ class CameraBag : public binloop::test::GraphTest {
     shadow_models_ = binloop::shadowModelNames("all", "hmvlad", BINLOOP_ROOT_DIR "/vocab/kitti08");
     for (const std::string& m : shadow_models_)
       subs_.push_back(nh.subscribe<binloop::LoopCandidates>("/binloop/shadow/" + m + "/loop_candidates", 1000,
-                                                           [this](const auto& c) {
-                                                             std::lock_guard<std::mutex> lk(seen_.m);
-                                                             shadow_[c->model].push_back(*c);
-                                                           }));
+                                                            [this](const auto& c) {
+                                                              std::lock_guard<std::mutex> lk(seen_.m);
+                                                              shadow_[c->model].push_back(*c);
+                                                            }));
   }
 
   /// Plays the drive's bag once, as a camera driver would publish it (no /clock), after the graph is up.
@@ -117,7 +118,8 @@ TEST_F(CameraBag, AnExternalLoopIsVerifiedLikeADetectedOne) {
   ASSERT_TRUE(ros::service::waitForService("/binloop/add_external_loop", ros::Duration(10)));
   const std::map<uint64_t, uint64_t>& keyframe_at = keyframeAt();
   ASSERT_GT(keyframe_at.size(), 20u);
-  const auto [query_frame, query] = *keyframe_at.rbegin();  // the last keyframe, a quarter lap into the revisit
+  const auto [query_frame, query] =
+      *keyframe_at.rbegin();  // the last keyframe, a quarter lap into the revisit
   ASSERT_GE(query_frame, lap);
   auto nearestInFirstLap = [&](double metres_away) {
     std::pair<uint64_t, uint64_t> best{0, 0};
@@ -125,7 +127,8 @@ TEST_F(CameraBag, AnExternalLoopIsVerifiedLikeADetectedOne) {
     for (const auto& [frame, id] : keyframe_at) {
       if (frame + 100 > lap) break;  // the first lap's first stretch only
       const double dist = (d.route[frame].translation() - d.route[query_frame].translation()).norm();
-      if (std::abs(dist - metres_away) < best_gap) best_gap = std::abs(dist - metres_away), best = {frame, id};
+      if (std::abs(dist - metres_away) < best_gap)
+        best_gap = std::abs(dist - metres_away), best = {frame, id};
     }
     return best;
   };
@@ -140,8 +143,8 @@ TEST_F(CameraBag, AnExternalLoopIsVerifiedLikeADetectedOne) {
   const auto [near_frame, near] = nearestInFirstLap(0);
   const auto good = call(query, near);
   ASSERT_FALSE(good.closures.empty());
-  std::cout << "keyframes " << query << " and " << near << ", frames " << query_frame << " and " << near_frame << ": " << good.closures.back().status << ", "
-            << good.closures.back().detail << "\n";
+  std::cout << "keyframes " << query << " and " << near << ", frames " << query_frame << " and " << near_frame
+            << ": " << good.closures.back().status << ", " << good.closures.back().detail << "\n";
   EXPECT_TRUE(good.accepted) << good.closures.back().status << ": " << good.closures.back().detail;
   EXPECT_EQ(good.closures.back().model, "rostest");
   EXPECT_EQ(good.closures.back().match_frame, near_frame);
@@ -149,10 +152,12 @@ TEST_F(CameraBag, AnExternalLoopIsVerifiedLikeADetectedOne) {
   const auto [far_frame, far] = nearestInFirstLap(40);
   const auto wrong = call(query, far);
   ASSERT_FALSE(wrong.closures.empty());
-  std::cout << "frames " << query_frame << " and " << far_frame << ": " << wrong.closures.back().status << "\n";
-  EXPECT_FALSE(wrong.accepted) << "a loop between places "
-                               << (d.route[far_frame].translation() - d.route[query_frame].translation()).norm()
-                               << " m apart was accepted";
+  std::cout << "frames " << query_frame << " and " << far_frame << ": " << wrong.closures.back().status
+            << "\n";
+  EXPECT_FALSE(wrong.accepted)
+      << "a loop between places "
+      << (d.route[far_frame].translation() - d.route[query_frame].translation()).norm()
+      << " m apart was accepted";
   EXPECT_NE(wrong.closures.back().status, binloop::LoopClosure::ACCEPTED);
 
   const auto unknown = call(query, 987654321);

@@ -1,7 +1,7 @@
 #pragma once
 // What a rostest node sees of a binloop graph: publishers of stereo pairs on the graph's default input
-// topics, and everything the graph publishes (poses, loops, candidates, odometry, diagnostics) collected on the
-// spinner's thread. The rostest programs derive their fixtures from GraphTest.
+// topics, and everything the graph publishes (poses, loops, candidates, odometry, diagnostics) collected on
+// the spinner's thread. The rostest programs derive their fixtures from GraphTest.
 #include <binloop/LoopCandidates.h>
 #include <binloop/LoopClosure.h>
 #include <binloop/Statistics.h>
@@ -54,10 +54,11 @@ class GraphTest : public ::testing::Test {
       std::lock_guard<std::mutex> lk(seen_.m);
       seen_.closures.push_back(*m);
     }));
-    subs_.push_back(nh.subscribe<binloop::LoopCandidates>("/binloop/loop_candidates", 1000, [this](const auto& m) {
-      std::lock_guard<std::mutex> lk(seen_.m);
-      seen_.candidates.push_back(*m);
-    }));
+    subs_.push_back(
+        nh.subscribe<binloop::LoopCandidates>("/binloop/loop_candidates", 1000, [this](const auto& m) {
+          std::lock_guard<std::mutex> lk(seen_.m);
+          seen_.candidates.push_back(*m);
+        }));
     subs_.push_back(nh.subscribe<geometry_msgs::PoseWithCovarianceStamped>(
         "/binloop/pose_with_covariance", 1000, [this](const auto& m) {
           std::lock_guard<std::mutex> lk(seen_.m);
@@ -71,12 +72,13 @@ class GraphTest : public ::testing::Test {
       std::lock_guard<std::mutex> lk(seen_.m);
       seen_.corrected_path = *m;
     }));
-    subs_.push_back(nh.subscribe<diagnostic_msgs::DiagnosticArray>("/diagnostics", 100, [this](const auto& m) {
-      std::lock_guard<std::mutex> lk(seen_.m);
-      for (const auto& s : m->status)
-        if (s.name.find("tracking") != std::string::npos)
-          for (const auto& kv : s.values) seen_.tracking_diag[kv.key] = kv.value;
-    }));
+    subs_.push_back(
+        nh.subscribe<diagnostic_msgs::DiagnosticArray>("/diagnostics", 100, [this](const auto& m) {
+          std::lock_guard<std::mutex> lk(seen_.m);
+          for (const auto& s : m->status)
+            if (s.name.find("tracking") != std::string::npos)
+              for (const auto& kv : s.values) seen_.tracking_diag[kv.key] = kv.value;
+        }));
   }
 
   // Waits for `pred` (checked under the lock) up to `seconds`.
@@ -94,12 +96,14 @@ class GraphTest : public ::testing::Test {
   }
 
   bool graphConnected() {
-    return waitFor(60, [&] { return left_.getNumSubscribers() > 0 && right_.getNumSubscribers() > 0 &&
-                                    left_info_.getNumSubscribers() > 0; });
+    return waitFor(60, [&] {
+      return left_.getNumSubscribers() > 0 && right_.getNumSubscribers() > 0 &&
+             left_info_.getNumSubscribers() > 0;
+    });
   }
 
-  void publishPair(const sensor_msgs::Image& l, const sensor_msgs::Image& r, const sensor_msgs::CameraInfo& li,
-                   const sensor_msgs::CameraInfo& ri) {
+  void publishPair(const sensor_msgs::Image& l, const sensor_msgs::Image& r,
+                   const sensor_msgs::CameraInfo& li, const sensor_msgs::CameraInfo& ri) {
     left_info_.publish(li);
     right_info_.publish(ri);
     left_.publish(l);
@@ -110,7 +114,6 @@ class GraphTest : public ::testing::Test {
   std::vector<ros::Subscriber> subs_;
   Observed seen_;
 };
-
 
 /// /binloop/statistics as key -> value; empty when the service does not answer.
 inline std::map<std::string, std::string> statistics() {

@@ -56,7 +56,8 @@ TEST_F(LocalizeOnly, TheRevisitIsTrackedInTheLoadedMapAndNoStageAddsToIt) {
     worst = std::max(worst, err);
   }
   const size_t sent = pairs.size() - lap;
-  std::cout << posed << " of " << sent << " pairs posed, " << near << " within 0.3 m; worst " << worst << " m\n";
+  std::cout << posed << " of " << sent << " pairs posed, " << near << " within 0.3 m; worst " << worst
+            << " m\n";
   EXPECT_GE(posed, sent * 9 / 10) << "too few pairs tracked in the loaded map";
   EXPECT_GE(near + 2, posed) << "poses away from where the car is";
   ros::WallDuration(2.0).sleep();  // anything a stage would still add

@@ -51,7 +51,8 @@ TEST_F(LoopGraph, TheRevisitIsClosedTheDetectorSwitchesAndBadPairsAreReported) {
       p.name = "method";
       p.value = "vladpq";
       srv.request.config.strs.push_back(p);
-      ASSERT_TRUE(ros::service::call("/binloop/loop_detector/set_parameters", srv)) << "dynamic_reconfigure call failed";
+      ASSERT_TRUE(ros::service::call("/binloop/loop_detector/set_parameters", srv))
+          << "dynamic_reconfigure call failed";
       std::lock_guard<std::mutex> lk(seen_.m);
       switched_after_candidates = seen_.candidates.size();
     }
@@ -115,7 +116,8 @@ TEST_F(LoopGraph, TheRevisitIsClosedTheDetectorSwitchesAndBadPairsAreReported) {
   EXPECT_GE(twist_known, seen_.odometry.size() * 9 / 10);
   EXPECT_LT(worst_sd, 0.2);
   // The camera's pose with its covariance, in the slam frame: one per odometry message, the same position
-  // variance (the slam and odom axes differ, the sum over them does not; the lever to base_link is zero here).
+  // variance (the slam and odom axes differ, the sum over them does not; the lever to base_link is zero
+  // here).
   const size_t both = std::min(seen_.poses_with_covariance.size(), seen_.odometry.size());
   ASSERT_GE(both + 2, seen_.odometry.size()) << "fewer poses with covariance than odometry messages";
   for (size_t i = 1; i < both; ++i) {
@@ -125,7 +127,6 @@ TEST_F(LoopGraph, TheRevisitIsClosedTheDetectorSwitchesAndBadPairsAreReported) {
     EXPECT_NEAR(c[0] + c[7] + c[14], o[0] + o[7] + o[14], 1e-9 + 1e-6 * (o[0] + o[7] + o[14])) << i;
   }
 }
-
 
 // After the first test's drive (or alone, after a short one): save, reset, load into the emptied graph.
 TEST_F(LoopGraph, TheMapIsSavedAndLoadedIntoAFreshGraphWithTheSameKeyframesAndIndex) {
@@ -156,8 +157,9 @@ TEST_F(LoopGraph, TheMapIsSavedAndLoadedIntoAFreshGraphWithTheSameKeyframesAndIn
   ASSERT_TRUE(save.response.success) << save.response.message;
   std::cout << "saved: " << save.response.message << "\n";
   EXPECT_NE(save.response.map_id, 0u);
-  EXPECT_EQ(binloop::checkMapFolder(dir / "map", {"tracking", "local_mapping", "loop_detector", "loop_closing"}),
-            save.response.map_id);
+  EXPECT_EQ(
+      binloop::checkMapFolder(dir / "map", {"tracking", "local_mapping", "loop_detector", "loop_closing"}),
+      save.response.map_id);
   const std::string again_dir = dir / "again";  // a second save of the same graph: another map id
   binloop::SaveMap again;
   again.request.directory = again_dir;
@@ -190,7 +192,8 @@ TEST_F(LoopGraph, TheMapIsSavedAndLoadedIntoAFreshGraphWithTheSameKeyframesAndIn
     EXPECT_NE(l.response.message.find(why), std::string::npos) << l.response.message;
     EXPECT_NE(l.response.message.find("nothing loaded"), std::string::npos) << l.response.message;
     const auto now = statistics();  // as empty as after the reset (tracking: no tracker until a camera comes)
-    for (const char* k : {"tracking/keyframes", "local_mapping/keyframes", "loop_detector/keyframes", "loop_closing/keyframes"})
+    for (const char* k : {"tracking/keyframes", "local_mapping/keyframes", "loop_detector/keyframes",
+                          "loop_closing/keyframes"})
       EXPECT_EQ(now.count(k) ? now.at(k) : "missing", empty.count(k) ? empty.at(k) : "missing")
           << k << " after refusing " << folder;
   };
@@ -198,7 +201,8 @@ TEST_F(LoopGraph, TheMapIsSavedAndLoadedIntoAFreshGraphWithTheSameKeyframesAndIn
   fs::resize_file(binloop::stageStatePath(dir / "broken", "loop_closing"), 100);
   refusedEverywhere(dir / "broken", "truncated state file");
   fs::copy(dir / "map", dir / "mixed");
-  fs::copy_file(binloop::stageStatePath(again_dir, "loop_detector"), binloop::stageStatePath(dir / "mixed", "loop_detector"),
+  fs::copy_file(binloop::stageStatePath(again_dir, "loop_detector"),
+                binloop::stageStatePath(dir / "mixed", "loop_detector"),
                 fs::copy_options::overwrite_existing);
   refusedEverywhere(dir / "mixed", "the folder mixes two saves");
   fs::create_directories(dir / "home");
@@ -207,7 +211,8 @@ TEST_F(LoopGraph, TheMapIsSavedAndLoadedIntoAFreshGraphWithTheSameKeyframesAndIn
   over.request.directory = dir / "home";
   ASSERT_TRUE(ros::service::call("/binloop/save_map", over));
   EXPECT_FALSE(over.response.success);
-  EXPECT_NE(over.response.message.find("which is not a saved map's"), std::string::npos) << over.response.message;
+  EXPECT_NE(over.response.message.find("which is not a saved map's"), std::string::npos)
+      << over.response.message;
   EXPECT_TRUE(fs::exists(dir / "home/notes.txt"));
 
   binloop::LoadMap load;
@@ -217,9 +222,10 @@ TEST_F(LoopGraph, TheMapIsSavedAndLoadedIntoAFreshGraphWithTheSameKeyframesAndIn
   EXPECT_EQ(load.response.map_id, save.response.map_id);
   std::cout << "loaded: " << load.response.message << "\n";
   const auto after = statistics();
-  for (const char* k : {"tracking/keyframes", "tracking/map_points", "local_mapping/keyframes", "local_mapping/map_points",
-                        "loop_detector/model", "loop_detector/keyframes", "loop_detector/index_keyframes",
-                        "loop_detector/index_bytes", "loop_closing/keyframes", "loop_closing/loops"})
+  for (const char* k :
+       {"tracking/keyframes", "tracking/map_points", "local_mapping/keyframes", "local_mapping/map_points",
+        "loop_detector/model", "loop_detector/keyframes", "loop_detector/index_keyframes",
+        "loop_detector/index_bytes", "loop_closing/keyframes", "loop_closing/loops"})
     EXPECT_EQ(after.count(k) ? after.at(k) : "missing", before.count(k) ? before.at(k) : "missing") << k;
   EXPECT_EQ(after.at("tracking/state"), "lost");
 
@@ -230,7 +236,8 @@ TEST_F(LoopGraph, TheMapIsSavedAndLoadedIntoAFreshGraphWithTheSameKeyframesAndIn
   const ros::Time t = pairs.back().left.header.stamp + ros::Duration(50);
   p.left.header.stamp = p.right.header.stamp = p.left_info.header.stamp = p.right_info.header.stamp = t;
   bool placed = false;
-  for (int tries = 0; tries < 3 && !placed; ++tries) {  // the first may only find the place, the next tracks it
+  for (int tries = 0; tries < 3 && !placed;
+       ++tries) {  // the first may only find the place, the next tracks it
     const ros::Time s = t + ros::Duration(0.1 * tries);
     p.left.header.stamp = p.right.header.stamp = p.left_info.header.stamp = p.right_info.header.stamp = s;
     publishPair(p.left, p.right, p.left_info, p.right_info);
@@ -259,9 +266,9 @@ TEST_F(LoopGraph, MalformedPairsAreReportedAndTrackingGoesOn) {
     p.left.header.stamp = p.right.header.stamp = p.left_info.header.stamp = p.right_info.header.stamp = s;
     return p;
   };
-  // The graph may be anywhere after the first test (the load test ends relocalised eleven pairs back), so the first good
-  // pair may have to be found from scratch; in the threaded graph one try in about fifty was lost, so it gets
-  // three, and a failure says why tracking refused it.
+  // The graph may be anywhere after the first test (the load test ends relocalised eleven pairs back), so the
+  // first good pair may have to be found from scratch; in the threaded graph one try in about fifty was lost,
+  // so it gets three, and a failure says why tracking refused it.
   bool tracked = false;
   for (int tries = 0; tries < 3 && !tracked; ++tries) {
     t = base.left.header.stamp + ros::Duration(100 + tries);
@@ -297,7 +304,8 @@ TEST_F(LoopGraph, MalformedPairsAreReportedAndTrackingGoesOn) {
   const ros::Time t2 = t + ros::Duration(0.5);
   const Pair good = stamped(base, t2);
   publishPair(good.left, good.right, good.left_info, good.right_info);
-  EXPECT_TRUE(waitFor(5, [&] { return seen_.poses.count(t2.toSec()) > 0; })) << "tracking stopped after bad pairs";
+  EXPECT_TRUE(waitFor(5, [&] { return seen_.poses.count(t2.toSec()) > 0; }))
+      << "tracking stopped after bad pairs";
   EXPECT_TRUE(waitFor(5, [&] {
     auto it = seen_.tracking_diag.find("input dropped");
     return it != seen_.tracking_diag.end() && std::stoi(it->second) >= 4;
@@ -354,7 +362,8 @@ TEST_F(LoopGraph, BadStampsAndAReplayDoNotStopTheGraph) {
   EXPECT_TRUE(waitFor(10, [&] { return seen_.pose_stamps.size() >= before + 5; }))
       << "the replayed pairs were not tracked again";
   EXPECT_TRUE(waitFor(5, [&] {
-    auto dropped = seen_.tracking_diag.find("input dropped"), restarts = seen_.tracking_diag.find("clock restarts");
+    auto dropped = seen_.tracking_diag.find("input dropped"),
+         restarts = seen_.tracking_diag.find("clock restarts");
     return dropped != seen_.tracking_diag.end() && std::stoi(dropped->second) >= 4 &&
            restarts != seen_.tracking_diag.end() && restarts->second == "1";
   })) << "diagnostics do not count the dropped pairs and the clock restart";
@@ -394,9 +403,9 @@ int main(int argc, char** argv) { return binloop::test::runRostest(argc, argv, "
 
 // Run alone by stage_restarts.test (the split graph with respawn on; the other .test files leave it out):
 // each stage's process but local mapping's is killed during the drive and comes back; local mapping sends it
-// the map again (the loop stages every keyframe, tracking the whole map to relocalise in), so tracking goes on
-// in the same map, and the revisit at the end is still closed against keyframes made before the restarts and
-// applied by mapping (the correction sequences agree again).
+// the map again (the loop stages every keyframe, tracking the whole map to relocalise in), so tracking goes
+// on in the same map, and the revisit at the end is still closed against keyframes made before the restarts
+// and applied by mapping (the correction sequences agree again).
 TEST_F(LoopGraph, RestartedStagesGetTheMapAgainAndTheRevisitIsClosed) {
   const Drive& d = drive();
   ASSERT_TRUE(d.problem.empty()) << d.problem;
@@ -411,7 +420,8 @@ TEST_F(LoopGraph, RestartedStagesGetTheMapAgainAndTheRevisitIsClosed) {
     bool back = false;
     std::string holds;  // what the restarted stage holds once back
   };
-  std::vector<Restart> restarts = {{40, "loop_closing"}, {lap / 2, "loop_detector"}, {lap * 3 / 4, "tracking"}};
+  std::vector<Restart> restarts = {
+      {40, "loop_closing"}, {lap / 2, "loop_detector"}, {lap * 3 / 4, "tracking"}};
   size_t tracked_again_at = 0;  // the first pair with a pose after tracking's restart
   for (size_t i = 0; i < pairs.size(); ++i) {
     for (Restart& r : restarts) {
@@ -425,7 +435,8 @@ TEST_F(LoopGraph, RestartedStagesGetTheMapAgainAndTheRevisitIsClosed) {
         auto mine = s.find(std::string(r.stage) + "/keyframes"), mapping = s.find("local_mapping/keyframes");
         if (std::string(r.stage) == "tracking") {
           // Back when it takes pairs again (its map comes with its camera, at the next pair).
-          r.back = s.count("tracking/frames") && left_.getNumSubscribers() > 0 && right_.getNumSubscribers() > 0;
+          r.back =
+              s.count("tracking/frames") && left_.getNumSubscribers() > 0 && right_.getNumSubscribers() > 0;
           if (r.back) ros::WallDuration(1.0).sleep();  // local mapping's map reaches it
           r.holds = "-";
         } else if (mine != s.end() && mapping != s.end() && std::stoi(mapping->second) > 5 &&
@@ -471,7 +482,8 @@ TEST_F(LoopGraph, RestartedStagesGetTheMapAgainAndTheRevisitIsClosed) {
     std::lock_guard<std::mutex> lk(seen_.m);
     for (const auto& c : seen_.closures) {
       if (c.status != binloop::LoopClosure::ACCEPTED) continue;
-      EXPECT_LT(c.match_frame, restarts.front().at) << "the loop should reach keyframes made before the restarts";
+      EXPECT_LT(c.match_frame, restarts.front().at)
+          << "the loop should reach keyframes made before the restarts";
       auto q = index_of.find(c.header.stamp.toSec());
       ASSERT_NE(q, index_of.end());
       EXPECT_LT((d.route[q->second].translation() - d.route[c.match_frame].translation()).norm(), 10);
@@ -485,14 +497,16 @@ TEST_F(LoopGraph, RestartedStagesGetTheMapAgainAndTheRevisitIsClosed) {
               s.at("local_mapping/corrections") == s.at("loop_closing/corrections");
   }
   const auto s = statistics();
-  EXPECT_TRUE(applied) << "mapping applied " << (s.count("local_mapping/corrections") ? s.at("local_mapping/corrections") : "?")
-                       << " corrections, loop closing made " << (s.count("loop_closing/corrections") ? s.at("loop_closing/corrections") : "?");
+  EXPECT_TRUE(applied) << "mapping applied "
+                       << (s.count("local_mapping/corrections") ? s.at("local_mapping/corrections") : "?")
+                       << " corrections, loop closing made "
+                       << (s.count("loop_closing/corrections") ? s.at("loop_closing/corrections") : "?");
 }
 
 // Run alone by mapping_down.test (the split graph, no respawn; the other .test files leave it out): local
-// mapping's process dies mid-drive. Tracking does not wait on it: the keyframes in flight are given up as soon
-// as nothing subscribes to them, it goes on making keyframes into its own map and posing every pair, and its
-// diagnostics say what it gave up.
+// mapping's process dies mid-drive. Tracking does not wait on it: the keyframes in flight are given up as
+// soon as nothing subscribes to them, it goes on making keyframes into its own map and posing every pair, and
+// its diagnostics say what it gave up.
 TEST_F(LoopGraph, TrackingGoesOnWhenLocalMappingIsGone) {
   const Drive& d = drive();
   ASSERT_TRUE(d.problem.empty()) << d.problem;

@@ -32,8 +32,8 @@ inline const Drive& drive() {
   d.route = binloop::sim::loopRoute(50, 80, 12, 8, 10, 1.25);
   binloop::writeKittiPoses(*d.dir / "route.txt", d.route);
   const std::string tools = BINLOOP_TOOL_DIR;
-  auto r = binloop::test::runCommand(tools + "/render --route " + (*d.dir / "route.txt") + " --calib kitti04 --out " +
-                                     (*d.dir / "seq"));
+  auto r = binloop::test::runCommand(tools + "/render --route " + (*d.dir / "route.txt") +
+                                     " --calib kitti04 --out " + (*d.dir / "seq"));
   if (r.code != 0) d.problem = "render failed: " + r.out;
   d.bag = *d.dir / "drive.bag";
   if (d.problem.empty()) {
@@ -53,16 +53,16 @@ inline std::vector<Pair> readPairs(const std::string& path) {
   std::map<ros::Time, Pair> by_stamp;
   for (const rosbag::MessageInstance& m : rosbag::View(bag)) {
     if (auto img = m.instantiate<sensor_msgs::Image>()) {
-      (m.getTopic() == binloop_ros::topics::kLeftImage ? by_stamp[img->header.stamp].left : by_stamp[img->header.stamp].right) = *img;
+      (m.getTopic() == binloop_ros::topics::kLeftImage ? by_stamp[img->header.stamp].left
+                                                       : by_stamp[img->header.stamp].right) = *img;
     } else if (auto info = m.instantiate<sensor_msgs::CameraInfo>()) {
       (m.getTopic() == binloop_ros::topics::kLeftInfo ? by_stamp[info->header.stamp].left_info
-                                         : by_stamp[info->header.stamp].right_info) = *info;
+                                                      : by_stamp[info->header.stamp].right_info) = *info;
     }
   }
   std::vector<Pair> out;
   for (auto& [stamp, p] : by_stamp) out.push_back(std::move(p));
   return out;
 }
-
 
 }  // namespace binloop::test

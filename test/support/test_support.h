@@ -40,19 +40,19 @@ CommandResult runCommand(const std::string& command);
 }  // namespace binloop::test
 
 /// Skips the test (never passes it) when a file from ../shared/data is not there.
-#define BINLOOP_REQUIRE_DATA(path)                                                            \
-  do {                                                                                        \
+#define BINLOOP_REQUIRE_DATA(path)                                                         \
+  do {                                                                                     \
     if (!::binloop::test::exists(path)) GTEST_SKIP() << "test data not found: " << (path); \
   } while (0)
 
 /// Expects `stmt` to throw `Exc` whose what() contains `substr`.
-#define EXPECT_THROW_WITH(stmt, Exc, substr)                                             \
-  do {                                                                                   \
-    try {                                                                                \
-      stmt;                                                                              \
-      ADD_FAILURE() << #stmt " did not throw";                                           \
-    } catch (const Exc& e) {                                                             \
-      EXPECT_NE(std::string(e.what()).find(substr), std::string::npos)                  \
+#define EXPECT_THROW_WITH(stmt, Exc, substr)                                          \
+  do {                                                                                \
+    try {                                                                             \
+      stmt;                                                                           \
+      ADD_FAILURE() << #stmt " did not throw";                                        \
+    } catch (const Exc& e) {                                                          \
+      EXPECT_NE(std::string(e.what()).find(substr), std::string::npos)                \
           << "message was: " << e.what() << "\nexpected it to contain: " << (substr); \
-    }                                                                                    \
+    }                                                                                 \
   } while (0)

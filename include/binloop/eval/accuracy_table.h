@@ -25,12 +25,12 @@ struct AccuracyRow {
   double ate_median = 0, ate_min = 0, ate_max = 0;
   double t_rel_median = 0, t_rel_min = 0, t_rel_max = 0;  // NaN when the path is too short for segments
   double r_rel_median = 0;
-  double loops_median = 0;     // accepted loops per run
-  int loops_wrong = 0;         // over all runs: accepted loops too far apart or with a wrong relative pose
-  int wrong_unjudged_pose = 0; // runs whose loops had no relative pose to judge (a peer's loops.txt)
-  int segments = 0;            // revisit segments in the ground truth
-  int segments_every_run = 0;  // segments closed in every run
-  int lost_max = 0;            // frames not tracked, the worst run
+  double loops_median = 0;      // accepted loops per run
+  int loops_wrong = 0;          // over all runs: accepted loops too far apart or with a wrong relative pose
+  int wrong_unjudged_pose = 0;  // runs whose loops had no relative pose to judge (a peer's loops.txt)
+  int segments = 0;             // revisit segments in the ground truth
+  int segments_every_run = 0;   // segments closed in every run
+  int lost_max = 0;             // frames not tracked, the worst run
   double spread() const { return ate_min > 0 ? ate_max / ate_min : 0; }
 };
 
@@ -42,7 +42,8 @@ AccuracyRow summarizeRuns(const std::string& name, const std::vector<RunScore>& 
 /// seconds state", state 2 = tracked). Runs are grouped by folder name without its "-N" suffix ("loops-1",
 /// "loops-2" -> "loops"), each group one row named `prefix` + group. Throws DataError for a folder with no
 /// run or a malformed file.
-std::vector<AccuracyRow> scorePeerRuns(const std::string& dir, const std::string& prefix, const std::vector<Pose3>& gt,
+std::vector<AccuracyRow> scorePeerRuns(const std::string& dir, const std::string& prefix,
+                                       const std::vector<Pose3>& gt,
                                        const std::vector<RevisitSegment>& segments);
 
 /// The rows as an aligned text table (`csv` false) or CSV, header first.

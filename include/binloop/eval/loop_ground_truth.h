@@ -11,6 +11,7 @@
 namespace binloop {
 
 /// (query, ref) pairs with query > ref + min_frame_gap, ordered by query then ref.
-std::vector<std::pair<int, int>> loopPairsFromPoses(const std::vector<Pose3>& T_w_c, double radius_m, int min_frame_gap);
+std::vector<std::pair<int, int>> loopPairsFromPoses(const std::vector<Pose3>& T_w_c, double radius_m,
+                                                    int min_frame_gap);
 
 }  // namespace binloop

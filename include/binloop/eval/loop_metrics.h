@@ -28,16 +28,16 @@ struct LoopMetrics {
   std::vector<PrPoint> curve;  // one point per distinct confidence, descending
   int positives = 0;           // queries with a ground-truth loop that can be found
   double r_at_100p = 0;
-  double threshold_100p = 0;   // lowest confidence at which precision is still 1 (inf when none)
-  int tier_100p = 0;           // ... within this tier
-  double auc = 0;              // area under the PR curve (precision summed over recall steps)
+  double threshold_100p = 0;  // lowest confidence at which precision is still 1 (inf when none)
+  int tier_100p = 0;          // ... within this tier
+  double auc = 0;             // area under the PR curve (precision summed over recall steps)
   double precision_at_bar = 0, recall_at_bar = 0;  // of the predictions that passed the model's own bar
 };
 
 /// `truth`: every (query, ref) ground-truth pair; `positive_queries`: queries that have at least one
 /// findable ref (ref stored before the query and outside its ignored window).
-LoopMetrics evaluateLoops(const std::vector<LoopPrediction>& predictions, const std::set<std::pair<int, int>>& truth,
-                          const std::set<int>& positive_queries);
+LoopMetrics evaluateLoops(const std::vector<LoopPrediction>& predictions,
+                          const std::set<std::pair<int, int>>& truth, const std::set<int>& positive_queries);
 
 /// Of `queries`, how many have a correct prediction at or above (tier, threshold).
 int foundAt(const std::vector<LoopPrediction>& predictions, const std::set<std::pair<int, int>>& truth,

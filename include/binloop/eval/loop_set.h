@@ -1,6 +1,7 @@
 #pragma once
 // Real-image loop sets: an image sequence that visits places and comes back to them, made from real
-// photographs so that loop ranking can be tuned and checked on real image statistics (docs/loop_models.md, "Real-image loop sets").
+// photographs so that loop ranking can be tuned and checked on real image statistics (docs/loop_models.md,
+// "Real-image loop sets").
 //
 // A list file names one place per line: `<name> <image A> [<image B> | -]`. Each place is first visited
 // as three crops of A panning left to right (a camera sweeping a room). Places with a B are revisited

@@ -24,7 +24,8 @@ struct RevisitSegment {
 };
 
 /// Segments of the (query, ref) pairs' query frames, in frame order. Pairs may come in any order.
-std::vector<RevisitSegment> revisitSegments(const std::vector<std::pair<int, int>>& pairs, int max_gap = kRevisitMaxGap);
+std::vector<RevisitSegment> revisitSegments(const std::vector<std::pair<int, int>>& pairs,
+                                            int max_gap = kRevisitMaxGap);
 
 /// Whether the ground-truth positions of frames `query` and `match` lie within `radius_m`. Throws DataError
 /// when a frame is outside the ground truth (e.g. the run was of another sequence).
@@ -48,7 +49,8 @@ inline bool loopPoseIsWrong(const LoopPoseError& e) {
 
 struct LoopScore {
   int accepted = 0, correct = 0;
-  int wrong_pose = 0;   // accepted loops whose relative pose is wrong (loopPoseIsWrong); only when poses were given
+  int wrong_pose =
+      0;  // accepted loops whose relative pose is wrong (loopPoseIsWrong); only when poses were given
   std::vector<bool> closed;  // one per segment
   int segmentsClosed() const;
 };
@@ -60,8 +62,8 @@ LoopScore scoreLoops(const std::vector<std::pair<int, int>>& accepted, const std
 
 /// The same, also judging each loop's relative pose (`T_query_match[i]` for `accepted[i]`): a loop with a
 /// wrong pose counts in wrong_pose and, whatever its distance, neither as correct nor as closing a segment.
-LoopScore scoreLoops(const std::vector<std::pair<int, int>>& accepted, const std::vector<Pose3>& T_query_match,
-                     const std::vector<Pose3>& gt, const std::vector<RevisitSegment>& segments,
-                     double radius_m = kLoopCorrectRadiusM);
+LoopScore scoreLoops(const std::vector<std::pair<int, int>>& accepted,
+                     const std::vector<Pose3>& T_query_match, const std::vector<Pose3>& gt,
+                     const std::vector<RevisitSegment>& segments, double radius_m = kLoopCorrectRadiusM);
 
 }  // namespace binloop

@@ -30,6 +30,7 @@ struct QueryOffers {
 /// the chain's weakest confidence, or no candidate when no chain reaches that long. When a chain exists
 /// among offers that all passed their bar, the strongest such chain is the prediction instead, with
 /// `passed` set and tier 1 (it ranks above every chain through a rejected keyframe).
-std::vector<LoopPrediction> consistentPredictions(const std::vector<QueryOffers>& queries, int chain, int max_gap);
+std::vector<LoopPrediction> consistentPredictions(const std::vector<QueryOffers>& queries, int chain,
+                                                  int max_gap);
 
 }  // namespace binloop

@@ -1,7 +1,7 @@
 #pragma once
-// Trajectory accuracy against ground truth, as every binloop tool and benchmark reports it: the absolute trajectory error
-// after a rigid (SE(3), no scale) Umeyama alignment, and the KITTI devkit's relative errors over path
-// segments of 100..800 m.
+// Trajectory accuracy against ground truth, as every binloop tool and benchmark reports it: the absolute
+// trajectory error after a rigid (SE(3), no scale) Umeyama alignment, and the KITTI devkit's relative errors
+// over path segments of 100..800 m.
 //
 // Matching an estimate to the ground truth (docs/tools.md: eval-traj):
 // - KITTI files (12 numbers per line) carry no stamps: line i is frame i, so they hold every frame from 0
@@ -37,10 +37,10 @@ const char* formatName(TrajectoryFormat f);  // "KITTI" or "TUM"
 
 /// Estimate poses paired with their ground-truth frames, in increasing frame order.
 struct MatchedPoses {
-  std::vector<int> frames;    // ground-truth frame index of each pair
+  std::vector<int> frames;     // ground-truth frame index of each pair
   std::vector<Pose3> gt, est;  // T_w_c of camera 0, each in its own world frame
-  std::string rule;           // how they were matched, in words ("by frame index (KITTI line = frame)")
-  size_t gt_frames = 0;       // poses in the ground truth
+  std::string rule;            // how they were matched, in words ("by frame index (KITTI line = frame)")
+  size_t gt_frames = 0;        // poses in the ground truth
 };
 
 /// KITTI estimates (stamp = line) and TUM estimates whose stamps are frame indices. A stamp that is not a
@@ -56,8 +56,9 @@ struct TimeMatchOptions {
 
 /// TUM estimates: each stamp, less the offset, is matched to the nearest of `gt_times` (one per
 /// ground-truth pose, non-decreasing, e.g. KITTI's times.txt) and must lie within the tolerance of it.
-MatchedPoses matchByTime(const std::vector<Pose3>& gt, const std::vector<double>& gt_times, const EstimateFile& est,
-                         const TimeMatchOptions& options = {}, const std::string& source = "estimate");
+MatchedPoses matchByTime(const std::vector<Pose3>& gt, const std::vector<double>& gt_times,
+                         const EstimateFile& est, const TimeMatchOptions& options = {},
+                         const std::string& source = "estimate");
 
 /// T_gt_est minimising sum |gt_i - T * est_i|^2 over rotations and translations (Umeyama 1991 without
 /// scale). Needs at least 3 pairs of equal count; throws DataError otherwise.

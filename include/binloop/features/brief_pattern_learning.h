@@ -44,25 +44,25 @@ PatchSamples samplePatches(const cv::Mat& gray, const OrbSlamExtractor& extracto
 std::vector<uint8_t> testBits(const PatchSamples& s, const BriefTest& test);
 
 struct PatternLearningOptions {
-  int bits = 256;               // tests to keep (the extractor's table needs exactly 256)
-  int min_separation = 5;       // a candidate's points differ by at least this in x or in y (pixels)
-  double start_threshold = 0.1; // first |correlation| bound of the greedy walk
-  double threshold_step = 0.01; // raise per failed walk
-  size_t pool = 12000;          // the walk looks at this many best-balanced candidates at most
-  int tie_margin = 5;           // |I(a) - I(b)| <= this is a near-tie
-  double max_tie_share = 1;     // candidates with more near-ties than this share are left out (1: none)
+  int bits = 256;                // tests to keep (the extractor's table needs exactly 256)
+  int min_separation = 5;        // a candidate's points differ by at least this in x or in y (pixels)
+  double start_threshold = 0.1;  // first |correlation| bound of the greedy walk
+  double threshold_step = 0.01;  // raise per failed walk
+  size_t pool = 12000;           // the walk looks at this many best-balanced candidates at most
+  int tie_margin = 5;            // |I(a) - I(b)| <= this is a near-tie
+  double max_tie_share = 1;      // candidates with more near-ties than this share are left out (1: none)
   int threads = 2;
 };
 
 struct LearnedPattern {
-  std::vector<BriefTest> tests;  // `bits` of them, in the order kept (best-balanced first)
-  double threshold = 0;        // |correlation| bound the walk succeeded with
-  size_t candidates = 0;       // tests enumerated (after the separation and near-tie filters)
-  size_t walked = 0;           // candidates the successful walk looked at
-  std::vector<double> mean;    // P(bit = 1) of each kept test on the samples
+  std::vector<BriefTest> tests;     // `bits` of them, in the order kept (best-balanced first)
+  double threshold = 0;             // |correlation| bound the walk succeeded with
+  size_t candidates = 0;            // tests enumerated (after the separation and near-tie filters)
+  size_t walked = 0;                // candidates the successful walk looked at
+  std::vector<double> mean;         // P(bit = 1) of each kept test on the samples
   double mean_abs_correlation = 0;  // between kept tests, on the samples
   double max_abs_correlation = 0;
-  double tie_share = 0;             // mean near-tie share of the kept tests
+  double tie_share = 0;  // mean near-tie share of the kept tests
 };
 
 /// Throws PlaceError when there are no samples or options are out of range, or when the pool cannot give

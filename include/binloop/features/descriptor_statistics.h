@@ -16,7 +16,8 @@ struct BitStatistics {
   double median_abs_correlation = 0;  // over every pair of bits, of |phi| (Pearson's r of two 0/1 variables)
   double mean_abs_correlation = 0;
   double max_abs_correlation = 0;
-  double random_pair_distance = 0;  // mean Hamming distance of seeded random pairs of descriptors (128: ideal)
+  double random_pair_distance =
+      0;  // mean Hamming distance of seeded random pairs of descriptors (128: ideal)
 };
 
 /// A bit that never changes has no correlation with anything (counted as 0). Needs at least 2 descriptors

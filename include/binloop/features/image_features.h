@@ -18,7 +18,8 @@ std::vector<std::string> listImages(const std::string& dir);
 
 struct ExtractOptions {
   OrbSlamParams orb;  // defaults = the SLAM's (config/kitti.yaml, orb:)
-  int max_side = 0;   // > 0: larger images are scaled down (area interpolation) so that their longer side is this
+  int max_side =
+      0;  // > 0: larger images are scaled down (area interpolation) so that their longer side is this
   int threads = 2;
   /// Unreadable images (corrupt, 16-bit) give an empty set and a line in `skipped` instead of an error.
   bool skip_unreadable = false;

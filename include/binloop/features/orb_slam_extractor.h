@@ -10,13 +10,13 @@
 // Gaussian (sigma = 31/5 px, BRIEF's "G II" layout) by HashRng with a fixed seed, each point inside the
 // radius-15 orientation disc. kOrbLearned: ORB's learned rBRIEF tests, computed by OpenCV's ORB for
 // binloop's keypoints on the extractor's own level at the extractor's angle (OpenCV's ORB on the whole image
-// gives the same bits at level 0 and within a few bits above, where it resizes its own pyramid). The learned tests' bits are balanced and less correlated (the steered
-// Gaussian ones are biased, as the ORB paper found), which the place models gain from; but on renders
-// they survive a 24 m gap worse, and recovery after 20 missing frames fails with them, so the SLAM keeps
-// the Gaussian tests by default (docs/decisions.md, "ORB's learned BRIEF tests"). `learn-pattern` learns a
-// pattern as ORB learned rBRIEF.
-// It is the one extractor of binloop: SLAM, `train`, `eval-loops` and the benchmarks all use it (with the
-// same settings by default), and every model file records the settings it was trained with.
+// gives the same bits at level 0 and within a few bits above, where it resizes its own pyramid). The learned
+// tests' bits are balanced and less correlated (the steered Gaussian ones are biased, as the ORB paper
+// found), which the place models gain from; but on renders they survive a 24 m gap worse, and recovery after
+// 20 missing frames fails with them, so the SLAM keeps the Gaussian tests by default (docs/decisions.md,
+// "ORB's learned BRIEF tests"). `learn-pattern` learns a pattern as ORB learned rBRIEF. It is the one
+// extractor of binloop: SLAM, `train`, `eval-loops` and the benchmarks all use it (with the same settings by
+// default), and every model file records the settings it was trained with.
 #include <array>
 #include <cmath>
 #include <cstdint>
@@ -30,8 +30,8 @@
 
 namespace binloop {
 
-/// One BRIEF test: bit = I(a) < I(b) on the smoothed level (briefSmoothed), with a = (ax, ay) and b = (bx, by)
-/// in level pixels relative to the keypoint, rotated by its angle first. |a|, |b| <= 15.
+/// One BRIEF test: bit = I(a) < I(b) on the smoothed level (briefSmoothed), with a = (ax, ay) and b = (bx,
+/// by) in level pixels relative to the keypoint, rotated by its angle first. |a|, |b| <= 15.
 struct BriefTest {
   int8_t ax, ay, bx, by;
 };
@@ -83,8 +83,9 @@ struct OrbSlamParams {
 };
 
 /// What a model header records for descriptors of OrbSlamExtractor(p) on images scaled down to a longer
-/// side of `max_side` first (0: full size, as SLAM extracts). Pass it as RecognizerOptions::extractor.expected
-/// (or ExtractorCheck::expected) when loading a model that this extractor's descriptors will feed.
+/// side of `max_side` first (0: full size, as SLAM extracts). Pass it as
+/// RecognizerOptions::extractor.expected (or ExtractorCheck::expected) when loading a model that this
+/// extractor's descriptors will feed.
 ExtractorSettings extractorSettings(const OrbSlamParams& p, int max_side = 0);
 
 /// Level 0 is the image itself (its header shares the caller's pixels); level i is level i-1 resized

@@ -5,8 +5,8 @@
 // octave and a parabola through the best SAD and its two neighbours. A final test drops matches whose SAD
 // is far above the frame's median, which removes most wrong descriptor matches on repeated texture.
 //
-// Departures from ORB-SLAM2 (and one option), measured on a real KITTI frame shifted by a known disparity (see
-// stereo_matcher_test.cpp; share of matches within 0.2 px, at 12 / 7.5 / 20.25 / 33.7 px):
+// Departures from ORB-SLAM2 (and one option), measured on a real KITTI frame shifted by a known disparity
+// (see stereo_matcher_test.cpp; share of matches within 0.2 px, at 12 / 7.5 / 20.25 / 33.7 px):
 // - SAD is taken after removing each window's mean, not its centre pixel: 47/32/36/36 % -> 92/85/81/73 %.
 //   A FAST corner's centre pixel differs from its neighbours by construction, so sliding one pixel shifts
 //   the offset of the whole window. `centre_pixel_offset` restores ORB-SLAM2's choice.
@@ -23,11 +23,11 @@
 namespace binloop {
 
 struct StereoMatchParams {
-  int max_hamming = 75;                    // best descriptor must be below this: ORB-SLAM2's (TH_HIGH + TH_LOW) / 2
-  double min_depth_m = 0;                  // nearest depth searched; 0 = one baseline (ORB-SLAM2), i.e. disparity <= fx
-  float row_band_px = 2.f;                 // a right keypoint is a candidate for rows y ± this times its level scale
-  int sad_half_window = 5;                 // 11x11 SAD window, at the left keypoint's octave
-  int sad_search_px = 5;                   // the window slides ± this many level pixels around the descriptor match
+  int max_hamming = 75;     // best descriptor must be below this: ORB-SLAM2's (TH_HIGH + TH_LOW) / 2
+  double min_depth_m = 0;   // nearest depth searched; 0 = one baseline (ORB-SLAM2), i.e. disparity <= fx
+  float row_band_px = 2.f;  // a right keypoint is a candidate for rows y ± this times its level scale
+  int sad_half_window = 5;  // 11x11 SAD window, at the left keypoint's octave
+  int sad_search_px = 5;    // the window slides ± this many level pixels around the descriptor match
   float sad_outlier_factor = 1.5f * 1.4f;  // reject SAD above this times the median SAD of the frame
   double close_depth_baselines = 40;       // isCloseDepth: depth below this many baselines
   bool centre_pixel_offset = false;        // true: SAD windows offset by their centre pixel (ORB-SLAM2)
@@ -51,7 +51,8 @@ struct StereoMatches {
 /// octave without a pyramid level, differing pyramids, a camera without a positive fx·b, or parameters out
 /// of range.
 StereoMatches matchStereo(const OrbFeatures& left, const ImagePyramid& left_pyramid, const OrbFeatures& right,
-                          const ImagePyramid& right_pyramid, const StereoCamera& cam, const StereoMatchParams& p = {});
+                          const ImagePyramid& right_pyramid, const StereoCamera& cam,
+                          const StereoMatchParams& p = {});
 
 /// ORB-SLAM2's "close" point, whose depth is trusted from a single stereo frame: 0 < depth < 40 baselines
 /// (by default). Far points are only used for rotation until triangulated over frames.

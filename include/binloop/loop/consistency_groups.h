@@ -36,9 +36,9 @@ class ConsistencyGroups {
 
  private:
   struct Chain {
-    Group group;   // the place of its last proposal
-    int length;    // consistent proposals after the first
-    int age;       // queries since it was last continued
+    Group group;  // the place of its last proposal
+    int length;   // consistent proposals after the first
+    int age;      // queries since it was last continued
   };
   int required_, max_gap_;
   std::vector<Chain> groups_;

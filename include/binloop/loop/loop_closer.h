@@ -1,7 +1,8 @@
 #pragma once
-// The loop-closing stage (step 4 of four; ARCHITECTURE.md): refined keyframes and local mapping's updates in (its own
-// copy of every keyframe: keypoints, descriptors, pose, covisibility, parent), the loop detector's accepted
-// candidates in; per verified loop a LoopClosure out, and for an accepted one a Correction for local mapping.
+// The loop-closing stage (step 4 of four; ARCHITECTURE.md): refined keyframes and local mapping's updates in
+// (its own copy of every keyframe: keypoints, descriptors, pose, covisibility, parent), the loop detector's
+// accepted candidates in; per verified loop a LoopClosure out, and for an accepted one a Correction for local
+// mapping.
 //
 // A loop is accepted in four steps:
 //   1. verification (loop/loop_verifier.h): the two keyframes see the same structure; T_query_match. A pair
@@ -51,7 +52,7 @@ struct LoopCloserParams {
   EssentialGraphParams graph;
   PoseGraphParams optimizer;
   double drift_base_m = 1.0;
-  double drift_per_m = 0.005;      // 2-3x the t_rel of the tracking on the rendered routes (0.16-0.21 %)
+  double drift_per_m = 0.005;  // 2-3x the t_rel of the tracking on the rendered routes (0.16-0.21 %)
   double confirm_min_travel_m = 10;
   double hold_factor = 10;
   double confirm_tolerance_m = 1.0;
@@ -64,14 +65,14 @@ struct LoopCloserParams {
   // error grows with distance squared, so the loop edge is measured against the match's covisible keyframe
   // nearest to the query when the verified pair is more than this far apart (0: never).
   double reanchor_min_m = 5;
-  bool fuse = true;                      // ask local mapping to merge the points around the loop
+  bool fuse = true;  // ask local mapping to merge the points around the loop
 };
 
 class LoopCloser {
  public:
   struct Output {
     std::vector<msg::LoopClosurePtr> closures;  // loops verified now (and held ones that expired)
-    msg::CorrectionPtr correction;               // set when a loop was accepted
+    msg::CorrectionPtr correction;              // set when a loop was accepted
   };
 
   explicit LoopCloser(const LoopCloserParams& p = {});
@@ -111,8 +112,8 @@ class LoopCloser {
   struct Held {
     LoopEdge edge;
     msg::LoopClosure closure;
-    Pose3 delta;           // the world-frame correction it asks for
-    size_t held_at = 0;    // keyframes stored when it was held
+    Pose3 delta;                             // the world-frame correction it asks for
+    size_t held_at = 0;                      // keyframes stored when it was held
     std::vector<msg::LoopClosure> agreeing;  // later loops that agree but came too soon to confirm it
   };
   Output verify(SlamKeyframeId query, SlamKeyframeId match, const std::string& model,
@@ -125,8 +126,8 @@ class LoopCloser {
   /// neither is held).
   SlamKeyframeId standIn(SlamKeyframeId id) const;
   double travelBetween(SlamKeyframeId a, SlamKeyframeId b) const;
-  bool correct(const std::vector<LoopEdge>& new_loops, const std::vector<std::pair<MapPointId, MapPointId>>& fused,
-               msg::LoopClosure* c, Output* out);
+  bool correct(const std::vector<LoopEdge>& new_loops,
+               const std::vector<std::pair<MapPointId, MapPointId>>& fused, msg::LoopClosure* c, Output* out);
   void expireHeld(Output* out);
   /// The held loop, then those that agreed with it; nothing is held after.
   std::vector<msg::LoopClosure> takeHeld();

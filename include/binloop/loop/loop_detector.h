@@ -27,8 +27,8 @@ class StateReader;
 
 struct LoopDetectorParams {
   std::string model = "hmvlad";  // the default model: its file is small enough to ship (docs/loop_models.md)
-  int max_reference = 10;   // strongest covisible neighbours that set the bar
-  int ignore_recent = 20;   // keyframes just before the query are never candidates (they are not loops)
+  int max_reference = 10;        // strongest covisible neighbours that set the bar
+  int ignore_recent = 20;        // keyframes just before the query are never candidates (they are not loops)
   int consistency = 2;      // consecutive consistent queries before a candidate is accepted (ORB-SLAM2: 3;
                             // config/kitti.yaml says why 2)
   int consistency_gap = 2;  // queries a chain may skip (ConsistencyGroups' max_gap; ORB-SLAM2: 0)
@@ -43,7 +43,8 @@ class LoopDetector {
   struct Output {
     msg::LoopCandidatesPtr active;
     std::vector<msg::LoopCandidatesPtr> shadow;
-    double switch_ms = 0;  // building a switched-to model's index from the stored keyframes, when one took over
+    double switch_ms =
+        0;  // building a switched-to model's index from the stored keyframes, when one took over
   };
 
   /// Throws PlaceError when the first model cannot be made.
@@ -69,7 +70,9 @@ class LoopDetector {
   /// Keyframes in the active model's index (equal to keyframeCount() except between a switch and the next
   /// keyframe, when the new index is built).
   size_t indexSize() const { return active_.recognizer->size(); }
-  size_t indexBytes() const { return active_.recognizer->size() * active_.recognizer->indexBytesPerKeyframe(); }
+  size_t indexBytes() const {
+    return active_.recognizer->size() * active_.recognizer->indexBytesPerKeyframe();
+  }
 
   /// What a model's index depends on besides the keyframes (its vocabulary file: model_files.h), for the
   /// check when a saved map is loaded; "" = unknown, not checked.
@@ -91,7 +94,8 @@ class LoopDetector {
   };
   Model makeModel(const std::string& name) const;
   void fillFrom(Model& m) const;  // every stored keyframe, in order
-  /// The models whose index a saved map records: the active one (or the one about to take over) and the shadows.
+  /// The models whose index a saved map records: the active one (or the one about to take over) and the
+  /// shadows.
   std::vector<std::string> indexedModels() const;
   std::shared_ptr<msg::LoopCandidates> query(Model& m, SlamKeyframeId id, uint64_t frame, bool shadow) const;
   std::vector<KeyframeId> referenceOf(SlamKeyframeId id) const;

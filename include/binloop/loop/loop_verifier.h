@@ -28,9 +28,9 @@ enum class LoopRejection { kNone, kTooFewMatches, kNoConsensus, kTooFewInliers }
 msg::LoopStatus loopStatusOf(LoopRejection r);
 
 struct LoopVerifierParams {
-  int max_hamming = 50;     // ORB-SLAM2's TH_LOW
-  float ratio = 0.75f;      // best vs second best
-  int min_matches = 20;     // descriptor matches needed before RANSAC
+  int max_hamming = 50;        // ORB-SLAM2's TH_LOW
+  float ratio = 0.75f;         // best vs second best
+  int min_matches = 20;        // descriptor matches needed before RANSAC
   bool match_by_words = true;  // match within the words given with the keyframes (none given: brute force)
   RigidRansacParams ransac;
   float search_radius = 10;  // guided search, level-0 px times the level's scale
@@ -49,12 +49,12 @@ struct LoopVerifierParams {
 struct LoopVerification {
   bool accepted = false;
   LoopRejection rejection = LoopRejection::kNone;
-  std::string detail;                 // the numbers behind the result, one line
+  std::string detail;                           // the numbers behind the result, one line
   Pose3 T_query_candidate = Pose3::Identity();  // candidate camera -> query camera
-  int matches = 0;                    // step 1
-  bool by_words = false;              // step 1 matched within words
-  int first_inliers = 0;             // inliers of the first pose: step 2's RANSAC (verifyLoopAt: the first refinement's)
-  int inliers = 0;                    // after step 4
+  int matches = 0;                              // step 1
+  bool by_words = false;                        // step 1 matched within words
+  int first_inliers = 0;  // inliers of the first pose: step 2's RANSAC (verifyLoopAt: the first refinement's)
+  int inliers = 0;        // after step 4
   std::vector<std::pair<int, int>> pairs;  // final inlier (query keypoint, candidate keypoint) pairs
   double ms = 0;
   double match_ms = 0, ransac_ms = 0, refine_ms = 0, guided_ms = 0;  // steps 1, 2, 3, 4 (+ final refinement)
@@ -63,14 +63,14 @@ struct LoopVerification {
 /// Both keyframes must carry keypoints with stereo depth; `scale_factor` and `levels` from the messages.
 /// `query_words` and `candidate_words`: a coarse word per keypoint (msg::LoopCandidates), or empty; words
 /// whose count differs from the keypoints' are not used (the detail says so).
-LoopVerification verifyLoop(const msg::KeyFrame& query, const msg::KeyFrame& candidate, const LoopVerifierParams& p,
-                            const std::vector<uint32_t>& query_words = {},
+LoopVerification verifyLoop(const msg::KeyFrame& query, const msg::KeyFrame& candidate,
+                            const LoopVerifierParams& p, const std::vector<uint32_t>& query_words = {},
                             const std::vector<uint32_t>& candidate_words = {});
 
 /// Steps 4 and 5 only, from a pose already known to be close (a verified loop carried to a keyframe beside
 /// its match through the map): guided search, refinement, a second guided search and refinement.
 /// `matches` counts the first search, `first_inliers` what the first refinement kept (there is no RANSAC).
-LoopVerification verifyLoopAt(const msg::KeyFrame& query, const msg::KeyFrame& candidate, const Pose3& T_guess,
-                              const LoopVerifierParams& p);
+LoopVerification verifyLoopAt(const msg::KeyFrame& query, const msg::KeyFrame& candidate,
+                              const Pose3& T_guess, const LoopVerifierParams& p);
 
 }  // namespace binloop

@@ -10,7 +10,8 @@ namespace binloop {
 /// `parentOf` gives a keyframe's parent (for a culled one, the parent it had), kNoId past the root or for a
 /// keyframe it does not know. `max_hops` guards a cycle.
 template <class ParentOf, class Stop>
-SlamKeyframeId firstAncestor(SlamKeyframeId id, const ParentOf& parentOf, const Stop& stop, int max_hops = 100000) {
+SlamKeyframeId firstAncestor(SlamKeyframeId id, const ParentOf& parentOf, const Stop& stop,
+                             int max_hops = 100000) {
   for (int hops = 0; hops < max_hops && id != kNoId; ++hops) {
     if (stop(id)) return id;
     id = parentOf(id);

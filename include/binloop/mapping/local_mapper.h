@@ -1,7 +1,7 @@
 #pragma once
-// The local mapping stage (step 2 of four; ARCHITECTURE.md): keyframes from tracking in; a LocalMapUpdate back to
-// tracking and the refined keyframe on to the loop stages out. It owns the map: every keyframe and map
-// point with its observations, the covisibility graph and the spanning tree. Other stages only ever see
+// The local mapping stage (step 2 of four; ARCHITECTURE.md): keyframes from tracking in; a LocalMapUpdate
+// back to tracking and the refined keyframe on to the loop stages out. It owns the map: every keyframe and
+// map point with its observations, the covisibility graph and the spanning tree. Other stages only ever see
 // copies of parts of it, in messages.
 //
 // Threads: not thread-safe. One thread at a time calls everything, except abortFlag(), which any thread may
@@ -39,22 +39,23 @@ struct LocalMapperParams {
   int triangulate_neighbors = 10;  // strongest covisible keyframes searched (ORB-SLAM2)
   EpipolarParams epipolar;
   TriangulationParams triangulation;
-  bool fuse = true;                // merge duplicates with neighbouring keyframes
-  int fuse_neighbors = 10;         // first-order neighbours searched (plus 5 of each one's neighbours)
-  float fuse_radius = 3;           // level-0 px at level 0
-  int fuse_max_hamming = 50;       // ORB-SLAM2's TH_LOW
+  bool fuse = true;           // merge duplicates with neighbouring keyframes
+  int fuse_neighbors = 10;    // first-order neighbours searched (plus 5 of each one's neighbours)
+  float fuse_radius = 3;      // level-0 px at level 0
+  int fuse_max_hamming = 50;  // ORB-SLAM2's TH_LOW
   bool local_ba = true;
-  int local_ba_max_keyframes = 30; // optimised keyframes (the new one and its strongest neighbours)
+  int local_ba_max_keyframes = 30;  // optimised keyframes (the new one and its strongest neighbours)
   LocalBaParams ba;
   bool cull_keyframes = true;
-  // After a loop correction, a bundle adjustment of the whole map. Off by default (docs/results/2026-11-26-slam-measurements.md, "Loop closing, measured": what it costs and gives).
+  // After a loop correction, a bundle adjustment of the whole map. Off by default
+  // (docs/results/2026-11-26-slam-measurements.md, "Loop closing, measured": what it costs and gives).
   bool global_ba_after_loop = true;
   // Where it runs. False: on mapping's thread, before the corrected map goes to tracking (mapping waits;
   // lock-step runs stay bit-identical). True (the threaded pipeline and the nodelet set it): on its own
   // thread over a copy of the map, as ORB-SLAM2 does; mapping goes on, and mergeGlobalBa() folds the result
   // in, moving keyframes added meanwhile with their spanning-tree ancestor. A new correction stops it.
   bool global_ba_in_background = false;
-  float redundant_ratio = 0.9f;    // a keyframe whose points are this often seen by >= 3 others goes
+  float redundant_ratio = 0.9f;  // a keyframe whose points are this often seen by >= 3 others goes
   float close_depth_baselines = 40;
 };
 
@@ -85,7 +86,7 @@ class LocalMapper {
     int started = 0, merged = 0, aborted = 0;  // aborted: stopped by a correction (or discarded at the end)
     int failed = 0;                            // threw in its thread: the map stays as it was
     std::string last_failure;
-    double last_ms = 0;                        // the last merged one's solve
+    double last_ms = 0;  // the last merged one's solve
     int last_keyframes = 0, last_added_meanwhile = 0;
   };
   const GlobalBaStats& globalBaStats() const { return global_ba_; }
@@ -152,7 +153,8 @@ class LocalMapper {
   void localBundleAdjustment(KF& kf, msg::LocalMapUpdate& u);
   /// Bundle adjustment of the `free` keyframes and every point they see; other keyframes that see those
   /// points hold still.
-  void bundleAdjust(const std::vector<SlamKeyframeId>& free, const LocalBaParams& params, msg::LocalMapUpdate& u);
+  void bundleAdjust(const std::vector<SlamKeyframeId>& free, const LocalBaParams& params,
+                    msg::LocalMapUpdate& u);
   struct BaSetup {
     BaProblem problem;
     size_t free = 0;  // the first `free` keyframes of the problem are optimised
@@ -164,8 +166,9 @@ class LocalMapper {
   /// Moves every keyframe by its delta (T_w_c_after T_w_c_before^-1) or its nearest ancestor's, and every
   /// point with its reference keyframe unless `placed` gives its new position. Returns each keyframe's
   /// delta, by id.
-  std::vector<std::pair<SlamKeyframeId, Pose3>> moveMap(const std::unordered_map<SlamKeyframeId, Pose3>& delta,
-                                                        const std::unordered_map<MapPointId, Eigen::Vector3d>* placed);
+  std::vector<std::pair<SlamKeyframeId, Pose3>> moveMap(
+      const std::unordered_map<SlamKeyframeId, Pose3>& delta,
+      const std::unordered_map<MapPointId, Eigen::Vector3d>* placed);
   void wholeMapInto(msg::LocalMapUpdate& u) const;
   struct GlobalBaJob;
   void startGlobalBa(const std::vector<SlamKeyframeId>& keyframes);
@@ -185,7 +188,8 @@ class LocalMapper {
   std::unordered_map<SlamKeyframeId, KF> kfs_;
   std::unordered_map<MapPointId, MP> pts_;
   std::unordered_map<MapPointId, MapPointId> replaced_;
-  std::unordered_map<SlamKeyframeId, std::pair<SlamKeyframeId, Pose3>> culled_;  // id -> (parent, T_parent_kf)
+  std::unordered_map<SlamKeyframeId, std::pair<SlamKeyframeId, Pose3>>
+      culled_;  // id -> (parent, T_parent_kf)
   std::deque<MapPointId> recent_;
   std::vector<MapPointId> touched_;  // points whose state goes into this update
   std::atomic<bool> abort_{false};

@@ -12,11 +12,11 @@
 namespace binloop::msg {
 
 struct KeyPoint {
-  float x = 0, y = 0;   // left image, level-0 pixels
-  float angle = 0;      // degrees
-  uint8_t octave = 0;   // pyramid level it was detected at
-  float right_x = -1;   // matched x in the right image, -1 = none
-  float depth = -1;     // metres from the stereo match, -1 = none
+  float x = 0, y = 0;  // left image, level-0 pixels
+  float angle = 0;     // degrees
+  uint8_t octave = 0;  // pyramid level it was detected at
+  float right_x = -1;  // matched x in the right image, -1 = none
+  float depth = -1;    // metres from the stereo match, -1 = none
 };
 
 struct KeyFrame {
@@ -28,8 +28,8 @@ struct KeyFrame {
   float scale_factor = 1.2f;  // of the pyramid the octaves refer to
   uint8_t levels = 8;
   std::vector<KeyPoint> keypoints;
-  Descriptors descriptors;     // one per keypoint
-  KeyframeState state;         // pose, map point per keypoint, covisibility (empty at revision 0), parent
+  Descriptors descriptors;  // one per keypoint
+  KeyframeState state;      // pose, map point per keypoint, covisibility (empty at revision 0), parent
   std::vector<MapPoint> new_points;  // the points its creator made with it (ids in point_ids)
   // Loop corrections its creator had applied when it made it (Correction::sequence). A receiver that has
   // applied more moves the pose and new points with the parent's correction (messages/correction.h).

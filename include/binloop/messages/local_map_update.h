@@ -10,8 +10,8 @@
 namespace binloop::msg {
 
 struct LocalMapUpdate {
-  uint64_t sequence = 0;                // 1, 2, ... per mapper
-  SlamKeyframeId keyframe = kNoId;      // the keyframe whose processing produced it
+  uint64_t sequence = 0;                 // 1, 2, ... per mapper
+  SlamKeyframeId keyframe = kNoId;       // the keyframe whose processing produced it
   std::vector<KeyframeState> keyframes;  // inserted or refined
   std::vector<MapPoint> points;          // created, moved by BA, or whose descriptor/range changed
   std::vector<std::pair<MapPointId, MapPointId>> fused;  // (removed, kept): the same point seen twice
@@ -19,7 +19,7 @@ struct LocalMapUpdate {
   std::vector<SlamKeyframeId> culled_keyframes;
   uint64_t corrections_seen = 0;  // loop corrections applied before it was made (Correction::sequence)
   bool correction = false;        // the whole map after a loop correction, not one keyframe's processing
-  bool whole_map = false;         // the whole map sent again to a stage that (re)started (LocalMapper::wholeMap)
+  bool whole_map = false;  // the whole map sent again to a stage that (re)started (LocalMapper::wholeMap)
   // With whole_map: the highest counters of tracking's keyframe and point ids the map holds or still refers
   // to (culled keyframes, fused points), so that a restarted tracker issues none of them again.
   uint64_t tracking_keyframe_ids = 0, tracking_point_ids = 0;
@@ -27,7 +27,7 @@ struct LocalMapUpdate {
   double total_ms = 0, ba_ms = 0, triangulation_ms = 0;
   int ba_iterations = 0;
   int ba_outliers = 0;
-  int points_triangulated = 0;  // created by two-view triangulation with covisible keyframes
+  int points_triangulated = 0;       // created by two-view triangulation with covisible keyframes
   int points_fused_across_loop = 0;  // a correction's merges
 };
 

@@ -24,13 +24,13 @@ struct LoopStepTime {
 struct LoopCandidates {
   SlamKeyframeId query = kNoId;
   uint64_t query_frame = 0;
-  std::string model;          // hbow, fabmap, vlad, hmvlad, vladpq
-  bool shadow = false;        // true: logged only, never acted on
-  std::string status;         // the model's query status (found, below_reference, ...)
-  std::string detail;         // the numbers behind it, one line
+  std::string model;                      // hbow, fabmap, vlad, hmvlad, vladpq
+  bool shadow = false;                    // true: logged only, never acted on
+  std::string status;                     // the model's query status (found, below_reference, ...)
+  std::string detail;                     // the numbers behind it, one line
   std::vector<LoopCandidate> candidates;  // passed the model's bar, best first
-  int consistency = 0;        // consecutive consistent queries of the strongest chain so far
-  SlamKeyframeId accepted = kNoId;  // the candidate the consistency check accepted, if any
+  int consistency = 0;                    // consecutive consistent queries of the strongest chain so far
+  SlamKeyframeId accepted = kNoId;        // the candidate the consistency check accepted, if any
   // With an accepted candidate and a model that has them (PlaceRecognizer::matchWords): a coarse word per
   // keypoint of the query and of the accepted keyframe, so that verification matches within words.
   std::vector<uint32_t> query_words, accepted_words;

@@ -16,11 +16,11 @@ namespace binloop::msg {
 struct MapPoint {
   MapPointId id = kNoId;
   Eigen::Vector3d p_w = Eigen::Vector3d::Zero();
-  Desc256 descriptor;                             // the most central of its observations' descriptors
+  Desc256 descriptor;                                // the most central of its observations' descriptors
   Eigen::Vector3f normal = Eigen::Vector3f::Zero();  // mean viewing direction (unit), world frame
-  float min_distance = 0, max_distance = 0;       // scale-invariance range, metres from a camera
-  SlamKeyframeId reference = kNoId;               // the keyframe it was created in
-  uint32_t observations = 0;                      // keyframes that see it
+  float min_distance = 0, max_distance = 0;          // scale-invariance range, metres from a camera
+  SlamKeyframeId reference = kNoId;                  // the keyframe it was created in
+  uint32_t observations = 0;                         // keyframes that see it
 };
 
 struct CovisibleEdge {
@@ -32,9 +32,9 @@ struct CovisibleEdge {
 struct KeyframeState {
   SlamKeyframeId id = kNoId;
   Pose3 T_w_c = Pose3::Identity();
-  std::vector<MapPointId> point_ids;      // per keypoint, kNoId where none
-  std::vector<CovisibleEdge> covisible;   // weight >= the covisibility threshold, strongest first
-  SlamKeyframeId parent = kNoId;          // spanning tree
+  std::vector<MapPointId> point_ids;     // per keypoint, kNoId where none
+  std::vector<CovisibleEdge> covisible;  // weight >= the covisibility threshold, strongest first
+  SlamKeyframeId parent = kNoId;         // spanning tree
 };
 
 }  // namespace binloop::msg

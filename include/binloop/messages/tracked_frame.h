@@ -19,7 +19,7 @@ struct TrackedFrame {
   TrackingState state = TrackingState::kNotInitialized;
   Pose3 T_w_c = Pose3::Identity();  // valid unless state is kNotInitialized or kLost
   SlamKeyframeId reference = kNoId;
-  Pose3 T_ref_c = Pose3::Identity();  // pose relative to `reference`
+  Pose3 T_ref_c = Pose3::Identity();    // pose relative to `reference`
   SlamKeyframeId new_keyframe = kNoId;  // set when this frame became a keyframe
   // How well T_w_c is known from the points it matched (optim/pose_covariance.h): the camera centre's
   // error in the world frame, then the rotation's about the world axes; all zero: unknown (not tracked).

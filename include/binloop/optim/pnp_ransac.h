@@ -13,7 +13,7 @@ namespace binloop {
 
 struct PnpRansacParams {
   int iterations = 300;
-  double chi2 = 5.991;     // an inlier's squared pixel error times its inv_sigma2 (chi-square 95 %, 2 dof)
+  double chi2 = 5.991;  // an inlier's squared pixel error times its inv_sigma2 (chi-square 95 %, 2 dof)
   int min_inliers = 10;
   double stop_ratio = 0.9;  // stop early once this share of the correspondences are inliers
 };
@@ -28,8 +28,8 @@ struct PnpRansacResult {
 
 /// `inv_sigma2` per correspondence (1 / scale^(2 octave)); an empty vector means 1 for all. Throws
 /// std::invalid_argument for vectors of different sizes.
-PnpRansacResult solvePnpRansac(const std::vector<Eigen::Vector3d>& p_w, const std::vector<Eigen::Vector2d>& uv,
-                               const std::vector<double>& inv_sigma2, const StereoCamera& cam,
-                               const PnpRansacParams& params, uint64_t seed);
+PnpRansacResult solvePnpRansac(const std::vector<Eigen::Vector3d>& p_w,
+                               const std::vector<Eigen::Vector2d>& uv, const std::vector<double>& inv_sigma2,
+                               const StereoCamera& cam, const PnpRansacParams& params, uint64_t seed);
 
 }  // namespace binloop

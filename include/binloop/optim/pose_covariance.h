@@ -17,12 +17,13 @@ struct PoseCovariance {
   /// Of the camera centre's error in the world frame, then the rotation's about the world axes
   /// (R_w_c' = exp(dtheta) R_w_c): [x y z rx ry rz], m^2 and rad^2.
   Matrix6d covariance = Matrix6d::Zero();
-  double sigma_px = 0;     // the residuals' standard deviation at octave 0 (sqrt(chi2 / dof))
-  int observations = 0;    // those used
-  bool valid = false;      // false: too few observations, or they do not fix the pose
+  double sigma_px = 0;   // the residuals' standard deviation at octave 0 (sqrt(chi2 / dof))
+  int observations = 0;  // those used
+  bool valid = false;    // false: too few observations, or they do not fix the pose
 };
 
 /// The covariance of T_w_c given `inliers` (the observations the pose was optimised on, outliers left out).
-PoseCovariance poseCovariance(const StereoCamera& cam, const Pose3& T_w_c, const std::vector<PoseObservation>& inliers);
+PoseCovariance poseCovariance(const StereoCamera& cam, const Pose3& T_w_c,
+                              const std::vector<PoseObservation>& inliers);
 
 }  // namespace binloop

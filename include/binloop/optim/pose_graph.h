@@ -23,11 +23,11 @@ struct PoseGraphNode {
 };
 
 struct PoseGraphEdge {
-  size_t i = 0, j = 0;           // node indices
+  size_t i = 0, j = 0;              // node indices
   Pose3 T_i_j = Pose3::Identity();  // measured pose of camera j in camera i
   double sigma_rot_rad = 0.01;
   double sigma_trans_m = 0.05;
-  bool robust = false;           // Huber loss (loop edges)
+  bool robust = false;  // Huber loss (loop edges)
 };
 
 struct PoseGraphParams {
@@ -44,8 +44,8 @@ struct PoseGraphParams {
 };
 
 struct PoseGraphResult {
-  std::vector<Pose3> T_c_w;       // per node
-  std::vector<double> edge_chi2;  // per edge, at the solution
+  std::vector<Pose3> T_c_w;               // per node
+  std::vector<double> edge_chi2;          // per edge, at the solution
   std::vector<double> initial_edge_chi2;  // per edge, at the starting poses
   double initial_cost = 0, final_cost = 0;
   int iterations = 0;
@@ -54,7 +54,7 @@ struct PoseGraphResult {
 
 /// Throws std::invalid_argument for an edge naming a node out of range or no fixed node (the graph would
 /// float). Deterministic (one thread).
-PoseGraphResult optimizePoseGraph(const std::vector<PoseGraphNode>& nodes, const std::vector<PoseGraphEdge>& edges,
-                                  const PoseGraphParams& p = {});
+PoseGraphResult optimizePoseGraph(const std::vector<PoseGraphNode>& nodes,
+                                  const std::vector<PoseGraphEdge>& edges, const PoseGraphParams& p = {});
 
 }  // namespace binloop

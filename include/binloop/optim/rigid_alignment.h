@@ -20,7 +20,8 @@ namespace binloop {
 ///       [ .           .            .            -M11-M22+M33 ]
 /// read as a quaternion (w, x, y, z), and t = mean(a) - R mean(b). Empty for fewer than 3 pairs or
 /// collinear points (the rotation about their line is not determined).
-std::optional<Pose3> hornAlignment(const std::vector<Eigen::Vector3d>& a, const std::vector<Eigen::Vector3d>& b);
+std::optional<Pose3> hornAlignment(const std::vector<Eigen::Vector3d>& a,
+                                   const std::vector<Eigen::Vector3d>& b);
 
 struct RigidRansacParams {
   int iterations = 300;  // at most

@@ -24,15 +24,16 @@ std::string modelFileIdentity(const std::string& path);
 LoopDetector::ModelIdentity modelFileIdentities(const std::string& dir);
 
 /// The shadow models a user's list names (`run --shadow`, the nodelet's `shadow` parameter): "all" is every
-/// model with a file in `dir` but `active` (those without one, e.g. the hbow vocabulary a clone does not ship,
-/// go to `skipped`), otherwise a comma list whose names must be models (PlaceError otherwise; a named model
-/// without a file fails when it is loaded, with the reason).
-std::vector<std::string> shadowModelNames(const std::string& spec, const std::string& active, const std::string& dir,
+/// model with a file in `dir` but `active` (those without one, e.g. the hbow vocabulary a clone does not
+/// ship, go to `skipped`), otherwise a comma list whose names must be models (PlaceError otherwise; a named
+/// model without a file fails when it is loaded, with the reason).
+std::vector<std::string> shadowModelNames(const std::string& spec, const std::string& active,
+                                          const std::string& dir,
                                           std::vector<std::string>* skipped = nullptr);
 
 /// The hbow vocabulary tracking indexes its keyframes with for relocalisation, checked like a model.
 /// Throws PlaceError for a missing, corrupt or mismatched file.
-std::shared_ptr<const VocabularyTree> loadRelocalisationVocabulary(const std::string& path, const OrbSlamParams& orb,
-                                                                   bool force);
+std::shared_ptr<const VocabularyTree> loadRelocalisationVocabulary(const std::string& path,
+                                                                   const OrbSlamParams& orb, bool force);
 
 }  // namespace binloop

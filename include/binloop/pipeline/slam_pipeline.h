@@ -36,15 +36,16 @@ struct LoopClosingSetup {
   LoopCloserParams closer;
   std::vector<std::string> shadow;
   std::vector<std::pair<size_t, std::string>> switches;  // (keyframes seen by the detector, model)
-  LoopDetector::ModelIdentity model_identity;  // vocabularies a saved map records (model_files.h)
+  LoopDetector::ModelIdentity model_identity;            // vocabularies a saved map records (model_files.h)
 };
 
 class SlamPipeline {
  public:
   /// Throws PlaceError when loop closing's first model, a shadow model or a model named in `switches`
   /// cannot be made.
-  SlamPipeline(const StereoCamera& cam, const TrackerParams& tp, const LocalMapperParams& mp, PipelineMode mode,
-               size_t queue_capacity = 3, std::optional<LoopClosingSetup> loops = std::nullopt);
+  SlamPipeline(const StereoCamera& cam, const TrackerParams& tp, const LocalMapperParams& mp,
+               PipelineMode mode, size_t queue_capacity = 3,
+               std::optional<LoopClosingSetup> loops = std::nullopt);
   ~SlamPipeline();
   SlamPipeline(const SlamPipeline&) = delete;
   SlamPipeline& operator=(const SlamPipeline&) = delete;
@@ -102,9 +103,10 @@ class SlamPipeline {
     std::vector<msg::LoopCandidatesPtr> shadow;
     std::vector<msg::LoopClosurePtr> closures;
     double correction_ms = 0;  // local mapping applying an accepted loop's correction (lock-step only)
-    double global_ba_ms = 0;   // ... of which the global BA, when on (lock-step only; threaded: mapper().globalBaStats())
-    double switch_ms = 0;      // rebuilding a newly switched model's index before this query
-    std::string problem;       // a switch that failed (the running model stayed), empty otherwise
+    double global_ba_ms =
+        0;  // ... of which the global BA, when on (lock-step only; threaded: mapper().globalBaStats())
+    double switch_ms = 0;  // rebuilding a newly switched model's index before this query
+    std::string problem;   // a switch that failed (the running model stayed), empty otherwise
   };
   /// Only once finish() has returned.
   const std::vector<LoopLogEntry>& loopLog() const { return loop_log_; }
@@ -117,7 +119,7 @@ class SlamPipeline {
     std::string source;
   };
   struct LoopInput {
-    msg::KeyFramePtr refined;        // null for an update alone or an external loop
+    msg::KeyFramePtr refined;  // null for an update alone or an external loop
     msg::LocalMapUpdatePtr update;
     std::optional<ExternalLoop> external;
   };

@@ -14,15 +14,15 @@ class ChowLiuTree {
  public:
   /// `images`: sorted word ids present in each training image. Counts are smoothed by `pseudo_count`
   /// so that no probability is 0 or 1.
-  static ChowLiuTree learn(const std::vector<std::vector<uint32_t>>& images, uint32_t words, double pseudo_count = 0.5,
-                           const ProgressFn& progress = {});
+  static ChowLiuTree learn(const std::vector<std::vector<uint32_t>>& images, uint32_t words,
+                           double pseudo_count = 0.5, const ProgressFn& progress = {});
   /// Mutual information (nats) of words a and b from counts, as the tree learning uses it.
   static double mutualInformation(double n, double na, double nb, double nab);
 
   uint32_t words() const { return static_cast<uint32_t>(parent_.size()); }
   uint32_t root() const { return root_; }
   uint32_t parent(uint32_t i) const { return parent_[i]; }  // the root is its own parent
-  double marginal(uint32_t i) const { return p1_[i]; }       // p(z_i = 1)
+  double marginal(uint32_t i) const { return p1_[i]; }      // p(z_i = 1)
   /// p(z_i = 1 | z_parent = zp)
   double conditional(uint32_t i, bool zp) const { return zp ? p1_given1_[i] : p1_given0_[i]; }
 

@@ -15,9 +15,9 @@ namespace binloop {
 class DescriptorBlock {
  public:
   struct Nearest {
-    int index = -1;     // into the block; -1 when it is empty
-    int best = 256;     // Hamming distance to it
-    int second = 256;   // to the next nearest (256 when there is none); equal to best on a tie
+    int index = -1;    // into the block; -1 when it is empty
+    int best = 256;    // Hamming distance to it
+    int second = 256;  // to the next nearest (256 when there is none); equal to best on a tie
   };
 
   DescriptorBlock() = default;

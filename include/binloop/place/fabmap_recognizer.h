@@ -59,9 +59,9 @@ class FabmapRecognizer : public PlaceRecognizer {
   std::vector<std::vector<uint32_t>> words_;  // per slot: the words it saw
   std::vector<std::vector<Slot>> inverted_;   // per word
   struct QueryTables {
-    double base = 0;            // sum over words of the term for a place that saw none of them
-    std::vector<float> delta;   // per word: term(seen) - term(not seen)
-    double avg = 0;             // mean-field new place
+    double base = 0;           // sum over words of the term for a place that saw none of them
+    std::vector<float> delta;  // per word: term(seen) - term(not seen)
+    double avg = 0;            // mean-field new place
   };
   QueryTables tables(const std::vector<uint32_t>& query) const;
   static double placeLogLik(const QueryTables& t, const std::vector<uint32_t>& place);

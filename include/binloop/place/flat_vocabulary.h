@@ -19,7 +19,8 @@ struct FlatVocabParams {
 
 class FlatVocabulary {
  public:
-  static FlatVocabulary train(const std::vector<Descriptors>& images, const FlatVocabParams& p, const ProgressFn& progress = {});
+  static FlatVocabulary train(const std::vector<Descriptors>& images, const FlatVocabParams& p,
+                              const ProgressFn& progress = {});
   explicit FlatVocabulary(std::vector<Desc256> words = {}) : words_(std::move(words)) {}
   /// Sorted ids of the words present in the image.
   std::vector<uint32_t> presence(const Descriptors& d) const;

@@ -15,7 +15,8 @@ struct FloatKMeansResult {
 
 /// data is n × dims row-major. Returns fewer than k centres when clusters end empty (they are dropped)
 /// or when there are fewer rows than k.
-FloatKMeansResult floatKMeans(const std::vector<float>& data, int dims, int k, uint64_t seed, int max_iterations = 20);
+FloatKMeansResult floatKMeans(const std::vector<float>& data, int dims, int k, uint64_t seed,
+                              int max_iterations = 20);
 
 /// Squared L2 distance of two rows of `dims` floats.
 inline float squaredDistance(const float* a, const float* b, int dims) {

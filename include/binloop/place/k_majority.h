@@ -16,7 +16,7 @@ struct KMajorityParams {
 };
 
 struct KMajorityResult {
-  std::vector<Desc256> centres;   // no empty cluster: clusters that end empty are dropped
+  std::vector<Desc256> centres;      // no empty cluster: clusters that end empty are dropped
   std::vector<uint32_t> assignment;  // per input descriptor, index into centres
   int iterations = 0;
   int dropped_empty = 0;
@@ -24,7 +24,8 @@ struct KMajorityResult {
 
 /// Clusters data[idx[i]]. With fewer distinct descriptors than k, each distinct descriptor becomes a
 /// centre (as DBoW2 does at the bottom of a tree).
-KMajorityResult kMajority(const Descriptors& data, const std::vector<uint32_t>& idx, const KMajorityParams& p);
+KMajorityResult kMajority(const Descriptors& data, const std::vector<uint32_t>& idx,
+                          const KMajorityParams& p);
 
 /// Bitwise majority of the given descriptors (ties give 0).
 Desc256 bitwiseMajority(const Descriptors& data, const uint32_t* idx, size_t n);

@@ -36,14 +36,16 @@ enum class Weighting : uint32_t { kTfIdf = 0, kTf = 1, kIdf = 2, kBinary = 3 };
 /// those it was trained on: another BRIEF pattern gives unrelated bits, and other settings (feature count,
 /// pyramid, image size) other statistics.
 enum class ExtractorKind : uint32_t {
-  kUnknown = 0,      // not recorded: model files of versions 1-2, or trained from descriptors of unknown origin
-  kBinloopOrb = 1,   // binloop's extractor (features/orb_slam_extractor.h), Gaussian BRIEF tests: the SLAM's default
+  kUnknown = 0,  // not recorded: model files of versions 1-2, or trained from descriptors of unknown origin
+  kBinloopOrb =
+      1,  // binloop's extractor (features/orb_slam_extractor.h), Gaussian BRIEF tests: the SLAM's default
   kDbow2Import = 2,  // an imported DBoW2 vocabulary (ORB-SLAM2's or OpenCV's ORB pattern; settings not known)
   kBinloopOrbRbrief = 3,  // binloop's extractor with ORB's learned rBRIEF pattern (orb.learned_pattern: 1)
 };
 
 /// The extractor and its settings, as the model header records them (kBinloopOrb and kBinloopOrbRbrief: every
-/// field; otherwise only `kind`). features/orb_slam_extractor.h makes one from OrbSlamParams (extractorSettings()).
+/// field; otherwise only `kind`). features/orb_slam_extractor.h makes one from OrbSlamParams
+/// (extractorSettings()).
 struct ExtractorSettings {
   ExtractorKind kind = ExtractorKind::kUnknown;
   uint32_t features = 0;
@@ -77,7 +79,7 @@ struct ModelHeader {
   uint64_t training_hash = 0;
   uint64_t training_descriptors = 0;
   uint64_t training_images = 0;
-  ExtractorSettings extractor;  // what made the training descriptors (version 3; unknown before)
+  ExtractorSettings extractor;    // what made the training descriptors (version 3; unknown before)
   uint64_t payload_checksum = 0;  // of the file read (set by readers; the writer computes its own)
 
   std::string describe() const;
@@ -86,8 +88,8 @@ struct ModelHeader {
 /// Reads and checks only the 128-byte header (magic, version, descriptor size): no mapping, no checksum,
 /// so a caller can look at a model before loading it. Throws PlaceError as ModelReader does.
 ModelHeader readModelHeader(const std::string& path);
-/// One line that tells two vocabularies apart (model type, words, training data hash, payload checksum): what a
-/// saved map records of the vocabulary its indices were built with.
+/// One line that tells two vocabularies apart (model type, words, training data hash, payload checksum): what
+/// a saved map records of the vocabulary its indices were built with.
 std::string modelIdentity(const ModelHeader& h);
 
 /// What a caller that loads a model will feed it, so that a model trained on other descriptors is caught
@@ -186,7 +188,7 @@ class ModelReader {
   ModelHeader header_;
   uint32_t version_ = 0;
   std::shared_ptr<Storage> storage_;
-  const uint8_t* file_ = nullptr;  // the mapped file, header included
+  const uint8_t* file_ = nullptr;   // the mapped file, header included
   size_t file_size_ = 0, pos_ = 0;  // pos_: offset of the next section header in the file
 };
 

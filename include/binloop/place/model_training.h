@@ -11,8 +11,8 @@
 namespace binloop {
 
 struct TrainOptions {
-  int k = 0;        // 0: model default (hbow 10, vlad 4, hmvlad 2, vladpq 4)
-  int levels = 0;   // 0: model default (hbow 6, hmvlad 2, vlad/vladpq 1)
+  int k = 0;          // 0: model default (hbow 10, vlad 4, hmvlad 2, vladpq 4)
+  int levels = 0;     // 0: model default (hbow 6, hmvlad 2, vlad/vladpq 1)
   int words = 10000;  // fabmap flat vocabulary
   int pq_codes = 32;
   int pca_dims = 0;

@@ -29,18 +29,18 @@ struct QueryScope {
 };
 
 enum class QueryStatus {
-  kFound,               // candidates holds at least one keyframe
-  kUnknownKeyframe,     // the query keyframe was never added
-  kEmptyDatabase,       // nothing outside the scope to compare with
-  kNoReference,         // no reference keyframe in the database: no bar can be set
-  kNoPreCandidates,     // the pre-filter (common words, L2, short signature, shared codes) left nothing
-  kBelowReference,      // every candidate scored worse than the reference bar
+  kFound,            // candidates holds at least one keyframe
+  kUnknownKeyframe,  // the query keyframe was never added
+  kEmptyDatabase,    // nothing outside the scope to compare with
+  kNoReference,      // no reference keyframe in the database: no bar can be set
+  kNoPreCandidates,  // the pre-filter (common words, L2, short signature, shared codes) left nothing
+  kBelowReference,   // every candidate scored worse than the reference bar
 };
 std::string statusName(QueryStatus s);
 
 struct Candidate {
   KeyframeId id = 0;
-  double score = 0;       // the model's own score (similarity, negative distance, or probability)
+  double score = 0;  // the model's own score (similarity, negative distance, or probability)
   /// Comparable across queries, higher = likelier a true loop (place/ranking.h). Whether the keyframe
   /// beat the query's own bar is said by where it is: in `candidates` (beat it) or `best_rejected`.
   double confidence = 0;
@@ -138,7 +138,7 @@ class PlaceRecognizer {
 };
 
 struct RecognizerOptions {
-  std::string model_file;   // the trained model (vocabulary) of this model type
+  std::string model_file;          // the trained model (vocabulary) of this model type
   double fabmap_l2_offset = 0.05;  // see FabmapRecognizer
   double hbow_min_bar = 0.005;     // see HbowRecognizer
   int vladpq_shared_slack = 1;     // see VladPqRecognizer

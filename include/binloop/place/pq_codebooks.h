@@ -16,7 +16,8 @@ class PqCodebooks {
  public:
   /// `vlads`: training VLADs, each words × dims floats. Throws PlaceError when a word has fewer
   /// distinct residuals than m (too few training images).
-  static PqCodebooks train(const std::vector<std::vector<float>>& vlads, int words, int dims, int m, uint64_t seed);
+  static PqCodebooks train(const std::vector<std::vector<float>>& vlads, int words, int dims, int m,
+                           uint64_t seed);
 
   PqCodes encode(const std::vector<float>& vlad) const;
   float sdc(const PqCodes& a, const PqCodes& b) const;
@@ -25,7 +26,9 @@ class PqCodebooks {
   int words() const { return words_; }
   int dims() const { return dims_; }
   int m() const { return m_; }
-  const float* centroid(int word, int code) const { return &codebooks_[(static_cast<size_t>(word) * m_ + code) * dims_]; }
+  const float* centroid(int word, int code) const {
+    return &codebooks_[(static_cast<size_t>(word) * m_ + code) * dims_];
+  }
 
   void write(ModelWriter& w) const;
   static PqCodebooks read(ModelReader& r);

@@ -1,8 +1,9 @@
 #pragma once
-// How a model's candidates are ranked across queries: the `confidence` of a Candidate (docs/loop_models.md, "Ranking loops"). A model's bar (its reference keyframes' score) says whether a keyframe beats the query's own
-// neighbours; the thesis and ORB-SLAM2 accept on it. Dividing by the bar alone ranks badly across queries:
-// a query whose neighbours share almost nothing with it (a new room, open ground, a sharp turn) has a tiny
-// bar, and any weak match then gets a huge ratio and outranks true loops. So the bar is bounded before
+// How a model's candidates are ranked across queries: the `confidence` of a Candidate (docs/loop_models.md,
+// "Ranking loops"). A model's bar (its reference keyframes' score) says whether a keyframe beats the query's
+// own neighbours; the thesis and ORB-SLAM2 accept on it. Dividing by the bar alone ranks badly across
+// queries: a query whose neighbours share almost nothing with it (a new room, open ground, a sharp turn) has
+// a tiny bar, and any weak match then gets a huge ratio and outranks true loops. So the bar is bounded before
 // dividing: an L1-score bar never counts as lower than `score_floor`, a distance bar never as farther than
 // `distance_cap` of the signature's bits. Below the bound, confidence follows the raw score. The bounds
 // were chosen on the tuning sets (real_tune, rendered 06 and 05) and checked on the held-out ones

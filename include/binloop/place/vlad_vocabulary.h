@@ -16,7 +16,7 @@
 namespace binloop {
 
 struct VladParams {
-  int k = 4;          // thesis: VLAD 4 words; HMVLAD k = 2 with 2 levels (2 and 4 nodes)
+  int k = 4;  // thesis: VLAD 4 words; HMVLAD k = 2 with 2 levels (2 and 4 nodes)
   int levels = 1;
   float alpha = 0.5f;  // power normalisation exponent
   int pca_dims = 0;    // 0: no LCS-PCA; otherwise dimensions kept per word (whitened)
@@ -46,7 +46,8 @@ inline int hammingBits(const BinarySignature& a, const BinarySignature& b) {
 
 class VladVocabulary {
  public:
-  static VladVocabulary train(const std::vector<Descriptors>& images, const VladParams& p, const ProgressFn& progress = {});
+  static VladVocabulary train(const std::vector<Descriptors>& images, const VladParams& p,
+                              const ProgressFn& progress = {});
 
   int levels() const { return static_cast<int>(level_begin_.size()); }
   int wordsAtLevel(int level) const { return static_cast<int>(level_count_[level - 1]); }  // level from 1
@@ -62,10 +63,10 @@ class VladVocabulary {
  private:
   VladParams params_;
   int dims_ = Desc256::kBits;
-  std::vector<float> centres_;  // node × 256 (nodes breadth first, root excluded)
+  std::vector<float> centres_;                       // node × 256 (nodes breadth first, root excluded)
   std::vector<uint32_t> first_child_, child_count_;  // per node + 1 (entry 0 = root)
   std::vector<uint32_t> level_begin_, level_count_;  // node ranges per level
-  std::vector<float> pca_, pca_mean_;  // per node: dims × 256 whitened rotation, 256 mean
+  std::vector<float> pca_, pca_mean_;                // per node: dims × 256 whitened rotation, 256 mean
   void residual(const float* x, uint32_t node, float* out) const;
 };
 

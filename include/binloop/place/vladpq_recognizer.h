@@ -42,8 +42,8 @@ class VladPqRecognizer : public PlaceRecognizer {
   // Per slot:
   SignatureStore sigs_;
   std::vector<PqCodes> codes_;
-  std::vector<std::vector<float>> raw_;  // only kept for ADC
-  std::vector<std::vector<char>> empty_;   // per word: no descriptor fell into it (its code says nothing)
+  std::vector<std::vector<float>> raw_;      // only kept for ADC
+  std::vector<std::vector<char>> empty_;     // per word: no descriptor fell into it (its code says nothing)
   std::vector<std::vector<Slot>> inverted_;  // per (word, code); empty words are left out
   double distance(Slot q, Slot k) const;
 };

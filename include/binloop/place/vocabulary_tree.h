@@ -70,7 +70,7 @@ class VocabularyTree {
  private:
   int k_ = 0, levels_ = 0;
   Weighting weighting_ = Weighting::kTfIdf;
-  struct Owned;  // the arrays of a tree built in memory
+  struct Owned;                          // the arrays of a tree built in memory
   std::shared_ptr<const void> storage_;  // what the views below point into
   SectionView<Desc256> desc_;            // per node (root's is unused)
   SectionView<uint32_t> first_child_;    // per node

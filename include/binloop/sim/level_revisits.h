@@ -15,9 +15,9 @@
 namespace binloop::sim {
 
 struct LevelParams {
-  double radius_m = 8;             // a frame this near (x-z) to a frame of an earlier pass revisits it...
-  size_t min_frames_apart = 300;   // ... when that frame is at least this many frames earlier
-  double ramp_m = 150;             // a height change fades in before and out after a revisit over this much path
+  double radius_m = 8;            // a frame this near (x-z) to a frame of an earlier pass revisits it...
+  size_t min_frames_apart = 300;  // ... when that frame is at least this many frames earlier
+  double ramp_m = 150;  // a height change fades in before and out after a revisit over this much path
 };
 
 struct LevelResult {

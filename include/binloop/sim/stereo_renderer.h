@@ -43,8 +43,8 @@ std::vector<StereoFrame> renderFrames(StereoRenderer& renderer, const std::vecto
                                       size_t count);
 
 struct SequenceJob {
-  std::vector<Pose3> route;    // ground truth of the whole route (the world is built around all of it)
-  std::vector<double> times;   // one per route pose
+  std::vector<Pose3> route;   // ground truth of the whole route (the world is built around all of it)
+  std::vector<double> times;  // one per route pose
   size_t start = 0, end = 0, step = 1;  // frames start..end (inclusive), every `step`
   std::string out_dir;
 };

@@ -15,7 +15,7 @@ struct TextureBank {
   std::vector<int> walls;         // building sides, fences (no windows)
   std::vector<int> cars;
   int road = -1, pavement = -1, grass = -1, pole = -1, foliage = -1;
-  size_t photos_used = 0;         // 0: procedural fallback only
+  size_t photos_used = 0;  // 0: procedural fallback only
 
   /// `photos`: image files (any format OpenCV reads; unreadable ones are skipped and counted out).
   static TextureBank build(const std::vector<std::string>& photos, uint64_t seed, int n_facades = 48);

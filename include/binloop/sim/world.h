@@ -15,13 +15,13 @@ namespace binloop::sim {
 
 struct Quad {
   enum Shape : uint8_t { kRect = 0, kTree = 1 };  // kTree: crown-and-trunk cut-out (alpha by shape)
-  Eigen::Vector3f o;        // corner at (u, v) = (0, 0)
-  Eigen::Vector3f a, b;     // unit axes of u and v (metres)
-  float lu = 0, lv = 0;     // extents along a and b (metres)
-  int texture = 0;          // index into TextureBank::textures
-  float texels_per_m = 50;  // texture scale
+  Eigen::Vector3f o;                              // corner at (u, v) = (0, 0)
+  Eigen::Vector3f a, b;                           // unit axes of u and v (metres)
+  float lu = 0, lv = 0;                           // extents along a and b (metres)
+  int texture = 0;                                // index into TextureBank::textures
+  float texels_per_m = 50;                        // texture scale
   float off_u = 0, off_v = 0;  // texel offset (different places cut different parts of a texture)
-  float shade = 1;          // brightness factor (orientation to the sun)
+  float shade = 1;             // brightness factor (orientation to the sun)
   Shape shape = kRect;
   float max_distance = 200;  // not drawn farther than this (metres, from the camera)
 };
@@ -36,15 +36,14 @@ struct WorldParams {
   double gap_probability = 0.15;    // chance of a gap (alley, lot) after a façade
   double repeat_probability = 0.1;  // chance a façade copies an earlier one exactly (perceptual aliasing)
   double car_probability = 0.35, tree_probability = 0.3, pole_spacing_m = 30.0;
-  double clearance_m = 5.0;         // nothing but ground within this distance of any route point
-  bool populate = true;             // false: ground only (tests then add their own quads)
-  /// The ground texture repeats every 8 m (512 texels at 64 per metre), so a camera displaced by a multiple of
-  /// 8 m along the grid sees the same road: a relocalisation can lock on to it. True: a second, rotated layer
-  /// of incommensurate period is blended in, and the road never repeats within a route. Off by default so
-  /// that renders made before it stay as they were.
+  double clearance_m = 5.0;  // nothing but ground within this distance of any route point
+  bool populate = true;      // false: ground only (tests then add their own quads)
+  /// The ground texture repeats every 8 m (512 texels at 64 per metre), so a camera displaced by a multiple
+  /// of 8 m along the grid sees the same road: a relocalisation can lock on to it. True: a second, rotated
+  /// layer of incommensurate period is blended in, and the road never repeats within a route. Off by default
+  /// so that renders made before it stay as they were.
   bool aperiodic_ground = false;
 };
-
 
 class World {
  public:

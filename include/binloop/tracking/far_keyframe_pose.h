@@ -56,7 +56,7 @@ struct FarPoseResult {
 /// The frame's pose and which matches hold. A sample's pose is scored by each match's better side: the
 /// frame's stereo point seen from its keyframes, or the map point seen from the frame (a far point is
 /// known well by neither in depth and is judged by direction). Deterministic for a seed.
-FarPoseResult farKeyframePose(const StereoCamera& cam, const std::vector<FarMatch>& matches, const Pose3& prior_T_w_c,
-                              const FarPoseParams& p, uint64_t seed);
+FarPoseResult farKeyframePose(const StereoCamera& cam, const std::vector<FarMatch>& matches,
+                              const Pose3& prior_T_w_c, const FarPoseParams& p, uint64_t seed);
 
 }  // namespace binloop

@@ -27,8 +27,8 @@ class KeyframeDatabase {
   void remove(SlamKeyframeId id);
   size_t size() const { return bows_.size(); }
   /// The bag-of-words vectors (in id order); load() replaces them and rebuilds the inverted file. Only
-  /// meaningful with the vocabulary that made them: the tracker checks its identity. A database made without a
-  /// vocabulary (null) can load, to read past an index it will not use.
+  /// meaningful with the vocabulary that made them: the tracker checks its identity. A database made without
+  /// a vocabulary (null) can load, to read past an index it will not use.
   void save(StateWriter& w) const;
   void load(StateReader& r);
 
@@ -37,7 +37,8 @@ class KeyframeDatabase {
   /// covisible neighbours' (`neighbours`, strongest first) so that a place seen by several keyframes beats
   /// a single look-alike; groups above 75 % of the best sum give their best-scoring keyframe.
   using NeighboursFn = std::function<std::vector<SlamKeyframeId>(SlamKeyframeId)>;
-  std::vector<SlamKeyframeId> candidates(const Descriptors& d, size_t max, const NeighboursFn& neighbours) const;
+  std::vector<SlamKeyframeId> candidates(const Descriptors& d, size_t max,
+                                         const NeighboursFn& neighbours) const;
 
  private:
   std::shared_ptr<const VocabularyTree> voc_;

@@ -13,7 +13,10 @@ class MotionReach {
   /// No prediction: every pose is admitted.
   MotionReach() = default;
   MotionReach(const Eigen::Vector3d& predicted, double min_gate_m, double max_accel_mps2, double dt_s)
-      : active_(true), predicted_(predicted), radius_m_(min_gate_m + 0.5 * max_accel_mps2 * dt_s * dt_s), dt_s_(dt_s) {}
+      : active_(true),
+        predicted_(predicted),
+        radius_m_(min_gate_m + 0.5 * max_accel_mps2 * dt_s * dt_s),
+        dt_s_(dt_s) {}
 
   /// Whether the camera could be at T_w_c; a refused pose is remembered (the nearest) for the frame's report.
   bool admits(const Pose3& T_w_c) {

@@ -27,8 +27,8 @@ struct ProjectedPoint {
 
 /// ORB-SLAM2's isInFrustum: in front of the camera, inside the image, within the point's distance range
 /// (with 20 % slack) and seen less than 60 degrees off its mean direction.
-bool projectIntoFrame(const msg::MapPoint& p, const Pose3& T_c_w, const StereoCamera& cam, const ScalePyramid& s,
-                      ProjectedPoint* out);
+bool projectIntoFrame(const msg::MapPoint& p, const Pose3& T_c_w, const StereoCamera& cam,
+                      const ScalePyramid& s, ProjectedPoint* out);
 
 /// Matches points to the frame's unmatched keypoints within th * (2.5 or 4 by viewing angle) * level scale
 /// of their projection; returns the number of new matches.
@@ -38,14 +38,16 @@ int matchProjectedPoints(Frame& f, const std::vector<ProjectedPoint>& pts, const
 /// The last frame's matched points into the current one, predicted with `cur.T_w_c`; search radius th times
 /// the last keypoint's level scale, levels restricted by the direction of motion. `lookup` gives a map point
 /// by id or nullptr. Returns the number of matches.
-int matchFromLastFrame(Frame& cur, const Frame& last, const std::function<const msg::MapPoint*(MapPointId)>& lookup,
-                       const StereoCamera& cam, const ScalePyramid& s, float th, const ProjectionParams& p = {});
+int matchFromLastFrame(Frame& cur, const Frame& last,
+                       const std::function<const msg::MapPoint*(MapPointId)>& lookup, const StereoCamera& cam,
+                       const ScalePyramid& s, float th, const ProjectionParams& p = {});
 
 /// Without a pose prediction (the frame after the first keyframe, or after a failure): every matched point
 /// of `last` against every keypoint of `cur` by descriptor (best below max_hamming_strict and clearly better
 /// than the second, ratio 0.7), then the rotation check. ORB-SLAM2 narrows this with BoW nodes; 2000 x 2000
 /// Hamming distances take about 3 ms, which a once-in-a-while fallback can pay.
-int matchByDescriptor(Frame& cur, const Frame& last, const std::function<const msg::MapPoint*(MapPointId)>& lookup,
+int matchByDescriptor(Frame& cur, const Frame& last,
+                      const std::function<const msg::MapPoint*(MapPointId)>& lookup,
                       int max_hamming_strict = 50, float ratio = 0.7f);
 
 /// Indices of the matches to keep: those whose angle difference falls in the three most populated of 30

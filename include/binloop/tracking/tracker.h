@@ -1,8 +1,8 @@
 #pragma once
 // The tracking stage (step 1 of four; ARCHITECTURE.md): stereo frames in, a pose per frame and keyframes out.
 // It owns its state: the last frame, the motion model, and a MapReplica built only from the keyframes it
-// made and the LocalMapUpdate messages it is given (loop corrections arrive as one). It never waits for another stage, so the
-// pipeline can run it in lock-step or on its own thread.
+// made and the LocalMapUpdate messages it is given (loop corrections arrive as one). It never waits for
+// another stage, so the pipeline can run it in lock-step or on its own thread.
 #include <memory>
 #include <optional>
 #include <string>
@@ -12,9 +12,9 @@
 #include "binloop/messages/tracked_frame.h"
 #include "binloop/optim/pnp_ransac.h"
 #include "binloop/optim/pose_optimizer.h"
+#include "binloop/tracking/far_keyframe_pose.h"
 #include "binloop/tracking/frame.h"
 #include "binloop/tracking/keyframe_database.h"
-#include "binloop/tracking/far_keyframe_pose.h"
 #include "binloop/tracking/motion_reach.h"
 #include "binloop/tracking/projection_search.h"
 #include "binloop/tracking/rotation_search.h"
@@ -33,31 +33,32 @@ struct TrackerParams {
   float last_frame_radius = 7;      // search radius (level-0 px at level 0) from the last frame; doubled once
   int min_last_frame_matches = 20;  // below this the wider search is tried, then the frame fails
   int motion_model_min_inliers = 50;  // fewer after the last-frame search: also try without the prediction
-  float local_map_radius = 1;       // factor on the viewing-angle radius (2.5 or 4 px) in the local-map search
-  float lost_radius = 5;            // the same factor while recovering after lost frames
+  float local_map_radius = 1;  // factor on the viewing-angle radius (2.5 or 4 px) in the local-map search
+  float lost_radius = 5;       // the same factor while recovering after lost frames
   // After lost frames the motion model still predicts the pose for this long since the last tracked frame,
   // and recovery searches around that prediction before relocalising from scratch. A car does not stop
   // because a frame was black, and on repetitive facades a pose found without any prior can be off by one
   // facade (rendered 06: 874 inliers 2.3 m from the truth).
   double predict_through_loss_s = 3.0;
   // A pose recovered while the motion model still predicts must be one the camera could have reached: within
-  // recovery_min_gate_m + 1/2 a dt^2 of the prediction (a = recovery_max_accel_mps2, dt since the last tracked
-  // frame); farther, the frame stays lost. A road whose texture repeated every 8 m let rendered 06 relocalise
-  // 24 m and 40 m behind the truth after 10 and 20 missing frames, and the next keyframes then mapped there.
+  // recovery_min_gate_m + 1/2 a dt^2 of the prediction (a = recovery_max_accel_mps2, dt since the last
+  // tracked frame); farther, the frame stays lost. A road whose texture repeated every 8 m let rendered 06
+  // relocalise 24 m and 40 m behind the truth after 10 and 20 missing frames, and the next keyframes then
+  // mapped there.
   double recovery_min_gate_m = 1.0;
   double recovery_max_accel_mps2 = 5.0;
-  int min_inliers = 30;             // a frame is tracked with at least this many inliers after the local map
+  int min_inliers = 30;  // a frame is tracked with at least this many inliers after the local map
   int min_inliers_after_loss = 50;
   int max_local_keyframes = 80;
   // relocalisation when lost: descriptor matches to the points of recent keyframes, PnP RANSAC, pose
   // optimisation, then the local map
-  int reloc_keyframes = 10;      // keyframes tried: those the vocabulary finds most alike, else the most recent
+  int reloc_keyframes = 10;  // keyframes tried: those the vocabulary finds most alike, else the most recent
   /// The hbow vocabulary that indexes tracking's keyframes for relocalisation anywhere in the map; without
   /// one, only the most recent keyframes are tried.
   std::shared_ptr<const VocabularyTree> vocabulary;
   /// Which vocabulary that is (model_files.h, modelFileIdentity), checked when a saved map is loaded.
   std::string vocabulary_identity;
-  int reloc_min_matches = 15;    // descriptor matches a keyframe needs before PnP is tried
+  int reloc_min_matches = 15;  // descriptor matches a keyframe needs before PnP is tried
   // While the motion model predicts, recovery finds the rotation from far points first, then the pose from
   // the frame's stereo against the keyframes' sightings (Tracker::recoverRotationFirst); off, it goes
   // straight from the wide search to relocalisation.
@@ -65,13 +66,14 @@ struct TrackerParams {
   RotationSearchParams rotation_search;
   FarPoseParams far_pose;
   PnpRansacParams pnp;
-  uint64_t seed = 1;             // for the RANSAC samples
+  uint64_t seed = 1;                // for the RANSAC samples
   int covisible_per_keyframe = 10;  // neighbours each local keyframe adds to the local map
   // keyframe decision, ORB-SLAM2's stereo rules
-  int keyframe_max_frames = 10;           // always insert after this many frames (the camera's rate)
-  float keyframe_ref_ratio = 0.75f;       // insert when tracked points < this times the reference keyframe's
-  int keyframe_ref_min_observers = 2;     // ... counting its points that this many keyframes see (ORB-SLAM2: 3;
-                                          // 2 halved the ATE on rendered 05: with 3, turns thinned the map first)
+  int keyframe_max_frames = 10;      // always insert after this many frames (the camera's rate)
+  float keyframe_ref_ratio = 0.75f;  // insert when tracked points < this times the reference keyframe's
+  int keyframe_ref_min_observers =
+      2;  // ... counting its points that this many keyframes see (ORB-SLAM2: 3;
+          // 2 halved the ATE on rendered 05: with 3, turns thinned the map first)
   int keyframe_close_tracked_max = 100;   // ... or fewer close points tracked than this
   int keyframe_close_untracked_min = 70;  // ... while at least this many close points could be added
   int max_mapping_queue = 3;              // while mapping is busy, insert only if its queue is shorter
@@ -191,8 +193,8 @@ class Tracker {
   IdCounter point_ids_{IdIssuer::kTracking};
   msg::TrackingState state_ = msg::TrackingState::kNotInitialized;
   std::unique_ptr<Frame> last_;
-  SlamKeyframeId last_ref_ = kNoId;  // the last frame's pose is kept relative to this keyframe, so that
-  Pose3 T_ref_last_;                 // local BA moving that keyframe moves the last frame too
+  SlamKeyframeId last_ref_ = kNoId;     // the last frame's pose is kept relative to this keyframe, so that
+  Pose3 T_ref_last_;                    // local BA moving that keyframe moves the last frame too
   Pose3 velocity_ = Pose3::Identity();  // T_prev_last
   double velocity_dt_ = 1;              // seconds between those two frames
   bool have_velocity_ = false;

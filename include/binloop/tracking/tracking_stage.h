@@ -39,8 +39,8 @@ class TrackingStage {
 
   /// Tracks a frame at `now_s` (a clock that only goes forward); a keyframe it makes is counted in flight.
   Tracker::Output track(const StereoFrame& frame, double now_s);
-  /// Local mapping's update at `now_s` (not a whole map: adopt() that): applied, and counted as the answer to a
-  /// keyframe or a correction.
+  /// Local mapping's update at `now_s` (not a whole map: adopt() that): applied, and counted as the answer to
+  /// a keyframe or a correction.
   void apply(const msg::LocalMapUpdate& update, double now_s);
 
   KeyframesInFlight& inFlight() { return in_flight_; }

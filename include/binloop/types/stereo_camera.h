@@ -15,7 +15,9 @@ struct StereoCamera {
   double bf() const { return fx * baseline_m; }
   /// Where a left-camera point appears in the left image, level-0 pixels (p.z() != 0; behind the camera,
   /// p.z() < 0, the formal projection, as of an epipole).
-  Eigen::Vector2d project(const Eigen::Vector3d& p) const { return {fx * p.x() / p.z() + cx, fy * p.y() / p.z() + cy}; }
+  Eigen::Vector2d project(const Eigen::Vector3d& p) const {
+    return {fx * p.x() / p.z() + cx, fy * p.y() / p.z() + cy};
+  }
   /// 3x4 projection matrix of the left (right=false) or right camera, as in KITTI calib.txt.
   Eigen::Matrix<double, 3, 4> projectionMatrix(bool right) const;
   /// One line per value, for start-up logs.

@@ -1,6 +1,6 @@
 #pragma once
-// Randomness (world generation, k-means seeding) that is the same on every machine and standard library: values are
-// pure functions of (seed, stream, index) through SplitMix64, instead of std::*_distribution whose
+// Randomness (world generation, k-means seeding) that is the same on every machine and standard library:
+// values are pure functions of (seed, stream, index) through SplitMix64, instead of std::*_distribution whose
 // results differ between library versions.
 #include <cmath>
 #include <cstdint>
@@ -14,7 +14,9 @@ inline uint64_t splitmix64(uint64_t x) {
   return x ^ (x >> 31);
 }
 
-inline uint64_t hashCombine(uint64_t a, uint64_t b) { return splitmix64(a ^ (splitmix64(b) + 0x632BE59BD9B4E019ull)); }
+inline uint64_t hashCombine(uint64_t a, uint64_t b) {
+  return splitmix64(a ^ (splitmix64(b) + 0x632BE59BD9B4E019ull));
+}
 
 /// A sequential generator for one purpose (e.g. one façade), seeded from a hash.
 class HashRng {

@@ -1,6 +1,7 @@
 #pragma once
 // Where the package's shipped files (vocab/, config/) are, found from any working folder: the tools'
-// defaults and the nodelets' default parameters point here, not at paths relative to wherever the user stands.
+// defaults and the nodelets' default parameters point here, not at paths relative to wherever the user
+// stands.
 #include <string>
 
 namespace binloop {

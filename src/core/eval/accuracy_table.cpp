@@ -61,7 +61,8 @@ int peerLostFrames(const std::filesystem::path& path) {
     std::istringstream s(line);
     double frame, stamp, seconds;
     int state;
-    if (!(s >> frame >> stamp >> seconds >> state)) throw dataError(path.string(), n, "expected 'frame stamp seconds state'");
+    if (!(s >> frame >> stamp >> seconds >> state))
+      throw dataError(path.string(), n, "expected 'frame stamp seconds state'");
     lost += state != 2;
   }
   return lost;
@@ -84,7 +85,8 @@ AccuracyRow summarizeRuns(const std::string& name, const std::vector<RunScore>& 
     loops.push_back(s.loops.accepted);
     r.loops_wrong += s.loops.accepted - s.loops.correct;
     r.lost_max = std::max(r.lost_max, s.lost_frames);
-    for (size_t i = 0; i < s.loops.closed.size() && i < closed_in.size(); ++i) closed_in[i] += s.loops.closed[i];
+    for (size_t i = 0; i < s.loops.closed.size() && i < closed_in.size(); ++i)
+      closed_in[i] += s.loops.closed[i];
   }
   r.ate_median = median(ate);
   r.ate_min = minOf(ate);
@@ -98,7 +100,8 @@ AccuracyRow summarizeRuns(const std::string& name, const std::vector<RunScore>& 
   return r;
 }
 
-std::vector<AccuracyRow> scorePeerRuns(const std::string& dir, const std::string& prefix, const std::vector<Pose3>& gt,
+std::vector<AccuracyRow> scorePeerRuns(const std::string& dir, const std::string& prefix,
+                                       const std::vector<Pose3>& gt,
                                        const std::vector<RevisitSegment>& segments) {
   namespace fs = std::filesystem;
   if (!fs::is_directory(dir)) throw DataError(dir + ": no such folder");
@@ -132,25 +135,38 @@ std::vector<AccuracyRow> scorePeerRuns(const std::string& dir, const std::string
 }
 
 std::string formatAccuracyTable(const std::vector<AccuracyRow>& rows, bool csv) {
-  const std::vector<std::string> header{"system",       "runs",          "ate_m_median", "ate_m_min",  "ate_m_max",
-                                        "ate_spread",   "t_rel_pct_median", "t_rel_pct_min", "t_rel_pct_max",
-                                        "r_rel_deg_100m_median", "loops_median", "loops_wrong", "segments_closed_every_run",
+  const std::vector<std::string> header{"system",
+                                        "runs",
+                                        "ate_m_median",
+                                        "ate_m_min",
+                                        "ate_m_max",
+                                        "ate_spread",
+                                        "t_rel_pct_median",
+                                        "t_rel_pct_min",
+                                        "t_rel_pct_max",
+                                        "r_rel_deg_100m_median",
+                                        "loops_median",
+                                        "loops_wrong",
+                                        "segments_closed_every_run",
                                         "lost_frames_max"};
   std::vector<std::vector<std::string>> cells{header};
   for (const AccuracyRow& r : rows)
-    cells.push_back({r.name, std::to_string(r.runs), cell(r.ate_median, 3), cell(r.ate_min, 3), cell(r.ate_max, 3),
-                     cell(r.spread(), 2), cell(r.t_rel_median, 3), cell(r.t_rel_min, 3), cell(r.t_rel_max, 3),
-                     cell(r.r_rel_median, 3), cell(r.loops_median, 1),
+    cells.push_back({r.name, std::to_string(r.runs), cell(r.ate_median, 3), cell(r.ate_min, 3),
+                     cell(r.ate_max, 3), cell(r.spread(), 2), cell(r.t_rel_median, 3), cell(r.t_rel_min, 3),
+                     cell(r.t_rel_max, 3), cell(r.r_rel_median, 3), cell(r.loops_median, 1),
                      std::to_string(r.loops_wrong) + (r.wrong_unjudged_pose ? " (distance only)" : ""),
-                     std::to_string(r.segments_every_run) + "/" + std::to_string(r.segments), std::to_string(r.lost_max)});
+                     std::to_string(r.segments_every_run) + "/" + std::to_string(r.segments),
+                     std::to_string(r.lost_max)});
   std::vector<size_t> width(header.size(), 0);
   for (const auto& line : cells)
     for (size_t i = 0; i < line.size(); ++i) width[i] = std::max(width[i], line[i].size());
   std::ostringstream o;
   for (const auto& line : cells) {
     for (size_t i = 0; i < line.size(); ++i) {
-      if (csv) o << (i ? "," : "") << (line[i].find(',') != std::string::npos ? "\"" + line[i] + "\"" : line[i]);
-      else o << line[i] << (i + 1 == line.size() ? "" : std::string(width[i] - line[i].size() + 2, ' '));
+      if (csv)
+        o << (i ? "," : "") << (line[i].find(',') != std::string::npos ? "\"" + line[i] + "\"" : line[i]);
+      else
+        o << line[i] << (i + 1 == line.size() ? "" : std::string(width[i] - line[i].size() + 2, ' '));
     }
     o << "\n";
   }

@@ -2,7 +2,8 @@
 
 namespace binloop {
 
-std::vector<std::pair<int, int>> loopPairsFromPoses(const std::vector<Pose3>& T_w_c, double radius_m, int min_frame_gap) {
+std::vector<std::pair<int, int>> loopPairsFromPoses(const std::vector<Pose3>& T_w_c, double radius_m,
+                                                    int min_frame_gap) {
   std::vector<std::pair<int, int>> pairs;
   const double r2 = radius_m * radius_m;
   const int n = static_cast<int>(T_w_c.size());

@@ -5,8 +5,8 @@
 
 namespace binloop {
 
-LoopMetrics evaluateLoops(const std::vector<LoopPrediction>& predictions, const std::set<std::pair<int, int>>& truth,
-                          const std::set<int>& positive_queries) {
+LoopMetrics evaluateLoops(const std::vector<LoopPrediction>& predictions,
+                          const std::set<std::pair<int, int>>& truth, const std::set<int>& positive_queries) {
   LoopMetrics m;
   m.positives = static_cast<int>(positive_queries.size());
   m.threshold_100p = std::numeric_limits<double>::infinity();

@@ -40,7 +40,8 @@ cv::Mat otherView(const cv::Mat& img, HashRng& rng) {
   const double angle = rng.uniform(-8, 8) * CV_PI / 180, scale = rng.uniform(0.85, 1.15);
   std::vector<cv::Point2f> dst;
   for (const auto& p : src) {
-    const double dx = p.x - w / 2 + rng.uniform(-0.08, 0.08) * w, dy = p.y - h / 2 + rng.uniform(-0.08, 0.08) * h;
+    const double dx = p.x - w / 2 + rng.uniform(-0.08, 0.08) * w,
+                 dy = p.y - h / 2 + rng.uniform(-0.08, 0.08) * h;
     dst.emplace_back(static_cast<float>(w / 2 + scale * (std::cos(angle) * dx - std::sin(angle) * dy)),
                      static_cast<float>(h / 2 + scale * (std::sin(angle) * dx + std::cos(angle) * dy)));
   }
@@ -56,7 +57,8 @@ cv::Mat otherView(const cv::Mat& img, HashRng& rng) {
   if (sigma > 0.3) cv::GaussianBlur(warped, warped, cv::Size(0, 0), sigma);
   cv::Mat noise(warped.size(), CV_16S);
   for (int r = 0; r < noise.rows; ++r)
-    for (int c = 0; c < noise.cols; ++c) noise.at<int16_t>(r, c) = static_cast<int16_t>(std::lround(rng.uniform(-4, 4)));
+    for (int c = 0; c < noise.cols; ++c)
+      noise.at<int16_t>(r, c) = static_cast<int16_t>(std::lround(rng.uniform(-4, 4)));
   cv::Mat out;
   warped.convertTo(out, CV_16S);
   out += noise;
@@ -89,7 +91,8 @@ std::vector<LoopSetPlace> readLoopSetList(const std::string& path, const std::st
     if (p.second == "-") p.second.clear();
     if (!p.second.empty() && p.second != "=") p.second = expand(p.second);
     for (const auto& img : {p.first, p.second})
-      if (!img.empty() && img != "=" && !fs::is_regular_file(img)) throw dataError(path, n, img + ": no such image");
+      if (!img.empty() && img != "=" && !fs::is_regular_file(img))
+        throw dataError(path, n, img + ": no such image");
     places.push_back(p);
   }
   if (places.empty()) throw dataError(path, 0, "names no places");
@@ -115,24 +118,29 @@ LoopSet makeLoopSet(const std::vector<LoopSetPlace>& places, const std::string& 
     const cv::Mat a = readGrayImage(places[i].first);
     for (int c = 0; c < 3; ++c)
       first_frames[i].push_back(
-          write(crop(a, 0.5 * c, &last_span), {places[i].name, places[i].first + " crop " + std::to_string(c), false}));
+          write(crop(a, 0.5 * c, &last_span),
+                {places[i].name, places[i].first + " crop " + std::to_string(c), false}));
   }
   std::vector<size_t> order;
   for (size_t i = 0; i < places.size(); ++i)
     if (!places[i].second.empty()) order.push_back(i);
   HashRng shuffle_rng(hashCombine(seed, 0x5eed));
-  for (size_t i = order.size(); i > 1; --i) std::swap(order[i - 1], order[shuffle_rng.below(static_cast<int>(i))]);
+  for (size_t i = order.size(); i > 1; --i)
+    std::swap(order[i - 1], order[shuffle_rng.below(static_cast<int>(i))]);
   for (size_t i : order) {
     HashRng rng(hashCombine(seed, i));
     const bool synthetic = places[i].second == "=";
-    const cv::Mat b = synthetic ? otherView(readGrayImage(places[i].first), rng) : readGrayImage(places[i].second);
+    const cv::Mat b =
+        synthetic ? otherView(readGrayImage(places[i].first), rng) : readGrayImage(places[i].second);
     const std::string src = synthetic ? places[i].first + " warped" : places[i].second;
     for (int c = 0; c < 2; ++c) {
-      const int q = write(crop(b, 0.2 + 0.6 * c, &last_span), {places[i].name, src + " crop " + std::to_string(c), true});
+      const int q = write(crop(b, 0.2 + 0.6 * c, &last_span),
+                          {places[i].name, src + " crop " + std::to_string(c), true});
       // A loop when the two windows share at least half of their width (of the source image; for a
       // real or warped second view this is approximate, as the view itself moved).
       for (int r : first_frames[i]) {
-        const double overlap = std::min(span[q].second, span[r].second) - std::max(span[q].first, span[r].first);
+        const double overlap =
+            std::min(span[q].second, span[r].second) - std::max(span[q].first, span[r].first);
         if (overlap >= 0.5 * (span[r].second - span[r].first)) set.loops.emplace_back(q, r);
       }
     }

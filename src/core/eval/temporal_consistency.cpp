@@ -45,7 +45,8 @@ std::vector<LoopPrediction> strongestChains(const std::vector<QueryOffers>& quer
 
 }  // namespace
 
-std::vector<LoopPrediction> consistentPredictions(const std::vector<QueryOffers>& queries, int chain, int max_gap) {
+std::vector<LoopPrediction> consistentPredictions(const std::vector<QueryOffers>& queries, int chain,
+                                                  int max_gap) {
   chain = std::max(1, chain);
   std::vector<LoopPrediction> all = strongestChains(queries, chain, max_gap, false);
   const std::vector<LoopPrediction> passed = strongestChains(queries, chain, max_gap, true);

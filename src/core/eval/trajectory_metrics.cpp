@@ -28,7 +28,8 @@ std::vector<NumberLine> readFinitePoseLines(const std::string& path) {
   if (lines.empty()) throw dataError(path, 0, "holds no poses");
   for (const auto& l : lines)
     for (double v : l.values)
-      if (!std::isfinite(v)) throw dataError(path, l.line_no, "holds a number that is not finite (" + num(v) + ")");
+      if (!std::isfinite(v))
+        throw dataError(path, l.line_no, "holds a number that is not finite (" + num(v) + ")");
   return lines;
 }
 
@@ -44,8 +45,9 @@ MatchedPoses assemble(const std::vector<Pose3>& gt, const EstimateFile& est, std
   for (size_t k = 0; k < order.size(); ++k) {
     const size_t i = order[k];
     if (k > 0 && frame_of[i] == m.frames.back())
-      throw DataError(source + ": poses " + std::to_string(order[k - 1] + 1) + " and " + std::to_string(i + 1) +
-                      " both match ground-truth frame " + std::to_string(frame_of[i]));
+      throw DataError(source + ": poses " + std::to_string(order[k - 1] + 1) + " and " +
+                      std::to_string(i + 1) + " both match ground-truth frame " +
+                      std::to_string(frame_of[i]));
     m.frames.push_back(frame_of[i]);
     m.gt.push_back(gt[frame_of[i]]);
     m.est.push_back(est.poses[i].T_w_c);
@@ -86,17 +88,20 @@ std::vector<Pose3> readGroundTruthPoses(const std::string& path) {
   return readKittiPoses(path);
 }
 
-MatchedPoses matchByFrameIndex(const std::vector<Pose3>& gt, const EstimateFile& est, const std::string& source) {
+MatchedPoses matchByFrameIndex(const std::vector<Pose3>& gt, const EstimateFile& est,
+                               const std::string& source) {
   const bool kitti = est.format == TrajectoryFormat::kitti;
   if (kitti && est.poses.size() > gt.size())
-    throw DataError(source + ": " + std::to_string(est.poses.size()) + " poses, but the ground truth has only " +
-                    std::to_string(gt.size()) + " (KITTI lines are matched to frames by position)");
+    throw DataError(source + ": " + std::to_string(est.poses.size()) +
+                    " poses, but the ground truth has only " + std::to_string(gt.size()) +
+                    " (KITTI lines are matched to frames by position)");
   std::vector<int> frame_of;
   for (size_t i = 0; i < est.poses.size(); ++i) {
     const double s = est.poses[i].stamp_s;
     if (std::abs(s - std::round(s)) > 1e-6 || s < 0)
-      throw DataError(source + ": pose " + std::to_string(i + 1) + " has stamp " + num(s, "%.9g") +
-                      ", which is not a frame index (a whole number >= 0); match by time with a times file instead");
+      throw DataError(
+          source + ": pose " + std::to_string(i + 1) + " has stamp " + num(s, "%.9g") +
+          ", which is not a frame index (a whole number >= 0); match by time with a times file instead");
     if (s >= static_cast<double>(gt.size()))
       throw DataError(source + ": pose " + std::to_string(i + 1) + " is frame " + num(s, "%.0f") +
                       ", but the ground truth has only " + std::to_string(gt.size()) + " frames (0.." +
@@ -108,8 +113,9 @@ MatchedPoses matchByFrameIndex(const std::vector<Pose3>& gt, const EstimateFile&
   return m;
 }
 
-MatchedPoses matchByTime(const std::vector<Pose3>& gt, const std::vector<double>& gt_times, const EstimateFile& est,
-                         const TimeMatchOptions& options, const std::string& source) {
+MatchedPoses matchByTime(const std::vector<Pose3>& gt, const std::vector<double>& gt_times,
+                         const EstimateFile& est, const TimeMatchOptions& options,
+                         const std::string& source) {
   if (est.format != TrajectoryFormat::tum)
     throw DataError(source + ": KITTI files carry no time stamps; they are matched by frame index");
   if (gt_times.size() != gt.size())
@@ -125,15 +131,18 @@ MatchedPoses matchByTime(const std::vector<Pose3>& gt, const std::vector<double>
     if (k == gt_times.size() || (k > 0 && t - gt_times[k - 1] < gt_times[k] - t)) --k;
     const double dt = std::abs(gt_times[k] - t);
     if (dt > options.tolerance_s)
-      throw DataError(source + ": pose " + std::to_string(i + 1) + " (stamp " + num(est.poses[i].stamp_s, "%.6f") +
-                      (options.stamp_offset_s != 0 ? " - offset " + num(options.stamp_offset_s) : std::string()) +
-                      ") is " + num(dt, "%.4f") + " s from the nearest ground-truth time (frame " + std::to_string(k) +
-                      ", " + num(gt_times[k], "%.6f") + " s); the tolerance is " + num(options.tolerance_s) + " s");
+      throw DataError(
+          source + ": pose " + std::to_string(i + 1) + " (stamp " + num(est.poses[i].stamp_s, "%.6f") +
+          (options.stamp_offset_s != 0 ? " - offset " + num(options.stamp_offset_s) : std::string()) +
+          ") is " + num(dt, "%.4f") + " s from the nearest ground-truth time (frame " + std::to_string(k) +
+          ", " + num(gt_times[k], "%.6f") + " s); the tolerance is " + num(options.tolerance_s) + " s");
     frame_of.push_back(static_cast<int>(k));
   }
   MatchedPoses m = assemble(gt, est, std::move(frame_of), source);
-  m.rule = "by time stamp (within " + num(options.tolerance_s * 1e3) + " ms" +
-           (options.stamp_offset_s != 0 ? ", stamps - " + num(options.stamp_offset_s) + " s" : std::string()) + ")";
+  m.rule =
+      "by time stamp (within " + num(options.tolerance_s * 1e3) + " ms" +
+      (options.stamp_offset_s != 0 ? ", stamps - " + num(options.stamp_offset_s) + " s" : std::string()) +
+      ")";
   return m;
 }
 
@@ -170,7 +179,8 @@ RelativeErrors kittiRelativeErrors(const MatchedPoses& m, const RelativeErrorOpt
   r.t_rel_pct = r.r_rel_deg_per_100m = std::numeric_limits<double>::quiet_NaN();
   const size_t n = m.gt.size();
   std::vector<double> dist(n, 0.0);
-  for (size_t i = 1; i < n; ++i) dist[i] = dist[i - 1] + (m.gt[i].translation() - m.gt[i - 1].translation()).norm();
+  for (size_t i = 1; i < n; ++i)
+    dist[i] = dist[i - 1] + (m.gt[i].translation() - m.gt[i - 1].translation()).norm();
   r.path_length_m = n ? dist.back() : 0.0;
   if (options.lengths_m.empty() || options.step_frames < 1) {
     r.reason = "no segment lengths";
@@ -196,8 +206,8 @@ RelativeErrors kittiRelativeErrors(const MatchedPoses& m, const RelativeErrorOpt
   }
   if (r.segments == 0) {
     r.reason = "the matched ground truth travels " + num(r.path_length_m, "%.1f") +
-               " m, less than the shortest segment (" + num(*std::min_element(options.lengths_m.begin(), options.lengths_m.end())) +
-               " m)";
+               " m, less than the shortest segment (" +
+               num(*std::min_element(options.lengths_m.begin(), options.lengths_m.end())) + " m)";
     return r;
   }
   r.valid = true;
@@ -209,14 +219,16 @@ RelativeErrors kittiRelativeErrors(const MatchedPoses& m, const RelativeErrorOpt
 TrajectoryMetrics evaluateTrajectory(const MatchedPoses& m, const RelativeErrorOptions& options) {
   if (m.gt.size() != m.est.size() || m.frames.size() != m.gt.size())
     throw DataError("matched poses: " + std::to_string(m.gt.size()) + " ground truth, " +
-                    std::to_string(m.est.size()) + " estimated, " + std::to_string(m.frames.size()) + " frames");
+                    std::to_string(m.est.size()) + " estimated, " + std::to_string(m.frames.size()) +
+                    " frames");
   if (m.gt.size() < 3)
-    throw DataError("only " + std::to_string(m.gt.size()) + " poses matched the ground truth; at least 3 are needed");
+    throw DataError("only " + std::to_string(m.gt.size()) +
+                    " poses matched the ground truth; at least 3 are needed");
   std::vector<Eigen::Vector3d> p_est, p_gt;
   for (size_t i = 0; i < m.gt.size(); ++i) {
     if (!finitePose(m.gt[i]) || !finitePose(m.est[i]))
-      throw DataError(std::string(finitePose(m.gt[i]) ? "the estimated" : "the ground-truth") + " pose of frame " +
-                      std::to_string(m.frames[i]) + " is not finite");
+      throw DataError(std::string(finitePose(m.gt[i]) ? "the estimated" : "the ground-truth") +
+                      " pose of frame " + std::to_string(m.frames[i]) + " is not finite");
     p_est.push_back(m.est[i].translation());
     p_gt.push_back(m.gt[i].translation());
   }

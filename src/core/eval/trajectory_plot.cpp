@@ -27,7 +27,7 @@ std::string metres(double v) {
 // Matplotlib's tab10 (BGR) without its green, which marks the start: blue is the ground truth, the rest
 // the estimates.
 const cv::Scalar kGroundTruth(180, 119, 31);
-const cv::Scalar kPalette[] = {{14, 127, 255}, {40, 39, 214},  {189, 103, 148}, {75, 86, 140},
+const cv::Scalar kPalette[] = {{14, 127, 255},  {40, 39, 214},  {189, 103, 148}, {75, 86, 140},
                                {194, 119, 227}, {34, 189, 188}, {207, 190, 23},  {127, 127, 127}};
 
 // One path of a top view: drawn as a line, with a ring at its end.
@@ -46,7 +46,9 @@ void writeTopView(const std::string& path, const std::string& title, const std::
   const int w = 900, l = 75, r = 25, b = 75, ph_px = 800;  // margins round an 800-px-high plot area
   const cv::Scalar black(0, 0, 0), grey(120, 120, 120), grid(232, 232, 232), c_start(44, 160, 44);  // green
   const auto font = cv::FONT_HERSHEY_SIMPLEX;
-  auto textWidth = [&](const std::string& s, double size) { return cv::getTextSize(s, font, size, 1, nullptr).width; };
+  auto textWidth = [&](const std::string& s, double size) {
+    return cv::getTextSize(s, font, size, 1, nullptr).width;
+  };
 
   // Header layout first: its height sets where the plot area starts. A key is a line (a path), a filled
   // disc (start) or a ring (end).
@@ -102,11 +104,12 @@ void writeTopView(const std::string& path, const std::string& title, const std::
   for (double z = std::ceil(gz0 / step) * step; z <= gz1; z += step) {
     cv::line(img, px(gx0, z), px(gx1, z), grid);
     const std::string s_z = metres(z);
-    cv::putText(img, s_z, cv::Point(l - 6 - textWidth(s_z, 0.4), px(gx0, z).y + 4), font, 0.4, grey, 1, cv::LINE_AA);
+    cv::putText(img, s_z, cv::Point(l - 6 - textWidth(s_z, 0.4), px(gx0, z).y + 4), font, 0.4, grey, 1,
+                cv::LINE_AA);
   }
   cv::rectangle(img, cv::Point(l, t), cv::Point(w - r, h - b), grey);
-  cv::putText(img, "x [m] (right)", cv::Point(l + static_cast<int>(pw) / 2 - 45, h - b + 36), font, 0.45, black, 1,
-              cv::LINE_AA);
+  cv::putText(img, "x [m] (right)", cv::Point(l + static_cast<int>(pw) / 2 - 45, h - b + 36), font, 0.45,
+              black, 1, cv::LINE_AA);
   cv::putText(img, "z [m] (forward)", cv::Point(l - 60, t - 8), font, 0.45, black, 1, cv::LINE_AA);
 
   // Paths in order (the ground truth under the estimates), then end and start markers.
@@ -128,7 +131,8 @@ void writeTopView(const std::string& path, const std::string& title, const std::
   // Header: title, notes, legend.
   cv::putText(img, title, cv::Point(l - 60, 28), font, 0.6, black, 1, cv::LINE_AA);
   for (size_t i = 0; i < notes.size(); ++i)
-    cv::putText(img, notes[i], cv::Point(l - 60, 58 + 30 * static_cast<int>(i)), font, 0.6, black, 1, cv::LINE_AA);
+    cv::putText(img, notes[i], cv::Point(l - 60, 58 + 30 * static_cast<int>(i)), font, 0.6, black, 1,
+                cv::LINE_AA);
   for (const auto& e : legend) {
     const cv::Point c = e.at + cv::Point(8, -5);
     if (e.kind == Key::line) {
@@ -139,7 +143,8 @@ void writeTopView(const std::string& path, const std::string& title, const std::
     } else {
       cv::circle(img, c, 6, e.colour, e.thickness, cv::LINE_AA);
     }
-    cv::putText(img, e.label, e.at + cv::Point(e.kind == Key::line ? 38 : 22, 0), font, 0.5, black, 1, cv::LINE_AA);
+    cv::putText(img, e.label, e.at + cv::Point(e.kind == Key::line ? 38 : 22, 0), font, 0.5, black, 1,
+                cv::LINE_AA);
   }
 
   // Scale bar, bottom right below the plot: one grid step.
@@ -163,8 +168,9 @@ void writeTrajectoryPlot(const std::string& path, const std::string& title, cons
     text += cv::format("    t_rel %.3f %%    r_rel %.4f deg/100 m", rel.t_rel_pct, rel.r_rel_deg_per_100m);
   else
     text += cv::format("    t_rel, r_rel: n/a (path of %.0f m is too short)", rel.path_length_m);
-  writeTopView(path, title, {text},
-               {{"ground truth", &gt, kGroundTruth, 3}, {"estimate (aligned, SE(3))", &est_aligned, kPalette[0], 2}});
+  writeTopView(
+      path, title, {text},
+      {{"ground truth", &gt, kGroundTruth, 3}, {"estimate (aligned, SE(3))", &est_aligned, kPalette[0], 2}});
 }
 
 void writeTrajectoriesPlot(const std::string& path, const std::string& title, const std::vector<Pose3>& gt,

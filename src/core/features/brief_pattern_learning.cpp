@@ -32,14 +32,15 @@ void parallelFor(size_t n, int threads, F f) {
 struct Candidate {
   uint16_t a, b;  // disc point indices; bit = value[a] < value[b]
   double mean;
-  double ties;    // share of keypoints with |value[a] - value[b]| <= tie_margin
+  double ties;  // share of keypoints with |value[a] - value[b]| <= tie_margin
 };
 
 size_t discIndex(int x, int y) {
   const auto& d = briefDisc();
   const auto it = std::find(d.begin(), d.end(), cv::Point(x, y));
   if (it == d.end())
-    throw PlaceError("test point (" + std::to_string(x) + ", " + std::to_string(y) + ") is outside the radius-15 disc");
+    throw PlaceError("test point (" + std::to_string(x) + ", " + std::to_string(y) +
+                     ") is outside the radius-15 disc");
   return static_cast<size_t>(it - d.begin());
 }
 
@@ -59,7 +60,8 @@ const std::vector<cv::Point>& briefDisc() {
 void PatchSamples::append(const PatchSamples& more) {
   if (more.values.empty()) return;
   if (values.empty()) values.resize(more.values.size());
-  for (size_t p = 0; p < values.size(); ++p) values[p].insert(values[p].end(), more.values[p].begin(), more.values[p].end());
+  for (size_t p = 0; p < values.size(); ++p)
+    values[p].insert(values[p].end(), more.values[p].begin(), more.values[p].end());
 }
 
 PatchSamples samplePatches(const cv::Mat& gray, const OrbSlamExtractor& extractor, size_t max_keypoints,
@@ -92,7 +94,8 @@ PatchSamples samplePatches(const cv::Mat& gray, const OrbSlamExtractor& extracto
     float cs, sn;
     briefRotation(k.angle, &cs, &sn);
     for (size_t p = 0; p < disc.size(); ++p) {
-      const cv::Point q = c + rotatedTestPoint(static_cast<float>(disc[p].x), static_cast<float>(disc[p].y), cs, sn);
+      const cv::Point q =
+          c + rotatedTestPoint(static_cast<float>(disc[p].x), static_cast<float>(disc[p].y), cs, sn);
       s.values[p][j] = img.at<uint8_t>(q.y, q.x);
     }
   }
@@ -111,10 +114,11 @@ LearnedPattern learnBriefPattern(const PatchSamples& s, const PatternLearningOpt
   const auto& disc = briefDisc();
   const size_t n = s.keypoints();
   if (n == 0 || s.values.size() != disc.size()) throw PlaceError("no patch samples to learn a pattern from");
-  if (o.bits < 1 || o.min_separation < 0 || o.start_threshold <= 0 || o.threshold_step <= 0 || o.pool < size_t(o.bits) ||
-      o.tie_margin < 0 || o.max_tie_share <= 0)
-    throw PlaceError("pattern learning options out of range (bits >= 1, min_separation >= 0, thresholds > 0, "
-                     "pool >= bits, tie_margin >= 0, max_tie_share > 0)");
+  if (o.bits < 1 || o.min_separation < 0 || o.start_threshold <= 0 || o.threshold_step <= 0 ||
+      o.pool < size_t(o.bits) || o.tie_margin < 0 || o.max_tie_share <= 0)
+    throw PlaceError(
+        "pattern learning options out of range (bits >= 1, min_separation >= 0, thresholds > 0, "
+        "pool >= bits, tie_margin >= 0, max_tie_share > 0)");
 
   // 1-2. Every candidate's counts of a < b and b < a (ties count for neither).
   std::vector<std::pair<uint16_t, uint16_t>> pairs;
@@ -137,8 +141,9 @@ LearnedPattern learnBriefPattern(const PatchSamples& s, const PatternLearningOpt
       }
       // 3. Orient the test so that its mean is the nearer to 0.5 (ties make the two differ).
       const double m_lt = double(lt) / n, m_gt = double(gt) / n, ties = double(near) / n;
-      cand[i] = std::abs(m_lt - 0.5) <= std::abs(m_gt - 0.5) ? Candidate{pairs[i].first, pairs[i].second, m_lt, ties}
-                                                              : Candidate{pairs[i].second, pairs[i].first, m_gt, ties};
+      cand[i] = std::abs(m_lt - 0.5) <= std::abs(m_gt - 0.5)
+                    ? Candidate{pairs[i].first, pairs[i].second, m_lt, ties}
+                    : Candidate{pairs[i].second, pairs[i].first, m_gt, ties};
     }
   });
   std::vector<size_t> order;
@@ -211,7 +216,8 @@ LearnedPattern learnBriefPattern(const PatchSamples& s, const PatternLearningOpt
     out.max_abs_correlation = max;
     return out;
   }
-  throw PlaceError("the " + std::to_string(pool) + " best-balanced candidates do not give " + std::to_string(o.bits) +
+  throw PlaceError("the " + std::to_string(pool) + " best-balanced candidates do not give " +
+                   std::to_string(o.bits) +
                    " tests at any correlation bound (too few samples or too small a pool)");
 }
 

@@ -33,7 +33,8 @@ BitStatistics bitStatistics(const Descriptors& d, uint64_t seed, size_t random_p
   for (int a = 0; a < kBits; ++a) {
     for (int b = a + 1; b < kBits; ++b) {
       size_t both = 0;
-      for (size_t w = 0; w < words; ++w) both += __builtin_popcountll(col[a * words + w] & col[b * words + w]);
+      for (size_t w = 0; w < words; ++w)
+        both += __builtin_popcountll(col[a * words + w] & col[b * words + w]);
       const double var = p[a] * (1 - p[a]) * p[b] * (1 - p[b]);
       const double r = var > 0 ? (static_cast<double>(both) / n - p[a] * p[b]) / std::sqrt(var) : 0.0;
       corr.push_back(std::abs(r));

@@ -17,18 +17,21 @@ void declareExtractOptions(CliArgs& args) {
       .option("ini-fast", "FAST threshold tried first in each cell", std::to_string(d.orb.ini_fast))
       .option("min-fast", "FAST threshold where a cell found nothing", std::to_string(d.orb.min_fast))
       .option("cell-px", "FAST cell side, level pixels", std::to_string(d.orb.cell_px))
-      .option("pattern", "BRIEF tests: gaussian (binloop's, as the SLAM by default) or orb (ORB's learned rBRIEF)",
+      .option("pattern",
+              "BRIEF tests: gaussian (binloop's, as the SLAM by default) or orb (ORB's learned rBRIEF)",
               briefPatternName(d.orb.pattern))
       .option("max-side", "scale larger images down to this longer side first (0 = never, as the SLAM)",
               std::to_string(d.max_side))
       .option("threads", "feature extraction threads", std::to_string(d.threads))
-      .option("grid-cell", "retired (the OpenCV-ORB grid extractor is gone; every tool uses the SLAM's extractor)");
+      .option("grid-cell",
+              "retired (the OpenCV-ORB grid extractor is gone; every tool uses the SLAM's extractor)");
 }
 
 ExtractOptions extractOptionsFrom(const CliArgs& args) {
   if (args.has("grid-cell"))
-    throw CliError("--grid-cell is retired: every tool now extracts with the SLAM's ORB extractor (quadtree spread, "
-                   "--cell-px sets its FAST cells); see docs/loop_models.md, \"Features\"");
+    throw CliError(
+        "--grid-cell is retired: every tool now extracts with the SLAM's ORB extractor (quadtree spread, "
+        "--cell-px sets its FAST cells); see docs/loop_models.md, \"Features\"");
   ExtractOptions eo;
   eo.orb.features = static_cast<int>(args.integer("features"));
   eo.orb.scale_factor = static_cast<float>(args.number("scale-factor"));

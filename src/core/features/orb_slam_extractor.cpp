@@ -169,12 +169,13 @@ class QuadTree {
   QuadTree(const std::vector<cv::KeyPoint>& kps, cv::Rect area) : kps_(kps), idx_(kps.size()) {
     std::iota(idx_.begin(), idx_.end(), 0);
     // Square-ish roots side by side, so that a wide image is cut into squares and not into slivers.
-    const int roots = std::max(1, static_cast<int>(std::lround(static_cast<double>(area.width) / area.height)));
+    const int roots =
+        std::max(1, static_cast<int>(std::lround(static_cast<double>(area.width) / area.height)));
     const float rw = static_cast<float>(area.width) / roots;
     auto root = [&](int i) { return std::min(roots - 1, static_cast<int>((kps_[i].pt.x - area.x) / rw)); };
     for (int b = 0, r = 0; r < roots; ++r) {
-      const int e = static_cast<int>(std::partition(idx_.begin() + b, idx_.end(), [&](int i) { return root(i) == r; }) -
-                                     idx_.begin());
+      const int e = static_cast<int>(
+          std::partition(idx_.begin() + b, idx_.end(), [&](int i) { return root(i) == r; }) - idx_.begin());
       if (e > b)
         nodes_.push_back({area.x + r * rw, static_cast<float>(area.y), area.x + (r + 1) * rw,
                           static_cast<float>(area.y + area.height), b, e});
@@ -233,7 +234,8 @@ class QuadTree {
     const auto top = std::partition(first + n.begin, first + n.end, [&](int i) { return kps_[i].pt.y < my; });
     const auto tl = std::partition(first + n.begin, top, [&](int i) { return kps_[i].pt.x < mx; });
     const auto bl = std::partition(top, first + n.end, [&](int i) { return kps_[i].pt.x < mx; });
-    const int t = static_cast<int>(top - first), l = static_cast<int>(tl - first), b = static_cast<int>(bl - first);
+    const int t = static_cast<int>(top - first), l = static_cast<int>(tl - first),
+              b = static_cast<int>(bl - first);
     const Node kids[4] = {{n.x0, n.y0, mx, my, n.begin, l},
                           {mx, n.y0, n.x1, my, l, t},
                           {n.x0, my, mx, n.y1, t, b},
@@ -260,8 +262,9 @@ void checkImage(const cv::Mat& gray) {
 // that one instance may serve several threads.
 void describeWithOrb(const cv::Mat& level, std::vector<cv::KeyPoint>& kps, Descriptors& out) {
   if (kps.empty()) return;
-  const cv::Ptr<cv::ORB> orb = cv::ORB::create(static_cast<int>(kps.size()), 1.2f, 1, /*edgeThreshold=*/0,
-                                               /*firstLevel=*/0, /*WTA_K=*/2, cv::ORB::FAST_SCORE, kPatchSize);
+  const cv::Ptr<cv::ORB> orb =
+      cv::ORB::create(static_cast<int>(kps.size()), 1.2f, 1, /*edgeThreshold=*/0,
+                      /*firstLevel=*/0, /*WTA_K=*/2, cv::ORB::FAST_SCORE, kPatchSize);
   std::vector<cv::KeyPoint> level_kps = kps;
   for (auto& k : level_kps) k.octave = 0;
   cv::Mat desc;
@@ -299,7 +302,8 @@ const BriefPattern& briefPattern() {
         fresh = !((pa == a && pc == c) || (pa == c && pc == a));
       }
       if (!fresh) continue;
-      p[b] = {static_cast<int8_t>(a.x), static_cast<int8_t>(a.y), static_cast<int8_t>(c.x), static_cast<int8_t>(c.y)};
+      p[b] = {static_cast<int8_t>(a.x), static_cast<int8_t>(a.y), static_cast<int8_t>(c.x),
+              static_cast<int8_t>(c.y)};
       ++b;
     }
     return p;
@@ -311,7 +315,9 @@ void briefSmoothed(const cv::Mat& level, cv::Mat& out) {
   cv::GaussianBlur(level, out, cv::Size(7, 7), 2, 2, cv::BORDER_REFLECT_101);
 }
 
-const char* briefPatternName(BriefPatternKind k) { return k == BriefPatternKind::kGaussian ? "gaussian" : "orb"; }
+const char* briefPatternName(BriefPatternKind k) {
+  return k == BriefPatternKind::kGaussian ? "gaussian" : "orb";
+}
 
 BriefPatternKind briefPatternFromName(const std::string& name) {
   if (name == "orb") return BriefPatternKind::kOrbLearned;
@@ -320,13 +326,14 @@ BriefPatternKind briefPatternFromName(const std::string& name) {
 }
 
 bool OrbSlamParams::operator==(const OrbSlamParams& o) const {
-  return features == o.features && scale_factor == o.scale_factor && levels == o.levels && ini_fast == o.ini_fast &&
-         min_fast == o.min_fast && cell_px == o.cell_px && pattern == o.pattern;
+  return features == o.features && scale_factor == o.scale_factor && levels == o.levels &&
+         ini_fast == o.ini_fast && min_fast == o.min_fast && cell_px == o.cell_px && pattern == o.pattern;
 }
 
 ExtractorSettings extractorSettings(const OrbSlamParams& p, int max_side) {
   ExtractorSettings e;
-  e.kind = p.pattern == BriefPatternKind::kGaussian ? ExtractorKind::kBinloopOrb : ExtractorKind::kBinloopOrbRbrief;
+  e.kind = p.pattern == BriefPatternKind::kGaussian ? ExtractorKind::kBinloopOrb
+                                                    : ExtractorKind::kBinloopOrbRbrief;
   e.features = static_cast<uint32_t>(std::max(0, p.features));
   e.scale_factor = p.scale_factor;
   e.levels = static_cast<uint32_t>(std::max(0, p.levels));
@@ -359,9 +366,9 @@ OrbSlamExtractor::OrbSlamExtractor(const OrbSlamParams& p) : p_(p) {
   require(p.features >= 1, "features must be >= 1, got " + std::to_string(p.features));
   require(p.levels >= 1, "levels must be >= 1, got " + std::to_string(p.levels));
   require(p.scale_factor > 1.f, "scale_factor must be > 1, got " + std::to_string(p.scale_factor));
-  require(p.min_fast >= 1 && p.min_fast <= p.ini_fast, "FAST thresholds need 1 <= min_fast <= ini_fast, got " +
-                                                           std::to_string(p.min_fast) + " and " +
-                                                           std::to_string(p.ini_fast));
+  require(p.min_fast >= 1 && p.min_fast <= p.ini_fast,
+          "FAST thresholds need 1 <= min_fast <= ini_fast, got " + std::to_string(p.min_fast) + " and " +
+              std::to_string(p.ini_fast));
   require(p.cell_px >= 8, "cell_px must be >= 8, got " + std::to_string(p.cell_px));
   const double ratio = 1.0 / p.scale_factor;
   double n = p.features * (1 - ratio) / (1 - std::pow(ratio, p.levels));
@@ -377,12 +384,13 @@ OrbFeatures OrbSlamExtractor::extract(const cv::Mat& gray) const { return extrac
 
 OrbFeatures OrbSlamExtractor::extract(const ImagePyramid& pyr) const {
   if (static_cast<int>(pyr.levels.size()) != p_.levels || pyr.scale.size() != pyr.levels.size())
-    fail("pyramid has " + std::to_string(pyr.levels.size()) + " levels, expected " + std::to_string(p_.levels));
+    fail("pyramid has " + std::to_string(pyr.levels.size()) + " levels, expected " +
+         std::to_string(p_.levels));
   checkImage(pyr.levels[0]);
   for (int i = 0; i < p_.levels; ++i) {
     if (std::abs(pyr.scale[i] - std::pow(p_.scale_factor, static_cast<float>(i))) > 1e-3f * pyr.scale[i])
-      fail("pyramid level " + std::to_string(i) + " has scale " + std::to_string(pyr.scale[i]) + ", not scale_factor^" +
-           std::to_string(i));
+      fail("pyramid level " + std::to_string(i) + " has scale " + std::to_string(pyr.scale[i]) +
+           ", not scale_factor^" + std::to_string(i));
     if (pyr.levels[i].type() != CV_8UC1 || pyr.levels[i].cols > pyr.levels[0].cols ||
         pyr.levels[i].rows > pyr.levels[0].rows)
       fail("pyramid level " + std::to_string(i) + " is not 8-bit grey or is larger than level 0");

@@ -17,15 +17,15 @@ void check(bool ok, const std::string& what) {
 }
 
 void checkSide(const OrbFeatures& f, const ImagePyramid& pyr, const char* side) {
-  check(f.keypoints.size() == f.descriptors.size(), std::string(side) + " side has " +
-                                                        std::to_string(f.keypoints.size()) + " keypoints but " +
-                                                        std::to_string(f.descriptors.size()) + " descriptors");
+  check(f.keypoints.size() == f.descriptors.size(),
+        std::string(side) + " side has " + std::to_string(f.keypoints.size()) + " keypoints but " +
+            std::to_string(f.descriptors.size()) + " descriptors");
   check(!pyr.levels.empty() && pyr.scale.size() == pyr.levels.size(),
         std::string(side) + " pyramid is empty or has no scale per level");
   for (const auto& k : f.keypoints)
     if (k.octave < 0 || k.octave >= static_cast<int>(pyr.levels.size()))
-      check(false, std::string(side) + " keypoint of octave " + std::to_string(k.octave) + " but the pyramid has " +
-                       std::to_string(pyr.levels.size()) + " levels");
+      check(false, std::string(side) + " keypoint of octave " + std::to_string(k.octave) +
+                       " but the pyramid has " + std::to_string(pyr.levels.size()) + " levels");
 }
 
 // Right keypoints by image row, as one array with row offsets: a right keypoint is listed on every row
@@ -53,8 +53,8 @@ struct RowIndex {
 };
 
 // SAD of two windows after taking an offset off each, so that a brightness offset between the cameras
-// (exposure, vignetting) costs nothing. The offset is the window's mean: ORB-SLAM2's centre pixel is the corner
-// itself, unlike its neighbours by construction, so one pixel of slide changes the offset of all 121
+// (exposure, vignetting) costs nothing. The offset is the window's mean: ORB-SLAM2's centre pixel is the
+// corner itself, unlike its neighbours by construction, so one pixel of slide changes the offset of all 121
 // pixels and the SAD curve turns steep and lopsided (on a KITTI frame shifted by 12 px, 47 % of matches
 // within 0.2 px, against 92 % with the mean). In units of 1/n grey level, to stay in integers.
 int offsetSad(const cv::Mat& l, cv::Point pl, const cv::Mat& r, cv::Point pr, int w, bool centre_pixel) {
@@ -116,8 +116,9 @@ bool refine(const cv::KeyPoint& kl, float right_x0, const ImagePyramid& lp, cons
     if (sads[inc + reach] < sads[best + reach]) best = inc;
   }
   if (best == -reach || best == reach) return false;
-  const float delta = subPixelOffset(static_cast<float>(sads[best + reach - 1]), static_cast<float>(sads[best + reach]),
-                                     static_cast<float>(sads[best + reach + 1]), p.fit);
+  const float delta =
+      subPixelOffset(static_cast<float>(sads[best + reach - 1]), static_cast<float>(sads[best + reach]),
+                     static_cast<float>(sads[best + reach + 1]), p.fit);
   if (delta < -1.f || delta > 1.f) return false;
   out->right_x = scale * (static_cast<float>(ur0 + best) + delta);
   out->sad = sads[best + reach] / ((2 * w + 1) * (2 * w + 1));
@@ -134,18 +135,21 @@ bool StereoMatchParams::operator==(const StereoMatchParams& o) const {
 }
 
 StereoMatches matchStereo(const OrbFeatures& left, const ImagePyramid& left_pyramid, const OrbFeatures& right,
-                          const ImagePyramid& right_pyramid, const StereoCamera& cam, const StereoMatchParams& p) {
+                          const ImagePyramid& right_pyramid, const StereoCamera& cam,
+                          const StereoMatchParams& p) {
   check(p.max_hamming >= 1 && p.sad_half_window >= 1 && p.sad_half_window <= 15 && p.sad_search_px >= 1 &&
             p.row_band_px >= 0 && p.sad_outlier_factor > 0 && p.min_depth_m >= 0,
         "parameters out of range (max_hamming >= 1, 1 <= sad_half_window <= 15, sad_search_px >= 1, "
         "row_band_px >= 0, sad_outlier_factor > 0, min_depth_m >= 0)");
   checkSide(left, left_pyramid, "left");
   checkSide(right, right_pyramid, "right");
-  check(cam.bf() > 0, "the camera needs fx > 0 and a positive baseline, got fx·b = " + std::to_string(cam.bf()));
-  check(left_pyramid.levels.size() == right_pyramid.levels.size(), "left and right pyramids differ in levels");
+  check(cam.bf() > 0,
+        "the camera needs fx > 0 and a positive baseline, got fx·b = " + std::to_string(cam.bf()));
+  check(left_pyramid.levels.size() == right_pyramid.levels.size(),
+        "left and right pyramids differ in levels");
   for (size_t i = 0; i < left_pyramid.levels.size(); ++i)
-    check(left_pyramid.levels[i].size() == right_pyramid.levels[i].size() && left_pyramid.levels[i].type() == CV_8UC1 &&
-              right_pyramid.levels[i].type() == CV_8UC1,
+    check(left_pyramid.levels[i].size() == right_pyramid.levels[i].size() &&
+              left_pyramid.levels[i].type() == CV_8UC1 && right_pyramid.levels[i].type() == CV_8UC1,
           "pyramid level " + std::to_string(i) + " differs between left and right or is not 8-bit grey");
 
   const size_t n = left.keypoints.size();
@@ -155,7 +159,8 @@ StereoMatches matchStereo(const OrbFeatures& left, const ImagePyramid& left_pyra
   const int rows = left_pyramid.levels[0].rows;
   const RowIndex index(right, right_pyramid, rows, p.row_band_px);
   const float bf = static_cast<float>(cam.bf());
-  const float max_disparity = static_cast<float>(cam.bf() / (p.min_depth_m > 0 ? p.min_depth_m : cam.baseline_m));
+  const float max_disparity =
+      static_cast<float>(cam.bf() / (p.min_depth_m > 0 ? p.min_depth_m : cam.baseline_m));
 
   std::vector<std::pair<int, int>> sad_of;  // (SAD, left index) of every refined match
   sad_of.reserve(n);
@@ -167,7 +172,8 @@ StereoMatches matchStereo(const OrbFeatures& left, const ImagePyramid& left_pyra
     int best_dist = p.max_hamming, best = -1;
     for (int c = index.start[row]; c < index.start[row + 1]; ++c) {
       const cv::KeyPoint& kr = right.keypoints[index.ids[c]];
-      if (kr.octave < kl.octave - 1 || kr.octave > kl.octave + 1 || kr.pt.x < min_x || kr.pt.x > max_x) continue;
+      if (kr.octave < kl.octave - 1 || kr.octave > kl.octave + 1 || kr.pt.x < min_x || kr.pt.x > max_x)
+        continue;
       const int d = hamming(left.descriptors[il], right.descriptors[index.ids[c]]);
       if (d < best_dist) {
         best_dist = d;

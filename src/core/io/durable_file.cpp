@@ -48,7 +48,8 @@ void writeDurably(const std::string& path, const std::vector<std::pair<const uin
       }
       if (::fsync(f.fd) != 0) throw dataError(path, 0, "flushing it to disk failed: " + why());
     }
-    if (std::rename(partial.c_str(), path.c_str()) != 0) throw dataError(path, 0, "cannot rename " + partial + " to it: " + why());
+    if (std::rename(partial.c_str(), path.c_str()) != 0)
+      throw dataError(path, 0, "cannot rename " + partial + " to it: " + why());
   } catch (...) {
     std::remove(partial.c_str());
     throw;

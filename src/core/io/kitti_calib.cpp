@@ -31,8 +31,9 @@ StereoCamera readKittiCalib(const std::string& path) {
   if (p1[0] != p0[0]) throw dataError(path, rows["P1"].line_no, "P1's fx differs from P0's: not rectified");
   cam.baseline_m = -p1[3] / p1[0];
   if (cam.baseline_m <= 0) {
-    throw dataError(path, rows["P1"].line_no,
-                    "P1[0][3] must be -fx*baseline (negative) for a right camera; got " + std::to_string(p1[3]));
+    throw dataError(
+        path, rows["P1"].line_no,
+        "P1[0][3] must be -fx*baseline (negative) for a right camera; got " + std::to_string(p1[3]));
   }
   return cam;
 }

@@ -71,14 +71,17 @@ KittiSequence KittiSequence::open(const std::string& dir, const std::string& pos
 }
 
 StereoFrame KittiSequence::load(size_t i) const {
-  if (i >= size()) throw DataError("frame " + std::to_string(i) + " is past the sequence end (" +
-                                   std::to_string(size()) + " frames) in " + dir_);
+  if (i >= size())
+    throw DataError("frame " + std::to_string(i) + " is past the sequence end (" + std::to_string(size()) +
+                    " frames) in " + dir_);
   StereoFrame f;
   f.index = static_cast<int>(i);
   f.stamp_s = times_[i];
   f.left = readGrayImage(left_[i]);
   f.right = readGrayImage(right_[i]);
-  const auto size_str = [](const cv::Mat& m) { return std::to_string(m.cols) + "x" + std::to_string(m.rows); };
+  const auto size_str = [](const cv::Mat& m) {
+    return std::to_string(m.cols) + "x" + std::to_string(m.rows);
+  };
   if (f.left.size() != f.right.size())
     throw dataError(right_[i], 0, "is " + size_str(f.right) + " but its left image is " + size_str(f.left));
   if (f.left.cols != camera_.width || f.left.rows != camera_.height)

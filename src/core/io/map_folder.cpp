@@ -46,10 +46,12 @@ void requireReplaceable(const std::string& directory) {
   if (!fs::is_directory(directory, ec)) throw dataError(directory, 0, "is a file, not a map folder");
   for (const auto& e : fs::directory_iterator(directory, ec)) {
     const std::string name = e.path().filename().string();
-    const bool state = e.is_regular_file() && (e.path().extension() == ".state" || e.path().extension() == ".partial");
+    const bool state =
+        e.is_regular_file() && (e.path().extension() == ".state" || e.path().extension() == ".partial");
     if (!state)
-      throw dataError(directory, 0, "holds '" + name + "', which is not a saved map's: a save replaces the folder " +
-                                        "whole, so give a new folder (or one that holds only a map)");
+      throw dataError(directory, 0,
+                      "holds '" + name + "', which is not a saved map's: a save replaces the folder " +
+                          "whole, so give a new folder (or one that holds only a map)");
   }
   if (ec) throw dataError(directory, 0, "cannot list the folder: " + ec.message());
 }
@@ -102,8 +104,9 @@ void MapSave::commit() {
 }
 
 DataError mixedSaveError(const std::string& path, uint64_t id, const std::string& whose, uint64_t expected) {
-  return dataError(path, 0, "belongs to map save " + mapIdText(id) + ", " + whose + " to " + mapIdText(expected) +
-                                ": the folder mixes two saves (save the map again)");
+  return dataError(path, 0,
+                   "belongs to map save " + mapIdText(id) + ", " + whose + " to " + mapIdText(expected) +
+                       ": the folder mixes two saves (save the map again)");
 }
 
 uint64_t checkMapFolder(const std::string& directory, const std::vector<std::string>& stages) {
@@ -116,7 +119,8 @@ uint64_t checkMapFolder(const std::string& directory, const std::vector<std::str
       first = id;
       first_stage = stage;
     } else if (id != first) {
-      throw mixedSaveError(stageStatePath(directory, stage), id, "the " + first_stage + " stage's file", first);
+      throw mixedSaveError(stageStatePath(directory, stage), id, "the " + first_stage + " stage's file",
+                           first);
     }
   }
   return first;

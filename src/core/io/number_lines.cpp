@@ -55,9 +55,9 @@ std::vector<NumberLine> readNumberLines(const std::string& path) {
 
 void requireCount(const std::string& path, const NumberLine& l, size_t n, const std::string& what) {
   if (l.values.size() != n) {
-    throw dataError(path, l.line_no,
-                    what + " needs " + std::to_string(n) + " numbers, found " +
-                        std::to_string(l.values.size()));
+    throw dataError(
+        path, l.line_no,
+        what + " needs " + std::to_string(n) + " numbers, found " + std::to_string(l.values.size()));
   }
 }
 

@@ -95,8 +95,7 @@ std::vector<double> readTimes(const std::string& path) {
   std::vector<double> times;
   for (const auto& l : readNumberLines(path)) {
     requireCount(path, l, 1, "a time stamp");
-    if (!times.empty() && l.values[0] < times.back())
-      throw dataError(path, l.line_no, "time goes backwards");
+    if (!times.empty() && l.values[0] < times.back()) throw dataError(path, l.line_no, "time goes backwards");
     times.push_back(l.values[0]);
   }
   return times;

@@ -7,9 +7,9 @@
 
 namespace binloop {
 
-EssentialGraph buildEssentialGraph(const std::vector<msg::KeyframeState>& keyframes, const std::vector<LoopEdge>& old_loops,
-                                   const LoopEdge& new_loop, const std::vector<SlamKeyframeId>& fixed,
-                                   const EssentialGraphParams& p) {
+EssentialGraph buildEssentialGraph(const std::vector<msg::KeyframeState>& keyframes,
+                                   const std::vector<LoopEdge>& old_loops, const LoopEdge& new_loop,
+                                   const std::vector<SlamKeyframeId>& fixed, const EssentialGraphParams& p) {
   EssentialGraph g;
   std::unordered_map<SlamKeyframeId, size_t> index;
   for (const msg::KeyframeState& k : keyframes) {
@@ -40,18 +40,21 @@ EssentialGraph buildEssentialGraph(const std::vector<msg::KeyframeState>& keyfra
   for (const LoopEdge& l : old_loops) {
     const auto a = index.find(l.query), b = index.find(l.candidate);
     if (a == index.end() || b == index.end()) continue;
-    g.old_loop_edges += add(a->second, b->second, current(a->second, b->second), p.sigma_rot_rad, p.sigma_trans_m, false);
+    g.old_loop_edges +=
+        add(a->second, b->second, current(a->second, b->second), p.sigma_rot_rad, p.sigma_trans_m, false);
   }
   for (const msg::KeyframeState& k : keyframes) {
     const size_t i = index.at(k.id);
     auto parent = index.find(k.parent);
     if (parent != index.end())
-      g.tree_edges += add(parent->second, i, current(parent->second, i), p.sigma_rot_rad, p.sigma_trans_m, false);
+      g.tree_edges +=
+          add(parent->second, i, current(parent->second, i), p.sigma_rot_rad, p.sigma_trans_m, false);
     for (const msg::CovisibleEdge& e : k.covisible) {
       if (static_cast<int>(e.weight) < p.min_covisibility) continue;
       auto o = index.find(e.id);
       if (o == index.end()) continue;
-      g.covisibility_edges += add(i, o->second, current(i, o->second), p.sigma_rot_rad, p.sigma_trans_m, false);
+      g.covisibility_edges +=
+          add(i, o->second, current(i, o->second), p.sigma_rot_rad, p.sigma_trans_m, false);
     }
   }
   return g;

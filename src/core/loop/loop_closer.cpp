@@ -54,7 +54,8 @@ void LoopCloser::apply(const msg::LocalMapUpdate& u) {
     auto it = states_.find(k.id);
     if (it == states_.end()) continue;  // not refined yet: its keyframe message will bring it
     msg::KeyframeState s = k;
-    if (u.corrections_seen < history_.applied()) s.T_w_c = orthonormalized(history_.since(u.corrections_seen, k.id) * s.T_w_c);
+    if (u.corrections_seen < history_.applied())
+      s.T_w_c = orthonormalized(history_.since(u.corrections_seen, k.id) * s.T_w_c);
     it->second = s;
   }
   for (SlamKeyframeId k : u.culled_keyframes) {
@@ -105,7 +106,8 @@ LoopCloser::Output LoopCloser::process(const msg::LoopCandidates& c) {
   Output out;
   expireHeld(&out);
   if (c.shadow || c.accepted == kNoId) return out;
-  if (history_.applied() > 0 && order_.size() < last_correction_at_ + static_cast<size_t>(p_.min_keyframes_between_loops))
+  if (history_.applied() > 0 &&
+      order_.size() < last_correction_at_ + static_cast<size_t>(p_.min_keyframes_between_loops))
     return out;
   Output v = verify(c.query, c.accepted, c.model, c.query_words, c.accepted_words);
   for (auto& cl : v.closures) out.closures.push_back(cl);
@@ -113,7 +115,8 @@ LoopCloser::Output LoopCloser::process(const msg::LoopCandidates& c) {
   return out;
 }
 
-LoopCloser::Output LoopCloser::addExternalLoop(SlamKeyframeId query, SlamKeyframeId match, const std::string& source) {
+LoopCloser::Output LoopCloser::addExternalLoop(SlamKeyframeId query, SlamKeyframeId match,
+                                               const std::string& source) {
   Output out;
   expireHeld(&out);
   Output v = verify(query, match, source);
@@ -153,7 +156,8 @@ SlamKeyframeId LoopCloser::standIn(SlamKeyframeId id) const {
     auto cu = culled_.find(k);
     return cu == culled_.end() ? kNoId : cu->second;
   };
-  return firstAncestor(id, culledParent, [this](SlamKeyframeId k) { return frames_.count(k) > 0; }, 100);
+  return firstAncestor(
+      id, culledParent, [this](SlamKeyframeId k) { return frames_.count(k) > 0; }, 100);
 }
 
 SlamKeyframeId LoopCloser::reanchor(SlamKeyframeId query, SlamKeyframeId match, LoopVerification* v) const {
@@ -173,22 +177,26 @@ SlamKeyframeId LoopCloser::reanchor(SlamKeyframeId query, SlamKeyframeId match, 
   if (nearer.size() > 3) nearer.resize(3);
   std::string tried;
   for (const auto& [d, id] : nearer) {
-    LoopVerification w = verifyLoopAt(*frames_.at(query), *frames_.at(id), T_q_w * states_.at(id).T_w_c, p_.verify);
+    LoopVerification w =
+        verifyLoopAt(*frames_.at(query), *frames_.at(id), T_q_w * states_.at(id).T_w_c, p_.verify);
     v->ms += w.ms;
     if (!w.accepted) {
-      tried += (tried.empty() ? "" : ", ") + std::to_string(counterOf(id)) + " (" + fixedDecimals(d, 2) + " m, " +
-               std::to_string(w.inliers) + " inliers)";
+      tried += (tried.empty() ? "" : ", ") + std::to_string(counterOf(id)) + " (" + fixedDecimals(d, 2) +
+               " m, " + std::to_string(w.inliers) + " inliers)";
       continue;
     }
     w.detail = v->detail + "; anchored at keyframe " + std::to_string(counterOf(id)) + " (" +
-               fixedDecimals(w.T_query_candidate.translation().norm(), 2) + " m from the query, " + std::to_string(w.inliers) +
-               " inliers by projection) instead of " + std::to_string(counterOf(match)) + " (" + fixedDecimals(far, 2) +
-               " m, " + std::to_string(v->inliers) + " inliers)";
+               fixedDecimals(w.T_query_candidate.translation().norm(), 2) + " m from the query, " +
+               std::to_string(w.inliers) + " inliers by projection) instead of " +
+               std::to_string(counterOf(match)) + " (" + fixedDecimals(far, 2) + " m, " +
+               std::to_string(v->inliers) + " inliers)";
     w.ms = v->ms;
     *v = std::move(w);
     return id;
   }
-  if (!tried.empty()) v->detail += "; " + fixedDecimals(far, 2) + " m apart, and nearer keyframes beside the match did not verify: " + tried;
+  if (!tried.empty())
+    v->detail += "; " + fixedDecimals(far, 2) +
+                 " m apart, and nearer keyframes beside the match did not verify: " + tried;
   return match;
 }
 
@@ -205,23 +213,25 @@ LoopCloser::Output LoopCloser::verify(SlamKeyframeId query, SlamKeyframeId match
   const SlamKeyframeId proposed = match;
   if (const SlamKeyframeId held = standIn(match); held != kNoId && held != match) {
     match = held;
-    culled_note = "; keyframe " + std::to_string(counterOf(proposed)) + " was culled, its spanning-tree parent " +
-                  std::to_string(counterOf(match)) + " stands for it";
+    culled_note = "; keyframe " + std::to_string(counterOf(proposed)) +
+                  " was culled, its spanning-tree parent " + std::to_string(counterOf(match)) +
+                  " stands for it";
   }
   c->match = match;
   auto fq = frames_.find(query), fm = frames_.find(match);
   if (fq == frames_.end() || fm == frames_.end() || query == match) {
     c->status = msg::LoopStatus::kUnknownKeyframe;
-    c->detail = query == match ? "a keyframe cannot close a loop with itself"
-                               : std::string("loop closing does not hold keyframe ") +
-                                     std::to_string(fq == frames_.end() ? query : match) + " (never sent, or culled)";
+    c->detail = query == match
+                    ? "a keyframe cannot close a loop with itself"
+                    : std::string("loop closing does not hold keyframe ") +
+                          std::to_string(fq == frames_.end() ? query : match) + " (never sent, or culled)";
     return out;
   }
   c->query_frame = fq->second->frame_index;
   c->match_frame = fm->second->frame_index;
   const std::vector<uint32_t> no_words;  // a culled keyframe's words are not its stand-in's
-  LoopVerification v =
-      verifyLoop(*fq->second, *fm->second, p_.verify, query_words, match == proposed ? match_words : no_words);
+  LoopVerification v = verifyLoop(*fq->second, *fm->second, p_.verify, query_words,
+                                  match == proposed ? match_words : no_words);
   v.detail += culled_note;
   if (v.accepted) {
     if (const SlamKeyframeId nearer = reanchor(query, match, &v); nearer != match) {
@@ -247,14 +257,16 @@ LoopCloser::Output LoopCloser::verify(SlamKeyframeId query, SlamKeyframeId match
   c->correction_m = (T_w_q_loop.translation() - T_w_q.translation()).norm();
   const double travel = travelBetween(match, query);
   c->drift_bound_m = p_.drift_base_m + p_.drift_per_m * travel;
-  std::string numbers = v.detail + "; moves the query " + fixedDecimals(c->correction_m, 2) + " m, drift bound " +
-                        fixedDecimals(c->drift_bound_m, 2) + " m over " + fixedDecimals(travel, 2) + " m";
+  std::string numbers = v.detail + "; moves the query " + fixedDecimals(c->correction_m, 2) +
+                        " m, drift bound " + fixedDecimals(c->drift_bound_m, 2) + " m over " +
+                        fixedDecimals(travel, 2) + " m";
   std::vector<LoopEdge> edges{{query, match, v.T_query_candidate}};
   LoopEdge confirmed_edge;
   bool confirming = false;
   if (c->correction_m > p_.hold_factor * c->drift_bound_m) {
     c->status = msg::LoopStatus::kBeyondDriftBound;
-    c->detail = numbers + "; more than " + fixedDecimals(p_.hold_factor, 2) + "x the bound: not a loop drift can explain";
+    c->detail = numbers + "; more than " + fixedDecimals(p_.hold_factor, 2) +
+                "x the bound: not a loop drift can explain";
     return out;
   }
   if (c->correction_m > c->drift_bound_m) {
@@ -264,9 +276,10 @@ LoopCloser::Output LoopCloser::verify(SlamKeyframeId query, SlamKeyframeId match
       const double disagree = (delta * here - held_->delta * here).norm();
       const double apart = travelBetween(held_->edge.query, query);
       const double tol = p_.confirm_tolerance_m + p_.confirm_tolerance_per_m * apart;
-      const std::string agreement = " the loop held at keyframe " + std::to_string(counterOf(held_->edge.query)) + " (" +
-                                    fixedDecimals(disagree, 2) + " m apart in what they ask, " + fixedDecimals(apart, 2) +
-                                    " m along the path";
+      const std::string agreement = " the loop held at keyframe " +
+                                    std::to_string(counterOf(held_->edge.query)) + " (" +
+                                    fixedDecimals(disagree, 2) + " m apart in what they ask, " +
+                                    fixedDecimals(apart, 2) + " m along the path";
       if (disagree <= tol && apart >= p_.confirm_min_travel_m) {
         confirming = true;
         confirmed_edge = held_->edge;
@@ -311,21 +324,24 @@ LoopCloser::Output LoopCloser::verify(SlamKeyframeId query, SlamKeyframeId match
     msg::LoopClosure& w = waited[k];
     if (!applied) {
       w.status = c->status;  // large_residual: nothing moved
-      w.detail += "; the loop at keyframe " + by + " that confirmed it was rejected (" + msg::loopStatusName(c->status) + ")";
+      w.detail += "; the loop at keyframe " + by + " that confirmed it was rejected (" +
+                  msg::loopStatusName(c->status) + ")";
     } else if (k == 0) {
       w.status = msg::LoopStatus::kAccepted;
       w.detail += "; confirmed by the loop at keyframe " + by;
     } else {
       w.status = msg::LoopStatus::kAgreed;
-      w.detail += "; the held loop was confirmed by the loop at keyframe " + by + ", whose two edges carry the correction";
+      w.detail += "; the held loop was confirmed by the loop at keyframe " + by +
+                  ", whose two edges carry the correction";
     }
     out.closures.push_back(std::make_shared<msg::LoopClosure>(std::move(w)));
   }
   return out;
 }
 
-bool LoopCloser::correct(const std::vector<LoopEdge>& new_loops, const std::vector<std::pair<MapPointId, MapPointId>>& fused,
-                         msg::LoopClosure* c, Output* out) {
+bool LoopCloser::correct(const std::vector<LoopEdge>& new_loops,
+                         const std::vector<std::pair<MapPointId, MapPointId>>& fused, msg::LoopClosure* c,
+                         Output* out) {
   const auto t0 = std::chrono::steady_clock::now();
   std::vector<msg::KeyframeState> kfs;
   for (SlamKeyframeId id : order_) kfs.push_back(states_.at(id));
@@ -351,9 +367,10 @@ bool LoopCloser::correct(const std::vector<LoopEdge>& new_loops, const std::vect
   const double before = r.initial_edge_chi2[g.new_loop_edge], after = r.edge_chi2[g.new_loop_edge];
   // A loop the graph already agrees with (chi2 below 6-dof 95 %) has nothing to absorb.
   c->residual_ratio = before > 12.59 ? std::sqrt(after / before) : 0.0;
-  c->detail += "; loop edge chi2 " + fixedDecimals(before, 2) + " -> " + fixedDecimals(after, 2) + " (ratio " + fixedDecimals(c->residual_ratio, 2) +
-               "), " + std::to_string(g.nodes.size()) + " keyframes, " + std::to_string(g.edges.size()) + " edges, " +
-               std::to_string(r.iterations) + " iterations";
+  c->detail += "; loop edge chi2 " + fixedDecimals(before, 2) + " -> " + fixedDecimals(after, 2) +
+               " (ratio " + fixedDecimals(c->residual_ratio, 2) + "), " + std::to_string(g.nodes.size()) +
+               " keyframes, " + std::to_string(g.edges.size()) + " edges, " + std::to_string(r.iterations) +
+               " iterations";
   if (c->residual_ratio > p_.max_residual_ratio) {
     c->status = msg::LoopStatus::kLargeResidual;
     return false;

@@ -37,7 +37,8 @@ void LoopCloser::load(StateReader& r) {
   for (uint64_t i = 0; i < n; ++i) {
     auto kf = std::make_shared<const msg::KeyFrame>(readKeyFrame(r));
     msg::KeyframeState s = readKeyframeState(r);
-    if (s.id != kf->id || states_.count(kf->id)) r.fail("keyframe " + std::to_string(kf->id) + " twice or mislabelled");
+    if (s.id != kf->id || states_.count(kf->id))
+      r.fail("keyframe " + std::to_string(kf->id) + " twice or mislabelled");
     states_[kf->id] = std::move(s);
     order_.push_back(kf->id);
     frames_[kf->id] = std::move(kf);

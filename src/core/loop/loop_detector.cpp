@@ -86,7 +86,8 @@ std::set<SlamKeyframeId> LoopDetector::groupOf(SlamKeyframeId id) const {
   return g;
 }
 
-std::shared_ptr<msg::LoopCandidates> LoopDetector::query(Model& m, SlamKeyframeId id, uint64_t frame, bool shadow) const {
+std::shared_ptr<msg::LoopCandidates> LoopDetector::query(Model& m, SlamKeyframeId id, uint64_t frame,
+                                                         bool shadow) const {
   const KeyframeId q = dense_.at(id);
   QueryScope scope;
   scope.reference = referenceOf(id);
@@ -116,7 +117,8 @@ std::shared_ptr<msg::LoopCandidates> LoopDetector::query(Model& m, SlamKeyframeI
   out->accepted = cr.accepted;
   if (!shadow && cr.accepted != kNoId) {
     out->query_words = m.recognizer->matchWords(descriptors_[q]);
-    if (!out->query_words.empty()) out->accepted_words = m.recognizer->matchWords(descriptors_[dense_.at(cr.accepted)]);
+    if (!out->query_words.empty())
+      out->accepted_words = m.recognizer->matchWords(descriptors_[dense_.at(cr.accepted)]);
   }
   for (const StepTime& t : r.timings) out->timings.push_back({t.step, t.ms});
   out->total_ms = r.total_ms;
@@ -157,7 +159,8 @@ LoopDetector::Output LoopDetector::process(const msg::KeyFrame& kf) {
   };
   out.active = withSignature(query(active_, kf.id, kf.frame_index, false), active_signature_ms);
   for (size_t i = 0; i < shadow_.size(); ++i)
-    out.shadow.push_back(withSignature(query(shadow_[i], kf.id, kf.frame_index, true), shadow_signature_ms[i]));
+    out.shadow.push_back(
+        withSignature(query(shadow_[i], kf.id, kf.frame_index, true), shadow_signature_ms[i]));
   return out;
 }
 

@@ -16,10 +16,14 @@ namespace binloop {
 
 msg::LoopStatus loopStatusOf(LoopRejection r) {
   switch (r) {
-    case LoopRejection::kNone: return msg::LoopStatus::kAccepted;
-    case LoopRejection::kTooFewMatches: return msg::LoopStatus::kTooFewMatches;
-    case LoopRejection::kNoConsensus: return msg::LoopStatus::kNoConsensus;
-    case LoopRejection::kTooFewInliers: return msg::LoopStatus::kTooFewInliers;
+    case LoopRejection::kNone:
+      return msg::LoopStatus::kAccepted;
+    case LoopRejection::kTooFewMatches:
+      return msg::LoopStatus::kTooFewMatches;
+    case LoopRejection::kNoConsensus:
+      return msg::LoopStatus::kNoConsensus;
+    case LoopRejection::kTooFewInliers:
+      return msg::LoopStatus::kTooFewInliers;
   }
   return msg::LoopStatus::kTooFewMatches;
 }
@@ -34,8 +38,8 @@ Eigen::Vector3d pointOf(const msg::KeyFrame& kf, const msg::KeyPoint& k) {
 bool stereo(const msg::KeyPoint& k) { return k.depth > 0 && k.right_x >= 0; }
 
 // Pose optimisation of T_query_candidate on the pairs; drops the outliers from `pairs`.
-int refine(const msg::KeyFrame& q, const msg::KeyFrame& c, const ScalePyramid& s, const PoseOptimizerParams& p,
-           Pose3* T, std::vector<std::pair<int, int>>* pairs) {
+int refine(const msg::KeyFrame& q, const msg::KeyFrame& c, const ScalePyramid& s,
+           const PoseOptimizerParams& p, Pose3* T, std::vector<std::pair<int, int>>* pairs) {
   std::vector<PoseObservation> obs;
   for (const auto& [qi, ci] : *pairs) {
     const msg::KeyPoint& kq = q.keypoints[qi];
@@ -58,8 +62,8 @@ int refine(const msg::KeyFrame& q, const msg::KeyFrame& c, const ScalePyramid& s
 
 // Adds to `pairs` the candidate's unpaired stereo points that, put in the query by T, land near an unpaired
 // query keypoint of the scale the distance predicts, with a descriptor closer than max_hamming.
-void guidedSearch(const msg::KeyFrame& q, const msg::KeyFrame& c, const ScalePyramid& s, const LoopVerifierParams& p,
-                  const Pose3& T, std::vector<std::pair<int, int>>* pairs) {
+void guidedSearch(const msg::KeyFrame& q, const msg::KeyFrame& c, const ScalePyramid& s,
+                  const LoopVerifierParams& p, const Pose3& T, std::vector<std::pair<int, int>>* pairs) {
   std::vector<char> q_used(q.keypoints.size(), 0), c_used(c.keypoints.size(), 0);
   for (const auto& [qi, ci] : *pairs) q_used[qi] = c_used[ci] = 1;
   const KeypointGrid grid(q.keypoints, q.camera.width, q.camera.height);
@@ -90,7 +94,8 @@ void guidedSearch(const msg::KeyFrame& q, const msg::KeyFrame& c, const ScalePyr
 }  // namespace
 
 LoopVerification verifyLoop(const msg::KeyFrame& q, const msg::KeyFrame& c, const LoopVerifierParams& p,
-                            const std::vector<uint32_t>& query_words, const std::vector<uint32_t>& candidate_words) {
+                            const std::vector<uint32_t>& query_words,
+                            const std::vector<uint32_t>& candidate_words) {
   const auto t0 = std::chrono::steady_clock::now();
   LoopVerification v;
   std::string words_note;
@@ -104,13 +109,15 @@ LoopVerification verifyLoop(const msg::KeyFrame& q, const msg::KeyFrame& c, cons
   const ScalePyramid s(q.scale_factor, q.levels);
 
   // 1. Descriptor matches between stereo keypoints, each candidate keypoint used once.
-  const bool words_fit = query_words.size() == q.keypoints.size() && candidate_words.size() == c.keypoints.size();
+  const bool words_fit =
+      query_words.size() == q.keypoints.size() && candidate_words.size() == c.keypoints.size();
   v.by_words = p.match_by_words && words_fit;
   if (p.match_by_words && !words_fit && (!query_words.empty() || !candidate_words.empty()))
     words_note = " (words not used: " + std::to_string(query_words.size()) + " and " +
-                 std::to_string(candidate_words.size()) + " for " + std::to_string(q.keypoints.size()) + " and " +
-                 std::to_string(c.keypoints.size()) + " keypoints)";
-  std::vector<int> best_of_c(c.keypoints.size(), -1), dist_of_c(c.keypoints.size(), std::numeric_limits<int>::max());
+                 std::to_string(candidate_words.size()) + " for " + std::to_string(q.keypoints.size()) +
+                 " and " + std::to_string(c.keypoints.size()) + " keypoints)";
+  std::vector<int> best_of_c(c.keypoints.size(), -1),
+      dist_of_c(c.keypoints.size(), std::numeric_limits<int>::max());
   // One block of the candidate's stereo descriptors per word (a single block when brute force).
   struct Cell {
     DescriptorBlock desc;
@@ -157,8 +164,8 @@ LoopVerification verifyLoop(const msg::KeyFrame& q, const msg::KeyFrame& c, cons
   v.first_inliers = rr.inliers;
   v.ransac_ms = lap();
   if (!rr.ok)
-    return done(LoopRejection::kNoConsensus, matched + ", best consensus " +
-                                                 std::to_string(rr.inliers) + " < " + std::to_string(p.ransac.min_inliers));
+    return done(LoopRejection::kNoConsensus, matched + ", best consensus " + std::to_string(rr.inliers) +
+                                                 " < " + std::to_string(p.ransac.min_inliers));
   std::vector<std::pair<int, int>> in;
   for (size_t i = 0; i < pairs.size(); ++i)
     if (rr.inlier[i]) in.push_back(pairs[i]);
@@ -174,9 +181,10 @@ LoopVerification verifyLoop(const msg::KeyFrame& q, const msg::KeyFrame& c, cons
   v.guided_ms = lap();
   v.T_query_candidate = T;
   v.pairs = in;
-  const std::string numbers = matched + ", " + std::to_string(v.first_inliers) +
-                              " RANSAC inliers, " + std::to_string(v.inliers) + " after guided search";
-  if (v.inliers < p.min_inliers) return done(LoopRejection::kTooFewInliers, numbers + " < " + std::to_string(p.min_inliers));
+  const std::string numbers = matched + ", " + std::to_string(v.first_inliers) + " RANSAC inliers, " +
+                              std::to_string(v.inliers) + " after guided search";
+  if (v.inliers < p.min_inliers)
+    return done(LoopRejection::kTooFewInliers, numbers + " < " + std::to_string(p.min_inliers));
   return done(LoopRejection::kNone, numbers);
 }
 
@@ -200,7 +208,8 @@ LoopVerification verifyLoopAt(const msg::KeyFrame& q, const msg::KeyFrame& c, co
   v.detail = std::to_string(v.matches) + " matches by projection, " + std::to_string(v.first_inliers) +
              " after refinement, " + std::to_string(v.inliers) + " after a second search" +
              (v.accepted ? "" : " < " + std::to_string(p.min_inliers));
-  v.ms = v.guided_ms = std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - t0).count();
+  v.ms = v.guided_ms =
+      std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - t0).count();
   return v;
 }
 

@@ -11,7 +11,8 @@ namespace binloop {
 
 void CorrectionHistory::begin(uint64_t sequence) {
   if (sequence != applied() + 1)
-    throw std::invalid_argument("correction " + std::to_string(sequence) + " after " + std::to_string(applied()));
+    throw std::invalid_argument("correction " + std::to_string(sequence) + " after " +
+                                std::to_string(applied()));
   deltas_.emplace_back();
 }
 

@@ -146,7 +146,8 @@ std::unordered_map<SlamKeyframeId, Pose3> MapReplica::unsentMoves(const msg::Loc
     if (sent.count(id) || culled.count(id)) continue;
     // Up the parents (unsent ones were made here one on another) to the first the update names; with an
     // ancestor neither side holds, it stays.
-    const SlamKeyframeId a = firstAncestor(kf.parent, parentOf, [&](SlamKeyframeId x) { return sent.count(x) > 0; });
+    const SlamKeyframeId a =
+        firstAncestor(kf.parent, parentOf, [&](SlamKeyframeId x) { return sent.count(x) > 0; });
     moves.emplace(id, a == kNoId ? Pose3::Identity() : sent.at(a));
   }
   return moves;
@@ -181,7 +182,8 @@ std::vector<SlamKeyframeId> MapReplica::recentKeyframes(size_t n) const {
   return ids;
 }
 
-std::vector<SlamKeyframeId> MapReplica::keyframesNear(const Eigen::Vector3d& centre, double radius_m, size_t n) const {
+std::vector<SlamKeyframeId> MapReplica::keyframesNear(const Eigen::Vector3d& centre, double radius_m,
+                                                      size_t n) const {
   std::vector<std::pair<double, SlamKeyframeId>> near;
   for (const auto& [id, kf] : keyframes_) {
     const double d = (kf.T_w_c.translation() - centre).norm();
@@ -189,7 +191,8 @@ std::vector<SlamKeyframeId> MapReplica::keyframesNear(const Eigen::Vector3d& cen
   }
   std::sort(near.begin(), near.end(), [](const auto& a, const auto& b) {
     if (a.first != b.first) return a.first < b.first;
-    return counterOf(a.second) != counterOf(b.second) ? counterOf(a.second) > counterOf(b.second) : a.second > b.second;
+    return counterOf(a.second) != counterOf(b.second) ? counterOf(a.second) > counterOf(b.second)
+                                                      : a.second > b.second;
   });
   std::vector<SlamKeyframeId> ids;
   for (size_t i = 0; i < near.size() && i < n; ++i) ids.push_back(near[i].second);

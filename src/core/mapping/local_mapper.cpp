@@ -79,8 +79,9 @@ void LocalMapper::updatePointShape(MP& mp) {
 
 void LocalMapper::insert(const msg::KeyFrame& in) {
   if (in.descriptors.size() != in.keypoints.size() || in.state.point_ids.size() != in.keypoints.size())
-    throw std::invalid_argument("keyframe " + std::to_string(in.id) + ": " + std::to_string(in.keypoints.size()) +
-                                " keypoints but " + std::to_string(in.descriptors.size()) + " descriptors and " +
+    throw std::invalid_argument("keyframe " + std::to_string(in.id) + ": " +
+                                std::to_string(in.keypoints.size()) + " keypoints but " +
+                                std::to_string(in.descriptors.size()) + " descriptors and " +
                                 std::to_string(in.state.point_ids.size()) + " point ids");
   if (in.id == kNoId || in.state.id != in.id)
     throw std::invalid_argument("keyframe " + std::to_string(in.id) + ": its state names keyframe " +
@@ -88,12 +89,13 @@ void LocalMapper::insert(const msg::KeyFrame& in) {
   // Ids are never reused: one the map holds (or culled) comes from another tracking session (a tracker
   // restarted while mapping kept its map), and taking it would overwrite a keyframe or point others refer to.
   if (kfs_.count(in.id) || culled_.count(in.id))
-    throw std::invalid_argument("keyframe " + std::to_string(in.id) + " is already in the map (its id was issued " +
+    throw std::invalid_argument("keyframe " + std::to_string(in.id) +
+                                " is already in the map (its id was issued " +
                                 "again: a tracker restarted without mapping?); refused");
   for (const msg::MapPoint& np : in.new_points)
     if (np.id == kNoId || pts_.count(np.id) || replaced_.count(np.id))
-      throw std::invalid_argument("keyframe " + std::to_string(in.id) + ": new map point " + std::to_string(np.id) +
-                                  " is 0 or already in the map; refused");
+      throw std::invalid_argument("keyframe " + std::to_string(in.id) + ": new map point " +
+                                  std::to_string(np.id) + " is 0 or already in the map; refused");
   if (scales_.levels() == 0) scales_ = ScalePyramid(in.scale_factor, in.levels);
   camera_ = in.camera;
   // Made before a loop correction tracking had not heard of yet: it moves as its parent did.
@@ -103,7 +105,7 @@ void LocalMapper::insert(const msg::KeyFrame& in) {
                                                 auto c = culled_.find(a);
                                                 return c == culled_.end() ? kNoId : c->second.first;
                                               })
-                              : Pose3::Identity();
+                             : Pose3::Identity();
   KF& kf = kfs_[in.id];
   kf.state = in.state;
   kf.state.covisible.clear();
@@ -299,7 +301,8 @@ void LocalMapper::fuseInto(KF& t, const std::vector<MapPointId>& points, msg::Lo
     for (int i : t.grid.near(pp.u, pp.v, r, level - 1, level + 1)) {
       const msg::KeyPoint& k = t.keypoints[i];
       bool front = false;
-      const double chi2 = reprojectionChi2(camera_, T_c_w, mp.state.p_w, k, scales_.inv_sigma2[k.octave], &front);
+      const double chi2 =
+          reprojectionChi2(camera_, T_c_w, mp.state.p_w, k, scales_.inv_sigma2[k.octave], &front);
       if (chi2 > (k.right_x >= 0 ? 7.815 : 5.991)) continue;
       const int d = hamming(mp.state.descriptor, t.descriptors[i]);
       if (d < best) best = d, best_i = i;
@@ -311,8 +314,10 @@ void LocalMapper::fuseInto(KF& t, const std::vector<MapPointId>& points, msg::Lo
       touched_.push_back(id);
     } else if (there != id) {
       // Keep the better-observed point (ORB-SLAM2).
-      if (pts_.at(there).obs.size() >= mp.obs.size()) replacePoint(id, there, u);
-      else replacePoint(there, id, u);
+      if (pts_.at(there).obs.size() >= mp.obs.size())
+        replacePoint(id, there, u);
+      else
+        replacePoint(there, id, u);
     }
   }
 }
@@ -355,7 +360,8 @@ LocalMapper::BaSetup LocalMapper::makeBaProblem(const std::vector<SlamKeyframeId
   auto addKf = [&](SlamKeyframeId id, bool fixed) {
     if (kf_index.count(id)) return;
     kf_index[id] = b.problem.keyframes.size();
-    b.problem.keyframes.push_back({id, orthonormalized(kfs_.at(id).state.T_w_c.inverse()), fixed || id == first_kf_});
+    b.problem.keyframes.push_back(
+        {id, orthonormalized(kfs_.at(id).state.T_w_c.inverse()), fixed || id == first_kf_});
   };
   for (SlamKeyframeId k : free) addKf(k, false);
   b.free = b.problem.keyframes.size();
@@ -386,7 +392,8 @@ void LocalMapper::bundleAdjust(const std::vector<SlamKeyframeId>& free, const Lo
   u.ba_ms = msSinceT(t0);
   u.ba_iterations = r.iterations;
   u.ba_outliers = r.num_outliers;
-  for (const BaRefinedKeyframe& rk : r.keyframes) kfs_.at(rk.id).state.T_w_c = orthonormalized(rk.T_c_w.inverse());
+  for (const BaRefinedKeyframe& rk : r.keyframes)
+    kfs_.at(rk.id).state.T_w_c = orthonormalized(rk.T_c_w.inverse());
   for (const BaPoint& bp : r.points) pts_.at(bp.id).state.p_w = bp.p_w;
   removeBaOutliers(b, r, u);
   for (size_t i = 0; i < b.free; ++i) updateConnections(kfs_.at(b.problem.keyframes[i].id));
@@ -589,7 +596,7 @@ msg::LocalMapUpdatePtr LocalMapper::wholeMap() const {
 msg::LocalMapUpdatePtr LocalMapper::apply(const msg::Correction& c) {
   const auto t0 = std::chrono::steady_clock::now();
   history_.begin(c.sequence);  // throws for a correction out of order
-  stopGlobalBa();  // its result would undo the correction (ORB-SLAM2 stops it too)
+  stopGlobalBa();              // its result would undo the correction (ORB-SLAM2 stops it too)
   auto u = std::make_shared<msg::LocalMapUpdate>();
   u->sequence = ++updates_;
   u->keyframe = c.query;
@@ -661,7 +668,8 @@ void LocalMapper::wholeMapInto(msg::LocalMapUpdate& u) const {
 }
 
 std::vector<std::pair<SlamKeyframeId, Pose3>> LocalMapper::moveMap(
-    const std::unordered_map<SlamKeyframeId, Pose3>& delta, const std::unordered_map<MapPointId, Eigen::Vector3d>* placed) {
+    const std::unordered_map<SlamKeyframeId, Pose3>& delta,
+    const std::unordered_map<MapPointId, Eigen::Vector3d>* placed) {
   // Each keyframe moves by its own delta or, when the mover did not know it yet, by its nearest ancestor's
   // in the spanning tree; a culled keyframe's children went to its parent, and a point whose reference
   // keyframe was culled moves with that keyframe's parent. A point in `placed` goes where it says.
@@ -680,9 +688,12 @@ std::vector<std::pair<SlamKeyframeId, Pose3>> LocalMapper::moveMap(
         break;
       }
       path.push_back(id);
-      if (auto k = kfs_.find(id); k != kfs_.end()) id = k->second.state.parent;
-      else if (auto cu = culled_.find(id); cu != culled_.end()) id = cu->second.first;
-      else break;
+      if (auto k = kfs_.find(id); k != kfs_.end())
+        id = k->second.state.parent;
+      else if (auto cu = culled_.find(id); cu != culled_.end())
+        id = cu->second.first;
+      else
+        break;
     }
     for (SlamKeyframeId p : path) resolved[p] = d;
     return d;

@@ -77,7 +77,8 @@ void LocalMapper::load(StateReader& r) {
   camera_ = readCamera(r);
   const float factor = r.get<float>("scale factor");
   const int levels = r.get<int32_t>("pyramid levels");
-  if (levels < 0 || levels > 64 || (levels > 0 && !(factor > 1.f && factor < 4.f))) r.fail("impossible scale pyramid");
+  if (levels < 0 || levels > 64 || (levels > 0 && !(factor > 1.f && factor < 4.f)))
+    r.fail("impossible scale pyramid");
   scales_ = levels > 0 ? ScalePyramid(factor, levels) : ScalePyramid();
   const uint64_t kfs = r.getCount("keyframes", 100);
   for (uint64_t i = 0; i < kfs; ++i) {
@@ -91,7 +92,8 @@ void LocalMapper::load(StateReader& r) {
     kf.descriptors = r.getArray<Desc256>("keyframe descriptors");
     kf.weights = readCounts<SlamKeyframeId>(r, "covisibility weights");
     if (kf.keypoints.size() != kf.descriptors.size() || kf.keypoints.size() != kf.state.point_ids.size())
-      r.fail("keyframe " + std::to_string(kf.state.id) + ": keypoints, descriptors and point ids differ in number");
+      r.fail("keyframe " + std::to_string(kf.state.id) +
+             ": keypoints, descriptors and point ids differ in number");
     kf.grid = KeypointGrid(kf.keypoints, camera_.width, camera_.height);
   }
   const uint64_t pts = r.getCount("map points", 100);

@@ -7,8 +7,8 @@
 
 namespace binloop {
 
-std::optional<Eigen::Vector3d> triangulateLinear(const Pose3& T_c1_w, const Pose3& T_c2_w, const Eigen::Vector2d& x1,
-                                                 const Eigen::Vector2d& x2) {
+std::optional<Eigen::Vector3d> triangulateLinear(const Pose3& T_c1_w, const Pose3& T_c2_w,
+                                                 const Eigen::Vector2d& x1, const Eigen::Vector2d& x2) {
   const Eigen::Matrix<double, 3, 4> P1 = T_c1_w.matrix().topRows<3>();
   const Eigen::Matrix<double, 3, 4> P2 = T_c2_w.matrix().topRows<3>();
   Eigen::Matrix4d A;
@@ -43,8 +43,9 @@ Eigen::Vector3d unprojectStereo(const TriangulationView& v) {
 
 }  // namespace
 
-TriangulationResult triangulatePair(const TriangulationView& a, const TriangulationView& b, const ScalePyramid& s,
-                                    const TriangulationParams& p, Eigen::Vector3d* p_w) {
+TriangulationResult triangulatePair(const TriangulationView& a, const TriangulationView& b,
+                                    const ScalePyramid& s, const TriangulationParams& p,
+                                    Eigen::Vector3d* p_w) {
   const msg::KeyPoint &ka = *a.keypoint, &kb = *b.keypoint;
   const Eigen::Vector2d xa = normalised(*a.camera, ka), xb = normalised(*b.camera, kb);
   const Eigen::Vector3d ray_a = a.T_w_c->linear() * xa.homogeneous();
@@ -71,7 +72,8 @@ TriangulationResult triangulatePair(const TriangulationView& a, const Triangulat
   const double ea = reprojectionChi2(*a.camera, a.T_w_c->inverse(), X, ka, s.inv_sigma2[ka.octave], &front_a);
   const double eb = reprojectionChi2(*b.camera, b.T_w_c->inverse(), X, kb, s.inv_sigma2[kb.octave], &front_b);
   if (!front_a || !front_b) return TriangulationResult::kBehind;
-  if (ea > (ka.right_x >= 0 ? p.chi2_stereo : p.chi2_mono) || eb > (kb.right_x >= 0 ? p.chi2_stereo : p.chi2_mono))
+  if (ea > (ka.right_x >= 0 ? p.chi2_stereo : p.chi2_mono) ||
+      eb > (kb.right_x >= 0 ? p.chi2_stereo : p.chi2_mono))
     return TriangulationResult::kReprojection;
 
   // A point seen at a coarser level from farther away: distance ratio and level ratio must agree.
@@ -80,7 +82,8 @@ TriangulationResult triangulatePair(const TriangulationView& a, const Triangulat
   const double ratio_dist = db / da;
   const double ratio_octave = static_cast<double>(s.scale[ka.octave]) / s.scale[kb.octave];
   const double slack = p.scale_ratio_slack * s.factor;
-  if (ratio_dist * slack < ratio_octave || ratio_dist > ratio_octave * slack) return TriangulationResult::kScale;
+  if (ratio_dist * slack < ratio_octave || ratio_dist > ratio_octave * slack)
+    return TriangulationResult::kScale;
   *p_w = X;
   return TriangulationResult::kOk;
 }

@@ -31,12 +31,13 @@ Pose3 toPose(const cv::Mat& rvec, const cv::Mat& tvec) {
 
 }  // namespace
 
-PnpRansacResult solvePnpRansac(const std::vector<Eigen::Vector3d>& p_w, const std::vector<Eigen::Vector2d>& uv,
-                               const std::vector<double>& inv_sigma2, const StereoCamera& cam,
-                               const PnpRansacParams& params, uint64_t seed) {
+PnpRansacResult solvePnpRansac(const std::vector<Eigen::Vector3d>& p_w,
+                               const std::vector<Eigen::Vector2d>& uv, const std::vector<double>& inv_sigma2,
+                               const StereoCamera& cam, const PnpRansacParams& params, uint64_t seed) {
   if (p_w.size() != uv.size() || (!inv_sigma2.empty() && inv_sigma2.size() != uv.size()))
     throw std::invalid_argument("solvePnpRansac: " + std::to_string(p_w.size()) + " points, " +
-                                std::to_string(uv.size()) + " pixels, " + std::to_string(inv_sigma2.size()) + " weights");
+                                std::to_string(uv.size()) + " pixels, " + std::to_string(inv_sigma2.size()) +
+                                " weights");
   PnpRansacResult best;
   const int n = static_cast<int>(p_w.size());
   if (n < 4 || n < params.min_inliers) return best;

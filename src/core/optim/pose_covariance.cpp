@@ -1,12 +1,13 @@
 #include "binloop/optim/pose_covariance.h"
 
 #include <Eigen/Cholesky>
-#include <cmath>
 #include <Eigen/Geometry>
+#include <cmath>
 
 namespace binloop {
 
-PoseCovariance poseCovariance(const StereoCamera& cam, const Pose3& T_w_c, const std::vector<PoseObservation>& inliers) {
+PoseCovariance poseCovariance(const StereoCamera& cam, const Pose3& T_w_c,
+                              const std::vector<PoseObservation>& inliers) {
   PoseCovariance out;
   const Eigen::Matrix3d R_cw = T_w_c.linear().transpose();
   const Eigen::Vector3d c = T_w_c.translation();
@@ -23,7 +24,7 @@ PoseCovariance poseCovariance(const StereoCamera& cam, const Pose3& T_w_c, const
     dp.rightCols<3>() = R_cw * skew(q);
     const double iz = 1 / p.z(), iz2 = iz * iz;
     const bool stereo = o.u_right >= 0;
-    Eigen::Matrix<double, 3, 3> dproj;  // (u, v, u_right) by p_c
+    Eigen::Matrix<double, 3, 3> dproj;               // (u, v, u_right) by p_c
     dproj << cam.fx * iz, 0, -cam.fx * p.x() * iz2,  //
         0, cam.fy * iz, -cam.fy * p.y() * iz2,       //
         cam.fx * iz, 0, (cam.bf() - cam.fx * p.x()) * iz2;
@@ -42,7 +43,8 @@ PoseCovariance poseCovariance(const StereoCamera& cam, const Pose3& T_w_c, const
   }
   if (out.observations < 3 || rows <= 6) return out;
   const Eigen::LDLT<Matrix6d> ldlt(H);
-  if (ldlt.info() != Eigen::Success || !ldlt.isPositive() || ldlt.vectorD().minCoeff() <= 1e-12 * ldlt.vectorD().maxCoeff())
+  if (ldlt.info() != Eigen::Success || !ldlt.isPositive() ||
+      ldlt.vectorD().minCoeff() <= 1e-12 * ldlt.vectorD().maxCoeff())
     return out;
   const double variance = chi2 / (rows - 6);
   out.sigma_px = std::sqrt(variance);

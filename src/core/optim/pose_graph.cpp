@@ -22,7 +22,8 @@ namespace {
 template <typename T>
 void nodePose(const T* xi, const Eigen::Matrix3d& R0, const Eigen::Vector3d& t0, Eigen::Matrix<T, 3, 3>* R,
               Eigen::Matrix<T, 3, 1>* t) {
-  const Eigen::Quaternion<T> q = Eigen::Quaternion<T>(T(1), xi[0] / T(2), xi[1] / T(2), xi[2] / T(2)).normalized();
+  const Eigen::Quaternion<T> q =
+      Eigen::Quaternion<T>(T(1), xi[0] / T(2), xi[1] / T(2), xi[2] / T(2)).normalized();
   const Eigen::Matrix<T, 3, 3> dR = q.toRotationMatrix();
   *R = dR * R0.cast<T>();
   *t = dR * t0.cast<T>() + Eigen::Matrix<T, 3, 1>(xi[3], xi[4], xi[5]);
@@ -45,7 +46,8 @@ struct RelativePoseCost {
     const Eigen::Matrix<T, 3, 1> te = Rm_t.cast<T>() * (tij - tm.cast<T>());
     // The rotation error as the axis times sin(angle) (the skew part of Re): the angle-axis vector to
     // within 1 % below 14 degrees, and loop corrections spread over a graph leave far less on any edge.
-    const T aa[3] = {(Re(2, 1) - Re(1, 2)) / T(2), (Re(0, 2) - Re(2, 0)) / T(2), (Re(1, 0) - Re(0, 1)) / T(2)};
+    const T aa[3] = {(Re(2, 1) - Re(1, 2)) / T(2), (Re(0, 2) - Re(2, 0)) / T(2),
+                     (Re(1, 0) - Re(0, 1)) / T(2)};
     for (int k = 0; k < 3; ++k) {
       r[k] = aa[k] * T(inv_rot);
       r[3 + k] = te[k] * T(inv_trans);
@@ -56,8 +58,8 @@ struct RelativePoseCost {
 
 }  // namespace
 
-PoseGraphResult optimizePoseGraph(const std::vector<PoseGraphNode>& nodes, const std::vector<PoseGraphEdge>& edges,
-                                  const PoseGraphParams& p) {
+PoseGraphResult optimizePoseGraph(const std::vector<PoseGraphNode>& nodes,
+                                  const std::vector<PoseGraphEdge>& edges, const PoseGraphParams& p) {
   bool any_fixed = false;
   for (const auto& n : nodes) any_fixed = any_fixed || n.fixed;
   if (!any_fixed) throw std::invalid_argument("pose graph: no fixed node");
@@ -68,8 +70,8 @@ PoseGraphResult optimizePoseGraph(const std::vector<PoseGraphNode>& nodes, const
   std::vector<RelativePoseCost*> costs;
   for (const PoseGraphEdge& e : edges) {
     if (e.i >= nodes.size() || e.j >= nodes.size() || e.i == e.j)
-      throw std::invalid_argument("pose graph: edge " + std::to_string(e.i) + "-" + std::to_string(e.j) + " of " +
-                                  std::to_string(nodes.size()) + " nodes");
+      throw std::invalid_argument("pose graph: edge " + std::to_string(e.i) + "-" + std::to_string(e.j) +
+                                  " of " + std::to_string(nodes.size()) + " nodes");
     auto* c = new RelativePoseCost;
     c->R0i = nodes[e.i].T_c_w.linear();
     c->t0i = nodes[e.i].T_c_w.translation();
@@ -81,11 +83,12 @@ PoseGraphResult optimizePoseGraph(const std::vector<PoseGraphNode>& nodes, const
     c->inv_trans = 1.0 / e.sigma_trans_m;
     costs.push_back(c);
     ceres::LossFunction* loss = e.robust ? new ceres::HuberLoss(p.huber_delta) : nullptr;
-    blocks.push_back(problem.AddResidualBlock(new ceres::AutoDiffCostFunction<RelativePoseCost, 6, 6, 6>(c), loss,
-                                              xi[e.i].data(), xi[e.j].data()));
+    blocks.push_back(problem.AddResidualBlock(new ceres::AutoDiffCostFunction<RelativePoseCost, 6, 6, 6>(c),
+                                              loss, xi[e.i].data(), xi[e.j].data()));
   }
   for (size_t n = 0; n < nodes.size(); ++n)
-    if (problem.HasParameterBlock(xi[n].data()) && nodes[n].fixed) problem.SetParameterBlockConstant(xi[n].data());
+    if (problem.HasParameterBlock(xi[n].data()) && nodes[n].fixed)
+      problem.SetParameterBlockConstant(xi[n].data());
 
   PoseGraphResult r;
   auto edgeChi2 = [&](size_t k) {
@@ -100,8 +103,8 @@ PoseGraphResult optimizePoseGraph(const std::vector<PoseGraphNode>& nodes, const
   so.linear_solver_type = ceres::SPARSE_NORMAL_CHOLESKY;
   so.max_num_iterations = p.max_iterations;
   so.num_threads = 1;
-  // Eigen's sparse Cholesky beat CHOLMOD on these graphs (a pose graph is small and very sparse: 250 keyframes
-  // 40 vs 53 ms of solving, 1400 keyframes 400 vs 520 ms; bench/closing_bench.cpp).
+  // Eigen's sparse Cholesky beat CHOLMOD on these graphs (a pose graph is small and very sparse: 250
+  // keyframes 40 vs 53 ms of solving, 1400 keyframes 400 vs 520 ms; bench/closing_bench.cpp).
   so.sparse_linear_algebra_library_type = ceres::EIGEN_SPARSE;
   so.function_tolerance = p.function_tolerance;
   so.initial_trust_region_radius = p.initial_trust_region;

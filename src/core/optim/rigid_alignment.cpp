@@ -10,7 +10,8 @@
 
 namespace binloop {
 
-std::optional<Pose3> hornAlignment(const std::vector<Eigen::Vector3d>& a, const std::vector<Eigen::Vector3d>& b) {
+std::optional<Pose3> hornAlignment(const std::vector<Eigen::Vector3d>& a,
+                                   const std::vector<Eigen::Vector3d>& b) {
   const size_t n = a.size();
   if (n < 3 || b.size() != n) return std::nullopt;
   Eigen::Vector3d ca = Eigen::Vector3d::Zero(), cb = Eigen::Vector3d::Zero();
@@ -26,8 +27,8 @@ std::optional<Pose3> hornAlignment(const std::vector<Eigen::Vector3d>& a, const 
   const double Sxx = M(0, 0), Sxy = M(0, 1), Sxz = M(0, 2), Syx = M(1, 0), Syy = M(1, 1), Syz = M(1, 2),
                Szx = M(2, 0), Szy = M(2, 1), Szz = M(2, 2);
   N << Sxx + Syy + Szz, Syz - Szy, Szx - Sxz, Sxy - Syx,  //
-      Syz - Szy, Sxx - Syy - Szz, Sxy + Syx, Szx + Sxz,    //
-      Szx - Sxz, Sxy + Syx, -Sxx + Syy - Szz, Syz + Szy,   //
+      Syz - Szy, Sxx - Syy - Szz, Sxy + Syx, Szx + Sxz,   //
+      Szx - Sxz, Sxy + Syx, -Sxx + Syy - Szz, Syz + Szy,  //
       Sxy - Syx, Szx + Sxz, Syz + Szy, -Sxx - Syy + Szz;
   const Eigen::SelfAdjointEigenSolver<Eigen::Matrix4d> es(N);
   const Eigen::Vector4d q = es.eigenvectors().col(3);  // eigenvalues ascending

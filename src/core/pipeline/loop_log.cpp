@@ -11,8 +11,10 @@ namespace binloop {
 namespace {
 
 constexpr const char* kHeader =
-    "keyframe,frame,model,shadow,status,candidates,consistency,accepted_candidate,closure,match_frame,matches,"
-    "inliers,correction_m,drift_bound_m,residual_ratio,detect_ms,verify_ms,optimize_ms,correction_ms,switch_ms,"
+    "keyframe,frame,model,shadow,status,candidates,consistency,accepted_candidate,closure,match_frame,"
+    "matches,"
+    "inliers,correction_m,drift_bound_m,residual_ratio,detect_ms,verify_ms,optimize_ms,correction_ms,switch_"
+    "ms,"
     "detail,query_to_match,gt_error_m,gt_error_deg";
 constexpr size_t kFields = 24;
 constexpr size_t kFieldsBefore = 21;  // loops.csv before query_to_match and the ground-truth errors
@@ -29,10 +31,14 @@ std::vector<std::string> fields(const std::string& line) {
   bool in = false;
   for (size_t i = 0; i < line.size(); ++i) {
     const char c = line[i];
-    if (in && c == '"' && i + 1 < line.size() && line[i + 1] == '"') f.back() += '"', ++i;
-    else if (c == '"') in = !in;
-    else if (c == ',' && !in) f.emplace_back();
-    else f.back() += c;
+    if (in && c == '"' && i + 1 < line.size() && line[i + 1] == '"')
+      f.back() += '"', ++i;
+    else if (c == '"')
+      in = !in;
+    else if (c == ',' && !in)
+      f.emplace_back();
+    else
+      f.back() += c;
   }
   return f;
 }
@@ -42,8 +48,8 @@ std::string poseText(const Pose3& T) {
   const Eigen::Quaterniond q(T.linear());
   std::ostringstream o;
   o.precision(9);
-  o << T.translation().x() << " " << T.translation().y() << " " << T.translation().z() << " " << q.w() << " " << q.x()
-    << " " << q.y() << " " << q.z();
+  o << T.translation().x() << " " << T.translation().y() << " " << T.translation().z() << " " << q.w() << " "
+    << q.x() << " " << q.y() << " " << q.z();
   return o.str();
 }
 
@@ -60,26 +66,31 @@ Pose3 parsePose(const std::string& text) {
   return T;
 }
 
-void row(std::ostream& o, const msg::LoopCandidates* q, const msg::LoopClosure* c, double correction_ms, double switch_ms,
-         const std::vector<Pose3>* gt) {
+void row(std::ostream& o, const msg::LoopCandidates* q, const msg::LoopClosure* c, double correction_ms,
+         double switch_ms, const std::vector<Pose3>* gt) {
   if (q) {
     std::string cands;
     for (size_t i = 0; i < q->candidates.size() && i < 5; ++i)
-      cands += (i ? " " : "") + std::to_string(counterOf(q->candidates[i].id)) + ":" + std::to_string(q->candidates[i].score);
-    o << counterOf(q->query) << "," << q->query_frame << "," << q->model << "," << q->shadow << "," << q->status << ","
-      << quoted(cands) << "," << q->consistency << ","
+      cands += (i ? " " : "") + std::to_string(counterOf(q->candidates[i].id)) + ":" +
+               std::to_string(q->candidates[i].score);
+    o << counterOf(q->query) << "," << q->query_frame << "," << q->model << "," << q->shadow << ","
+      << q->status << "," << quoted(cands) << "," << q->consistency << ","
       << (q->accepted == kNoId ? std::string() : std::to_string(counterOf(q->accepted))) << ",";
   } else {
     o << counterOf(c->query) << "," << c->query_frame << "," << c->model << ",0,,\"\",,,";
   }
   if (c) {
-    o << msg::loopStatusName(c->status) << "," << c->match_frame << "," << c->matches << "," << c->inliers << "," << c->correction_m << ","
-      << c->drift_bound_m << "," << c->residual_ratio << ",";
+    o << msg::loopStatusName(c->status) << "," << c->match_frame << "," << c->matches << "," << c->inliers
+      << "," << c->correction_m << "," << c->drift_bound_m << "," << c->residual_ratio << ",";
   } else {
     o << ",,,,,,,";
   }
-  o << (q ? q->total_ms : 0) << "," << (c ? c->verify_ms : 0) << "," << (c ? c->optimize_ms : 0) << "," << correction_ms
-    << "," << switch_ms << "," << quoted(c ? c->detail : q ? q->detail : "") << ",";
+  o << (q ? q->total_ms : 0) << "," << (c ? c->verify_ms : 0) << "," << (c ? c->optimize_ms : 0) << ","
+    << correction_ms << "," << switch_ms << ","
+    << quoted(c   ? c->detail
+              : q ? q->detail
+                  : "")
+    << ",";
   // A verified pair's relative pose, and its error against the ground truth when the frames have one.
   const bool verified = c && c->inliers > 0;
   o << (verified ? poseText(c->T_query_match) : std::string()) << ",";

@@ -17,9 +17,11 @@ LoopDetector::ModelFactory modelFileFactory(const std::string& dir, const OrbSla
     ro.model_file = (std::filesystem::path(dir) / (name + ".bin")).string();
     // The one model the package cannot ship: say how to make it rather than only that it is missing.
     if (name == "hbow" && !std::filesystem::exists(ro.model_file))
-      throw PlaceError(ro.model_file + ": not found: the k=10, L=6 hbow vocabulary (26 MB) is not shipped; "
-                       "vocab/make_vocab.sh hbow makes it (about 6 minutes, from KITTI route 08's poses), or use a "
-                       "shipped model (hmvlad, vlad, vladpq, fabmap)");
+      throw PlaceError(
+          ro.model_file +
+          ": not found: the k=10, L=6 hbow vocabulary (26 MB) is not shipped; "
+          "vocab/make_vocab.sh hbow makes it (about 6 minutes, from KITTI route 08's poses), or use a "
+          "shipped model (hmvlad, vlad, vladpq, fabmap)");
     return makePlaceRecognizer(name, ro);
   };
 }
@@ -38,15 +40,17 @@ LoopDetector::ModelIdentity modelFileIdentities(const std::string& dir) {
   };
 }
 
-std::vector<std::string> shadowModelNames(const std::string& spec, const std::string& active, const std::string& dir,
-                                          std::vector<std::string>* skipped) {
+std::vector<std::string> shadowModelNames(const std::string& spec, const std::string& active,
+                                          const std::string& dir, std::vector<std::string>* skipped) {
   const std::vector<std::string>& known = placeModelNames();
   std::vector<std::string> out;
   if (spec == "all") {
     for (const std::string& n : known) {
       if (n == active) continue;
-      if (std::filesystem::exists(std::filesystem::path(dir) / (n + ".bin"))) out.push_back(n);
-      else if (skipped) skipped->push_back(n);
+      if (std::filesystem::exists(std::filesystem::path(dir) / (n + ".bin")))
+        out.push_back(n);
+      else if (skipped)
+        skipped->push_back(n);
     }
     return out;
   }
@@ -60,8 +64,8 @@ std::vector<std::string> shadowModelNames(const std::string& spec, const std::st
   return out;
 }
 
-std::shared_ptr<const VocabularyTree> loadRelocalisationVocabulary(const std::string& path, const OrbSlamParams& orb,
-                                                                   bool force) {
+std::shared_ptr<const VocabularyTree> loadRelocalisationVocabulary(const std::string& path,
+                                                                   const OrbSlamParams& orb, bool force) {
   ExtractorCheck check;
   check.expected = extractorSettings(orb, 0);
   check.force = force;

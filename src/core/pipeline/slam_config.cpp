@@ -131,13 +131,19 @@ std::map<std::string, std::map<std::string, Setting>> settingsOf(SlamConfig& c) 
 
 double valueOf(const Setting& s) {
   switch (s.kind) {
-    case Setting::kInt: return *static_cast<int*>(s.ptr);
-    case Setting::kFloat: return *static_cast<float*>(s.ptr);
-    case Setting::kDouble: return *static_cast<double*>(s.ptr);
-    case Setting::kBool: return *static_cast<bool*>(s.ptr) ? 1 : 0;
+    case Setting::kInt:
+      return *static_cast<int*>(s.ptr);
+    case Setting::kFloat:
+      return *static_cast<float*>(s.ptr);
+    case Setting::kDouble:
+      return *static_cast<double*>(s.ptr);
+    case Setting::kBool:
+      return *static_cast<bool*>(s.ptr) ? 1 : 0;
     case Setting::kSubPixelFit:
-      return *static_cast<StereoMatchParams::SubPixelFit*>(s.ptr) == StereoMatchParams::SubPixelFit::kEquiangular;
-    case Setting::kPattern: return *static_cast<BriefPatternKind*>(s.ptr) == BriefPatternKind::kOrbLearned;
+      return *static_cast<StereoMatchParams::SubPixelFit*>(s.ptr) ==
+             StereoMatchParams::SubPixelFit::kEquiangular;
+    case Setting::kPattern:
+      return *static_cast<BriefPatternKind*>(s.ptr) == BriefPatternKind::kOrbLearned;
   }
   return 0;
 }
@@ -156,16 +162,57 @@ void checkIntegerLiterals(const std::string& path) {
     while (!key.empty() && key.back() == ' ') key.pop_back();
     std::string value = code.substr(colon + 1);
     value.erase(0, value.find_first_not_of(" \t"));
-    while (!value.empty() && (value.back() == ' ' || value.back() == '\t' || value.back() == '\r')) value.pop_back();
+    while (!value.empty() && (value.back() == ' ' || value.back() == '\t' || value.back() == '\r'))
+      value.pop_back();
     if (first == 0) {
       section = key;
       continue;
     }
     size_t i = (!value.empty() && (value[0] == '-' || value[0] == '+')) ? 1 : 0;
     if (i == value.size() || value.find_first_not_of("0123456789", i) != std::string::npos) continue;
-    if (std::stold(value) > std::numeric_limits<int>::max() || std::stold(value) < std::numeric_limits<int>::min())
+    if (std::stold(value) > std::numeric_limits<int>::max() ||
+        std::stold(value) < std::numeric_limits<int>::min())
       throw ConfigError(path + ": " + section + "." + key + " = " + value + " is out of range (at most " +
                         std::to_string(std::numeric_limits<int>::max()) + ")");
+  }
+}
+
+// One setting from its YAML value, checked against its kind and range; `where` names it in the messages.
+void setFromYaml(const Setting& s, const cv::FileNode& v, const std::string& where) {
+  if (!v.isInt() && !v.isReal()) throw ConfigError(where + " must be a number");
+  const double x = v.real();
+  if (!std::isfinite(x) || x < s.min)
+    throw ConfigError(where + " = " + std::to_string(x) + " is out of range (at least " +
+                      std::to_string(s.min) + ")");
+  const bool binary =
+      s.kind == Setting::kBool || s.kind == Setting::kSubPixelFit || s.kind == Setting::kPattern;
+  if ((s.kind == Setting::kInt || binary) && x != std::floor(x))
+    throw ConfigError(where + " must be a whole number");
+  if (s.kind == Setting::kInt && x > std::numeric_limits<int>::max())
+    throw ConfigError(where + " = " + std::to_string(x) + " is out of range (at most " +
+                      std::to_string(std::numeric_limits<int>::max()) + ")");
+  if (binary && x > 1) throw ConfigError(where + " must be 0 or 1");
+  switch (s.kind) {
+    case Setting::kInt:
+      *static_cast<int*>(s.ptr) = static_cast<int>(x);
+      break;
+    case Setting::kFloat:
+      *static_cast<float*>(s.ptr) = static_cast<float>(x);
+      break;
+    case Setting::kDouble:
+      *static_cast<double*>(s.ptr) = x;
+      break;
+    case Setting::kBool:
+      *static_cast<bool*>(s.ptr) = x != 0;
+      break;
+    case Setting::kSubPixelFit:
+      *static_cast<StereoMatchParams::SubPixelFit*>(s.ptr) =
+          x != 0 ? StereoMatchParams::SubPixelFit::kEquiangular : StereoMatchParams::SubPixelFit::kParabola;
+      break;
+    case Setting::kPattern:
+      *static_cast<BriefPatternKind*>(s.ptr) =
+          x != 0 ? BriefPatternKind::kOrbLearned : BriefPatternKind::kGaussian;
+      break;
   }
 }
 
@@ -184,7 +231,10 @@ SlamConfig loadSlamConfig(const std::string& path) {
   SlamConfig c;
   auto settings = settingsOf(c);
   const cv::FileNode root = fs.root();
-  if (!root.isMap()) throw ConfigError(path + ": expected sections (orb, stereo, tracking, recovery, mapping, loop_detection, loop_closing)");
+  if (!root.isMap())
+    throw ConfigError(
+        path +
+        ": expected sections (orb, stereo, tracking, recovery, mapping, loop_detection, loop_closing)");
   for (const std::string& section : root.keys()) {
     auto sec = settings.find(section);
     if (sec == settings.end()) {
@@ -199,36 +249,10 @@ SlamConfig loadSlamConfig(const std::string& path) {
       if (it == sec->second.end()) {
         std::string known;
         for (const auto& [name, _] : sec->second) known += (known.empty() ? "" : ", ") + name;
-        throw ConfigError(path + ": unknown key '" + section + "." + key + "' (known in " + section + ": " + known + ")");
+        throw ConfigError(path + ": unknown key '" + section + "." + key + "' (known in " + section + ": " +
+                          known + ")");
       }
-      const cv::FileNode v = node[key];
-      if (!v.isInt() && !v.isReal())
-        throw ConfigError(path + ": " + section + "." + key + " must be a number");
-      const double x = v.real();
-      const Setting& s = it->second;
-      if (!std::isfinite(x) || x < s.min)
-        throw ConfigError(path + ": " + section + "." + key + " = " + std::to_string(x) + " is out of range (at least " +
-                          std::to_string(s.min) + ")");
-      const bool binary = s.kind == Setting::kBool || s.kind == Setting::kSubPixelFit || s.kind == Setting::kPattern;
-      if ((s.kind == Setting::kInt || binary) && x != std::floor(x))
-        throw ConfigError(path + ": " + section + "." + key + " must be a whole number");
-      if (s.kind == Setting::kInt && x > std::numeric_limits<int>::max())
-        throw ConfigError(path + ": " + section + "." + key + " = " + std::to_string(x) + " is out of range (at most " +
-                          std::to_string(std::numeric_limits<int>::max()) + ")");
-      if (binary && x > 1) throw ConfigError(path + ": " + section + "." + key + " must be 0 or 1");
-      switch (s.kind) {
-        case Setting::kInt: *static_cast<int*>(s.ptr) = static_cast<int>(x); break;
-        case Setting::kFloat: *static_cast<float*>(s.ptr) = static_cast<float>(x); break;
-        case Setting::kDouble: *static_cast<double*>(s.ptr) = x; break;
-        case Setting::kBool: *static_cast<bool*>(s.ptr) = x != 0; break;
-        case Setting::kSubPixelFit:
-          *static_cast<StereoMatchParams::SubPixelFit*>(s.ptr) =
-              x != 0 ? StereoMatchParams::SubPixelFit::kEquiangular : StereoMatchParams::SubPixelFit::kParabola;
-          break;
-        case Setting::kPattern:
-          *static_cast<BriefPatternKind*>(s.ptr) = x != 0 ? BriefPatternKind::kOrbLearned : BriefPatternKind::kGaussian;
-          break;
-      }
+      setFromYaml(it->second, node[key], path + ": " + section + "." + key);
     }
   }
   if (c.tracker.orb.min_fast > c.tracker.orb.ini_fast)

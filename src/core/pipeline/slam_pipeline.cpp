@@ -69,10 +69,13 @@ uint64_t SlamPipeline::saveMap(const std::string& directory) const {
 uint64_t SlamPipeline::loadMap(const std::string& directory) {
   requireDirectory(directory);
   if (detector_ && !std::filesystem::exists(stageStatePath(directory, "loop_detector")))
-    throw dataError(directory, 0, "the map has no loop_detector.state (saved without loop closing): load it with "
-                                  "loop closing off (--detector none)");
+    throw dataError(directory, 0,
+                    "the map has no loop_detector.state (saved without loop closing): load it with "
+                    "loop closing off (--detector none)");
   const uint64_t map_id = checkMapFolder(directory, stageNames());
-  forEachStage(*this, [&](const char* name, auto& stage) { loadStateFile(stage, stageStatePath(directory, name), name); });
+  forEachStage(*this, [&](const char* name, auto& stage) {
+    loadStateFile(stage, stageStatePath(directory, name), name);
+  });
   return map_id;
 }
 
@@ -87,8 +90,10 @@ void SlamPipeline::addExternalLoop(SlamKeyframeId query, SlamKeyframeId match, c
   if (!closer_) throw PlaceError("loop closing is off: no external loop can be added");
   LoopInput in;
   in.external = ExternalLoop{query, match, source};
-  if (mode_ == PipelineMode::kLockStep) searchLoops(in);
-  else loop_inbox_.push(in);
+  if (mode_ == PipelineMode::kLockStep)
+    searchLoops(in);
+  else
+    loop_inbox_.push(in);
 }
 
 void SlamPipeline::sendCorrection(const msg::CorrectionPtr& c) {
@@ -106,8 +111,10 @@ void SlamPipeline::sendCorrection(const msg::CorrectionPtr& c) {
 void SlamPipeline::sendMapUpdate(const msg::LocalMapUpdatePtr& u, bool loop_thread_running) {
   updates_.push(u);
   if (!closer_) return;
-  if (mode_ == PipelineMode::kThreaded && loop_thread_running) loop_inbox_.push({nullptr, u, std::nullopt});
-  else closer_->apply(*u);
+  if (mode_ == PipelineMode::kThreaded && loop_thread_running)
+    loop_inbox_.push({nullptr, u, std::nullopt});
+  else
+    closer_->apply(*u);
 }
 
 void SlamPipeline::mergeGlobalBa(bool wait, bool loop_thread_running) {
@@ -130,13 +137,16 @@ void SlamPipeline::map(const MappingInput& in) {
   updates_.push(out.update);
   --pending_;
   if (!detector_) return;
-  if (mode_ == PipelineMode::kLockStep) searchLoops({out.refined, out.update, std::nullopt});
-  else loop_inbox_.push({out.refined, out.update, std::nullopt});
+  if (mode_ == PipelineMode::kLockStep)
+    searchLoops({out.refined, out.update, std::nullopt});
+  else
+    loop_inbox_.push({out.refined, out.update, std::nullopt});
 }
 
 void SlamPipeline::searchLoops(const LoopInput& in) {
   if (in.external) {
-    LoopCloser::Output c = closer_->addExternalLoop(in.external->query, in.external->match, in.external->source);
+    LoopCloser::Output c =
+        closer_->addExternalLoop(in.external->query, in.external->match, in.external->source);
     LoopLogEntry entry;
     entry.closures = c.closures;
     loop_log_.push_back(entry);
@@ -161,7 +171,8 @@ void SlamPipeline::searchLoops(const LoopInput& in) {
     try {
       detector_->switchModel(to);
     } catch (const PlaceError& e) {  // checked when asked for; a file that went bad since is reported
-      entry.problem = std::string("switch to ") + to + " failed, " + detector_->activeModel() + " stays: " + e.what();
+      entry.problem =
+          std::string("switch to ") + to + " failed, " + detector_->activeModel() + " stays: " + e.what();
     }
   }
   LoopDetector::Output d = detector_->process(*in.refined);

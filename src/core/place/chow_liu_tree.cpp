@@ -20,9 +20,10 @@ double ChowLiuTree::mutualInformation(double n, double na, double nb, double nab
   return mi;
 }
 
-ChowLiuTree ChowLiuTree::learn(const std::vector<std::vector<uint32_t>>& images, uint32_t words, double pseudo,
-                               const ProgressFn& progress) {
-  if (images.size() < 2) throw PlaceError("Chow-Liu tree needs at least 2 training images, got " + std::to_string(images.size()));
+ChowLiuTree ChowLiuTree::learn(const std::vector<std::vector<uint32_t>>& images, uint32_t words,
+                               double pseudo, const ProgressFn& progress) {
+  if (images.size() < 2)
+    throw PlaceError("Chow-Liu tree needs at least 2 training images, got " + std::to_string(images.size()));
   if (words < 2) throw PlaceError("Chow-Liu tree needs at least 2 words");
   const double n = static_cast<double>(images.size()) + 4 * pseudo;
   std::vector<double> count(words, 0);
@@ -32,7 +33,9 @@ ChowLiuTree ChowLiuTree::learn(const std::vector<std::vector<uint32_t>>& images,
   for (size_t im = 0; im < images.size(); ++im) {
     const auto& w = images[im];
     for (size_t i = 0; i < w.size(); ++i) {
-      if (w[i] >= words) throw PlaceError("training image names word " + std::to_string(w[i]) + " of " + std::to_string(words));
+      if (w[i] >= words)
+        throw PlaceError("training image names word " + std::to_string(w[i]) + " of " +
+                         std::to_string(words));
       count[w[i]]++;
       for (size_t j = i + 1; j < w.size(); ++j) pair[at(w[i], w[j])]++;
     }
@@ -49,7 +52,8 @@ ChowLiuTree ChowLiuTree::learn(const std::vector<std::vector<uint32_t>>& images,
   std::vector<char> in_tree(words, 0);
   t.root_ = 0;
   in_tree[0] = 1;
-  for (uint32_t v = 1; v < words; ++v) best[v] = mutualInformation(n, na(0), na(v), nab(0, v)), t.parent_[v] = 0;
+  for (uint32_t v = 1; v < words; ++v)
+    best[v] = mutualInformation(n, na(0), na(v), nab(0, v)), t.parent_[v] = 0;
   for (uint32_t added = 1; added < words; ++added) {
     uint32_t u = 0;
     double bu = -std::numeric_limits<double>::infinity();
@@ -61,7 +65,8 @@ ChowLiuTree ChowLiuTree::learn(const std::vector<std::vector<uint32_t>>& images,
       const double mi = mutualInformation(n, na(u), na(v), nab(u, v));
       if (mi > best[v]) best[v] = mi, t.parent_[v] = u;
     }
-    if (progress && added % 256 == 0) progress(images.size() + added * images.size() / words, images.size() * 2);
+    if (progress && added % 256 == 0)
+      progress(images.size() + added * images.size() / words, images.size() * 2);
   }
   t.p1_.resize(words);
   t.p1_given0_.resize(words);
@@ -97,7 +102,8 @@ ChowLiuTree ChowLiuTree::read(ModelReader& r) {
   t.p1_given0_ = r.section<double>("CLC0");
   t.p1_given1_ = r.section<double>("CLC1");
   const size_t n = t.parent_.size();
-  bool ok = root.size() == 1 && root[0] < n && t.p1_.size() == n && t.p1_given0_.size() == n && t.p1_given1_.size() == n;
+  bool ok = root.size() == 1 && root[0] < n && t.p1_.size() == n && t.p1_given0_.size() == n &&
+            t.p1_given1_.size() == n;
   for (size_t i = 0; ok && i < n; ++i) ok = t.parent_[i] < n;
   if (!ok) throw PlaceError(r.path() + ": Chow-Liu tree sections are inconsistent");
   t.root_ = root[0];

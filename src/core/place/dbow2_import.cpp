@@ -19,7 +19,8 @@ Weighting weightingFromDbow2(int w, const std::string& path) {
 
 void checkScoring(int s, const std::string& path) {
   // binloop scores hbow with DBoW2's L1 score (scoring type 0), as ORB-SLAM2 does.
-  if (s != 0) throw PlaceError(path + ": DBoW2 scoring type " + std::to_string(s) + " is not supported (only L1, 0)");
+  if (s != 0)
+    throw PlaceError(path + ": DBoW2 scoring type " + std::to_string(s) + " is not supported (only L1, 0)");
 }
 
 // Parses 32 decimal byte values; `rest` (optional) receives where parsing stopped.
@@ -63,7 +64,8 @@ VocabularyTree importDbow2Yaml(const std::string& path) {
   for (const auto& n : nodes) {
     const int id = static_cast<int>(n["nodeId"]);
     if (id <= 0 || id >= static_cast<int>(in.size()))
-      throw PlaceError(path + ": node id " + std::to_string(id) + " out of range 1.." + std::to_string(in.size() - 1));
+      throw PlaceError(path + ": node id " + std::to_string(id) + " out of range 1.." +
+                       std::to_string(in.size() - 1));
     in[id].parent = static_cast<uint32_t>(static_cast<int>(n["parentId"]));
     in[id].weight = static_cast<float>(static_cast<double>(n["weight"]));
     const std::string desc = static_cast<std::string>(n["descriptor"]);
@@ -104,7 +106,8 @@ VocabularyTree importDbow2Text(const std::string& path) {
     const long leaf = std::strtol(s, &end, 10);
     if (end == s || (leaf != 0 && leaf != 1)) throw PlaceError(where + "is_leaf must be 0 or 1");
     s = end;
-    VocabularyTree::InputNode n{static_cast<uint32_t>(parent), parseDescriptorBytes(s, where + "node", &s), leaf == 1, 0.f};
+    VocabularyTree::InputNode n{static_cast<uint32_t>(parent), parseDescriptorBytes(s, where + "node", &s),
+                                leaf == 1, 0.f};
     const double weight = std::strtod(s, &end);
     if (end == s) throw PlaceError(where + "missing the node weight after the 32 descriptor bytes");
     n.weight = static_cast<float>(weight);

@@ -38,9 +38,12 @@ __attribute__((target("avx512f,avx512vpopcntdq"))) DescriptorBlock::Nearest near
   for (size_t k = 0; k < n; k += 8) {
     const __mmask8 in = n - k >= 8 ? 0xff : static_cast<__mmask8>((1u << (n - k)) - 1);
     __m512i d = _mm512_popcnt_epi64(_mm512_xor_si512(_mm512_maskz_loadu_epi64(in, words[0].data() + k), q0));
-    d = _mm512_add_epi64(d, _mm512_popcnt_epi64(_mm512_xor_si512(_mm512_maskz_loadu_epi64(in, words[1].data() + k), q1)));
-    d = _mm512_add_epi64(d, _mm512_popcnt_epi64(_mm512_xor_si512(_mm512_maskz_loadu_epi64(in, words[2].data() + k), q2)));
-    d = _mm512_add_epi64(d, _mm512_popcnt_epi64(_mm512_xor_si512(_mm512_maskz_loadu_epi64(in, words[3].data() + k), q3)));
+    d = _mm512_add_epi64(
+        d, _mm512_popcnt_epi64(_mm512_xor_si512(_mm512_maskz_loadu_epi64(in, words[1].data() + k), q1)));
+    d = _mm512_add_epi64(
+        d, _mm512_popcnt_epi64(_mm512_xor_si512(_mm512_maskz_loadu_epi64(in, words[2].data() + k), q2)));
+    d = _mm512_add_epi64(
+        d, _mm512_popcnt_epi64(_mm512_xor_si512(_mm512_maskz_loadu_epi64(in, words[3].data() + k), q3)));
     const __m512i v = _mm512_mask_mov_epi64(none, in, _mm512_or_si512(_mm512_slli_epi64(d, 32), index));
     m2 = _mm512_min_epu64(m2, _mm512_max_epu64(m1, v));
     m1 = _mm512_min_epu64(m1, v);
@@ -51,8 +54,10 @@ __attribute__((target("avx512f,avx512vpopcntdq"))) DescriptorBlock::Nearest near
   _mm512_store_si512(lanes + 8, m2);
   uint64_t first = std::numeric_limits<uint64_t>::max(), second = first;
   for (uint64_t v : lanes) {
-    if (v < first) second = first, first = v;
-    else if (v < second) second = v;
+    if (v < first)
+      second = first, first = v;
+    else if (v < second)
+      second = v;
   }
   return unpack(first, second);
 }
@@ -86,8 +91,10 @@ DescriptorBlock::Nearest DescriptorBlock::nearestPortable(const Desc256& q) cons
         __builtin_popcountll(q.w[2] ^ words_[2][k]) + __builtin_popcountll(q.w[3] ^ words_[3][k]));
     const uint64_t v = pack(d, k);
     if (v < second) {
-      if (v < first) second = first, first = v;
-      else second = v;
+      if (v < first)
+        second = first, first = v;
+      else
+        second = v;
     }
   }
   return unpack(first, second);

@@ -34,7 +34,8 @@ FabmapModel FabmapModel::load(const std::string& path) {
   const auto offsets = r.section<uint64_t>("FSMO");
   const auto ids = r.section<uint32_t>("FSMW");
   for (size_t i = 0; i + 1 < offsets.size(); ++i) {
-    if (offsets[i] > offsets[i + 1] || offsets[i + 1] > ids.size()) throw PlaceError(path + ": FAB-MAP samples malformed");
+    if (offsets[i] > offsets[i + 1] || offsets[i + 1] > ids.size())
+      throw PlaceError(path + ": FAB-MAP samples malformed");
     m.samples.emplace_back(ids.begin() + offsets[i], ids.begin() + offsets[i + 1]);
   }
   r.expectEnd();
@@ -45,8 +46,8 @@ FabmapModel FabmapModel::load(const std::string& path) {
 }
 
 void FabmapModel::write(ModelWriter& w) const {
-  w.section("FPAR", std::vector<double>{params.p_z_given_e, params.p_z_given_not_e, params.p_new, params.sigma,
-                                        params.sampled_evidence ? 1.0 : 0.0, params.l2_offset});
+  w.section("FPAR", std::vector<double>{params.p_z_given_e, params.p_z_given_not_e, params.p_new,
+                                        params.sigma, params.sampled_evidence ? 1.0 : 0.0, params.l2_offset});
   w.section("FVOC", vocabulary->words());
   tree->write(w);
   std::vector<uint64_t> offsets{0};
@@ -122,7 +123,8 @@ double FabmapRecognizer::logLikelihood(KeyframeId query, KeyframeId k) const {
   return placeLogLik(tables(words_[slotOf(query)]), words_[slotOf(k)]);
 }
 
-double FabmapRecognizer::logLikelihoodDirect(const std::vector<uint32_t>& query, const std::vector<uint32_t>& place) const {
+double FabmapRecognizer::logLikelihoodDirect(const std::vector<uint32_t>& query,
+                                             const std::vector<uint32_t>& place) const {
   const uint32_t n = m_.tree->words();
   std::vector<char> z(n, 0), l(n, 0);
   for (uint32_t w : query) z[w] = 1;
@@ -171,7 +173,8 @@ QueryResult FabmapRecognizer::querySignature(const SlotScope& scope) const {
   // posterior (it was never in the location prior), and ranking one anyway brought false loops to the top.
   if (pre.empty()) {
     r.status = QueryStatus::kNoPreCandidates;
-    r.detail = "no keyframe within L2 " + std::to_string(min_l2) + " + " + std::to_string(m_.params.l2_offset);
+    r.detail =
+        "no keyframe within L2 " + std::to_string(min_l2) + " + " + std::to_string(m_.params.l2_offset);
     return r;
   }
 
@@ -212,8 +215,9 @@ QueryResult FabmapRecognizer::querySignature(const SlotScope& scope) const {
   if (scope.max_ranked) keepRanked(r, std::move(all), scope.max_ranked);
   r.timings.push_back({"posterior", msSince(t)});
   std::ostringstream detail;
-  detail << pre.size() << " within L2 " << min_l2 << "+" << m_.params.l2_offset << "; best reference posterior " << bar
-         << ", new place " << post[places] << "; " << r.candidates.size() << " beat it";
+  detail << pre.size() << " within L2 " << min_l2 << "+" << m_.params.l2_offset
+         << "; best reference posterior " << bar << ", new place " << post[places] << "; "
+         << r.candidates.size() << " beat it";
   r.detail = detail.str();
   r.status = r.candidates.empty() ? QueryStatus::kBelowReference : QueryStatus::kFound;
   return r;

@@ -18,7 +18,8 @@ uint32_t nearestFloatCentre(const float* x, const float* centres, int n, int dim
   return best;
 }
 
-FloatKMeansResult floatKMeans(const std::vector<float>& data, int dims, int k, uint64_t seed, int max_iterations) {
+FloatKMeansResult floatKMeans(const std::vector<float>& data, int dims, int k, uint64_t seed,
+                              int max_iterations) {
   FloatKMeansResult r;
   const size_t n = data.size() / dims;
   if (n == 0 || k <= 0) return r;
@@ -43,7 +44,8 @@ FloatKMeansResult floatKMeans(const std::vector<float>& data, int dims, int k, u
     while (d2[pick] == 0) pick = (pick + 1) % n;
     c.insert(c.end(), row(pick), row(pick) + dims);
     ++have;
-    for (size_t i = 0; i < n; ++i) d2[i] = std::min<double>(d2[i], squaredDistance(row(i), &c[(have - 1) * dims], dims));
+    for (size_t i = 0; i < n; ++i)
+      d2[i] = std::min<double>(d2[i], squaredDistance(row(i), &c[(have - 1) * dims], dims));
   }
   std::vector<uint32_t> assign(n, UINT32_MAX);
   std::vector<double> sum(static_cast<size_t>(have) * dims);

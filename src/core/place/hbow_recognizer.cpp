@@ -70,7 +70,8 @@ QueryResult HbowRecognizer::querySignature(const SlotScope& scope) const {
   const size_t refs = scope.reference.size();
   if (refs == 0) {
     r.status = QueryStatus::kNoReference;
-    r.detail = "none of the " + std::to_string(scope.reference_named) + " reference keyframes is in the database";
+    r.detail =
+        "none of the " + std::to_string(scope.reference_named) + " reference keyframes is in the database";
     return r;
   }
   const double reference_score = min_score;
@@ -87,7 +88,8 @@ QueryResult HbowRecognizer::querySignature(const SlotScope& scope) const {
   if (scope.max_ranked > 0) {
     std::vector<Candidate> all;
     for (Slot k : touched)
-      if (!scope.excluded[k]) all.push_back({idAt(k), score[k], scoreConfidence(score[k], min_score, ranking().score_floor)});
+      if (!scope.excluded[k])
+        all.push_back({idAt(k), score[k], scoreConfidence(score[k], min_score, ranking().score_floor)});
     keepRanked(r, std::move(all), scope.max_ranked);
   }
   if (sharing == 0) {
@@ -112,8 +114,8 @@ QueryResult HbowRecognizer::querySignature(const SlotScope& scope) const {
   std::ostringstream detail;
   detail << "bar " << min_score;
   if (reference_score < min_score) detail << " (floor; the references scored " << reference_score << ")";
-  detail << " from " << refs << " reference keyframes; " << sharing
-         << " share words (max " << max_common << "); " << scored.size() << " reach the bar";
+  detail << " from " << refs << " reference keyframes; " << sharing << " share words (max " << max_common
+         << "); " << scored.size() << " reach the bar";
   r.detail = detail.str();
   if (scored.empty()) {
     r.status = QueryStatus::kBelowReference;
@@ -138,14 +140,16 @@ QueryResult HbowRecognizer::querySignature(const SlotScope& scope) const {
     best_acc = std::max(best_acc, g.acc);
     groups.push_back(g);
   }
-  std::stable_sort(groups.begin(), groups.end(), [](const Group& a, const Group& b) { return a.acc > b.acc; });
+  std::stable_sort(groups.begin(), groups.end(),
+                   [](const Group& a, const Group& b) { return a.acc > b.acc; });
   const double retain = 0.75 * best_acc;
   std::vector<Slot> seen;
   for (const Group& g : groups) {
     if (g.acc < retain) break;
     if (std::find(seen.begin(), seen.end(), g.best_slot) != seen.end()) continue;
     seen.push_back(g.best_slot);
-    r.candidates.push_back({idAt(g.best_slot), g.acc, scoreConfidence(g.best, min_score, ranking().score_floor)});
+    r.candidates.push_back(
+        {idAt(g.best_slot), g.acc, scoreConfidence(g.best, min_score, ranking().score_floor)});
   }
   r.timings.push_back({"group", msSince(t)});
   r.status = QueryStatus::kFound;

@@ -77,11 +77,13 @@ QueryResult HmvladRecognizer::querySignature(const SlotScope& scope) const {
   }
   r.timings.push_back({"long_verify", msSince(t)});
   std::ostringstream detail;
-  detail << "bars " << bar_short << "/" << bar_long << " bits (short/long) from " << refs << " reference keyframes; "
-         << pre.size() << " pass the short signature, " << r.candidates.size() << " the long";
+  detail << "bars " << bar_short << "/" << bar_long << " bits (short/long) from " << refs
+         << " reference keyframes; " << pre.size() << " pass the short signature, " << r.candidates.size()
+         << " the long";
   r.detail = detail.str();
-  r.status = pre.empty() ? QueryStatus::kNoPreCandidates
-             : r.candidates.empty() ? QueryStatus::kBelowReference : QueryStatus::kFound;
+  r.status = pre.empty()            ? QueryStatus::kNoPreCandidates
+             : r.candidates.empty() ? QueryStatus::kBelowReference
+                                    : QueryStatus::kFound;
   return r;
 }
 

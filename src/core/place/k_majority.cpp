@@ -27,7 +27,8 @@ Desc256 bitwiseMajority(const Descriptors& data, const uint32_t* idx, size_t n) 
 
 namespace {
 
-std::vector<Desc256> seedPlusPlus(const Descriptors& data, const std::vector<uint32_t>& idx, int k, HashRng& rng) {
+std::vector<Desc256> seedPlusPlus(const Descriptors& data, const std::vector<uint32_t>& idx, int k,
+                                  HashRng& rng) {
   std::vector<Desc256> centres;
   centres.push_back(data[idx[rng.below(static_cast<int>(idx.size()))]]);
   std::vector<double> d2(idx.size());
@@ -57,7 +58,8 @@ std::vector<Desc256> seedPlusPlus(const Descriptors& data, const std::vector<uin
 
 }  // namespace
 
-KMajorityResult kMajority(const Descriptors& data, const std::vector<uint32_t>& idx, const KMajorityParams& p) {
+KMajorityResult kMajority(const Descriptors& data, const std::vector<uint32_t>& idx,
+                          const KMajorityParams& p) {
   KMajorityResult res;
   if (idx.empty()) return res;
   if (idx.size() <= static_cast<size_t>(p.k)) {

@@ -1,15 +1,15 @@
 #include "binloop/place/model_file.h"
 
+#include <fcntl.h>
+#include <sys/mman.h>
+#include <sys/stat.h>
+#include <unistd.h>
 #include <algorithm>
 #include <cstdio>
 #include <filesystem>
 #include <iostream>
 #include <memory>
 #include <sstream>
-#include <fcntl.h>
-#include <sys/mman.h>
-#include <sys/stat.h>
-#include <unistd.h>
 
 #include "binloop/util/hash_random.h"
 
@@ -48,18 +48,20 @@ const char* const kTypeNames[] = {"", "hbow", "fabmap", "vlad", "hmvlad", "vladp
 ModelHeader decodeHeader(const std::string& path, const uint8_t* file, size_t size, uint64_t* payload,
                          uint64_t* checksum) {
   if (size == 0 || std::memcmp(file, kMagic, std::min<size_t>(size, 8)) != 0)
-    throw PlaceError(path + ": not a binloop model file (bad magic; DBoW2 vocabularies are converted with "
-                            "'binloop train hbow --import <file>')");
+    throw PlaceError(path +
+                     ": not a binloop model file (bad magic; DBoW2 vocabularies are converted with "
+                     "'binloop train hbow --import <file>')");
   if (size < kHeaderBytes)
-    throw PlaceError(path + ": truncated model file (" + std::to_string(size) + " bytes, the header alone is 128)");
+    throw PlaceError(path + ": truncated model file (" + std::to_string(size) +
+                     " bytes, the header alone is 128)");
   HeaderCodec c;
   std::memcpy(c.bytes, file, kHeaderBytes);
   c.pos = 8;
   ModelHeader h;
   h.version = c.get<uint32_t>();
   if (h.version < 1 || h.version > ModelHeader::kVersion)
-    throw PlaceError(path + ": model file version " + std::to_string(h.version) + ", this build reads versions 1 to " +
-                     std::to_string(ModelHeader::kVersion));
+    throw PlaceError(path + ": model file version " + std::to_string(h.version) +
+                     ", this build reads versions 1 to " + std::to_string(ModelHeader::kVersion));
   h.type = static_cast<ModelType>(c.get<uint32_t>());
   h.descriptor_bits = c.get<uint32_t>();
   h.weighting = static_cast<Weighting>(c.get<uint32_t>());
@@ -115,10 +117,14 @@ namespace {
 
 std::string kindName(ExtractorKind k) {
   switch (k) {
-    case ExtractorKind::kUnknown: return "unknown";
-    case ExtractorKind::kBinloopOrb: return "binloop ORB with the Gaussian BRIEF pattern";
-    case ExtractorKind::kBinloopOrbRbrief: return "binloop ORB with ORB's learned pattern";
-    case ExtractorKind::kDbow2Import: return "imported DBoW2";
+    case ExtractorKind::kUnknown:
+      return "unknown";
+    case ExtractorKind::kBinloopOrb:
+      return "binloop ORB with the Gaussian BRIEF pattern";
+    case ExtractorKind::kBinloopOrbRbrief:
+      return "binloop ORB with ORB's learned pattern";
+    case ExtractorKind::kDbow2Import:
+      return "imported DBoW2";
   }
   return "kind " + std::to_string(static_cast<uint32_t>(k));
 }
@@ -130,14 +136,17 @@ std::string sideName(uint32_t max_side) { return max_side ? std::to_string(max_s
 std::string ExtractorSettings::describe() const {
   std::ostringstream s;
   switch (kind) {
-    case ExtractorKind::kUnknown: return "an unknown extractor (not recorded)";
+    case ExtractorKind::kUnknown:
+      return "an unknown extractor (not recorded)";
     case ExtractorKind::kDbow2Import:
-      return "the ORB of an imported DBoW2 vocabulary (ORB-SLAM2's or OpenCV's pattern, settings not recorded)";
+      return "the ORB of an imported DBoW2 vocabulary (ORB-SLAM2's or OpenCV's pattern, settings not "
+             "recorded)";
     case ExtractorKind::kBinloopOrb:
     case ExtractorKind::kBinloopOrbRbrief:
-      s << kindName(kind) << " (" << features << " features, scale " << scale_factor << ", " << levels << " levels, FAST "
-        << ini_fast << "/" << min_fast << ", " << cell_px << "-px cells, "
-        << (max_side ? "images scaled to a longer side <= " + std::to_string(max_side) + " px" : "full-size images")
+      s << kindName(kind) << " (" << features << " features, scale " << scale_factor << ", " << levels
+        << " levels, FAST " << ini_fast << "/" << min_fast << ", " << cell_px << "-px cells, "
+        << (max_side ? "images scaled to a longer side <= " + std::to_string(max_side) + " px"
+                     : "full-size images")
         << ")";
       return s.str();
   }
@@ -149,7 +158,9 @@ std::string ExtractorSettings::differences(const ExtractorSettings& o) const {
   if (kind != o.kind) {
     s << "extractor " << kindName(kind) << " vs " << kindName(o.kind);
     // Two binloop extractors differ in their BRIEF tests; say what else differs too.
-    const auto binloop = [](ExtractorKind k) { return k == ExtractorKind::kBinloopOrb || k == ExtractorKind::kBinloopOrbRbrief; };
+    const auto binloop = [](ExtractorKind k) {
+      return k == ExtractorKind::kBinloopOrb || k == ExtractorKind::kBinloopOrbRbrief;
+    };
     if (!binloop(kind) || !binloop(o.kind)) return s.str();
   }
   auto field = [&](const char* name, const auto& a, const auto& b) {
@@ -168,10 +179,10 @@ std::string ExtractorSettings::differences(const ExtractorSettings& o) const {
 
 std::string ModelHeader::describe() const {
   std::ostringstream s;
-  s << modelTypeName(type) << " model, " << descriptor_bits << "-bit descriptors, k=" << k << " levels=" << levels
-    << " words=" << words << ", trained with seed " << seed << " on " << training_descriptors << " descriptors of "
-    << training_images << " images (data hash " << std::hex << training_hash << std::dec << ") from "
-    << extractor.describe();
+  s << modelTypeName(type) << " model, " << descriptor_bits << "-bit descriptors, k=" << k
+    << " levels=" << levels << " words=" << words << ", trained with seed " << seed << " on "
+    << training_descriptors << " descriptors of " << training_images << " images (data hash " << std::hex
+    << training_hash << std::dec << ") from " << extractor.describe();
   return s.str();
 }
 
@@ -191,11 +202,13 @@ void checkModelExtractor(const std::string& path, const ModelHeader& h, const Ex
     return;
   }
   const std::string what = path + ": trained on descriptors of " + h.extractor.describe() +
-                           ", but they will come from " + c.expected.describe() + " (differ: " +
-                           h.extractor.differences(c.expected) + ")";
+                           ", but they will come from " + c.expected.describe() +
+                           " (differ: " + h.extractor.differences(c.expected) + ")";
   if (!c.force)
-    throw PlaceError(what + "; a vocabulary only fits descriptors like those it was trained on: retrain it with "
-                            "these settings, or use it anyway with " + c.force_hint);
+    throw PlaceError(what +
+                     "; a vocabulary only fits descriptors like those it was trained on: retrain it with "
+                     "these settings, or use it anyway with " +
+                     c.force_hint);
   warn(what + "; used anyway (" + c.force_hint + ")");
 }
 
@@ -295,8 +308,8 @@ ModelReader::ModelReader(const std::string& path) : path_(path), storage_(std::m
   header_ = decodeHeader(path, file_, size, &payload, &checksum);
   version_ = header_.version;
   if (size != kHeaderBytes + payload)
-    throw PlaceError(path + ": truncated model file: header promises " + std::to_string(kHeaderBytes + payload) +
-                     " bytes, file has " + std::to_string(size));
+    throw PlaceError(path + ": truncated model file: header promises " +
+                     std::to_string(kHeaderBytes + payload) + " bytes, file has " + std::to_string(size));
   const uint64_t computed =
       version_ == 1 ? hashBytes(file_ + kHeaderBytes, payload) : checksum64(file_ + kHeaderBytes, payload);
   if (computed != checksum) throw PlaceError(path + ": corrupt model file (payload checksum differs)");
@@ -320,13 +333,15 @@ std::string modelIdentity(const ModelHeader& h) {
   char buf[160];
   std::snprintf(buf, sizeof buf, "%s vocabulary of %llu words (training data %016llx, checksum %016llx)",
                 modelTypeName(h.type).c_str(), static_cast<unsigned long long>(h.words),
-                static_cast<unsigned long long>(h.training_hash), static_cast<unsigned long long>(h.payload_checksum));
+                static_cast<unsigned long long>(h.training_hash),
+                static_cast<unsigned long long>(h.payload_checksum));
   return buf;
 }
 
 void ModelReader::expectType(ModelType t) const {
   if (header_.type != t)
-    throw PlaceError(path_ + ": holds a " + modelTypeName(header_.type) + " model, expected " + modelTypeName(t));
+    throw PlaceError(path_ + ": holds a " + modelTypeName(header_.type) + " model, expected " +
+                     modelTypeName(t));
 }
 
 const uint8_t* ModelReader::next(const char* tag4, uint32_t elem_size, uint64_t* count) {
@@ -338,8 +353,8 @@ const uint8_t* ModelReader::next(const char* tag4, uint32_t elem_size, uint64_t*
   std::memcpy(count, file_ + pos_ + 8, 8);
   if (tag != want) throw PlaceError(path_ + ": expected section '" + want + "', found '" + tag + "'");
   if (es != elem_size)
-    throw PlaceError(path_ + ": section '" + want + "' has " + std::to_string(es) + "-byte elements, expected " +
-                     std::to_string(elem_size));
+    throw PlaceError(path_ + ": section '" + want + "' has " + std::to_string(es) +
+                     "-byte elements, expected " + std::to_string(elem_size));
   const size_t data_at = version_ == 1 ? pos_ + 16 : alignUp(pos_ + 16, kSectionAlign);
   const uint64_t bytes = es * *count;
   if (*count > file_size_ || data_at + bytes > file_size_)

@@ -11,7 +11,8 @@ namespace binloop {
 
 uint64_t trainingHash(const std::vector<Descriptors>& images) {
   uint64_t h = 0x6269'6e6c'6f6f'70ull;
-  for (const auto& im : images) h = hashCombine(h, hashBytes(im.data(), im.size() * sizeof(Desc256), im.size()));
+  for (const auto& im : images)
+    h = hashCombine(h, hashBytes(im.data(), im.size() * sizeof(Desc256), im.size()));
   return h;
 }
 
@@ -64,7 +65,8 @@ ModelHeader trainModel(ModelType type, const std::vector<Descriptors>& images, c
     case ModelType::kVlad:
     case ModelType::kHmvlad: {
       const bool hier = type == ModelType::kHmvlad;
-      const VladVocabulary v = VladVocabulary::train(images, vladParams(hier ? 2 : 4, hier ? 2 : 1), progress);
+      const VladVocabulary v =
+          VladVocabulary::train(images, vladParams(hier ? 2 : 4, hier ? 2 : 1), progress);
       if (hier && v.levels() < 2) throw PlaceError("hmvlad needs --levels 2 or more");
       ModelWriter w(h);
       v.write(w);
@@ -76,7 +78,8 @@ ModelHeader trainModel(ModelType type, const std::vector<Descriptors>& images, c
       std::vector<std::vector<float>> vlads;
       for (const auto& im : images)
         if (!im.empty()) vlads.push_back(v.aggregate(im).back());
-      const PqCodebooks pq = PqCodebooks::train(vlads, v.wordsAtLevel(v.levels()), v.dims(), o.pq_codes, o.seed);
+      const PqCodebooks pq =
+          PqCodebooks::train(vlads, v.wordsAtLevel(v.levels()), v.dims(), o.pq_codes, o.seed);
       ModelWriter w(h);
       v.write(w);
       pq.write(w);
@@ -92,10 +95,12 @@ ModelHeader trainModel(ModelType type, const std::vector<Descriptors>& images, c
       m.vocabulary = std::make_shared<FlatVocabulary>(FlatVocabulary::train(images, fp, progress));
       std::vector<std::vector<uint32_t>> presence;
       for (const auto& im : images) presence.push_back(m.vocabulary->presence(im));
-      m.tree = std::make_shared<ChowLiuTree>(ChowLiuTree::learn(presence, static_cast<uint32_t>(m.vocabulary->size()), 0.5, progress));
+      m.tree = std::make_shared<ChowLiuTree>(
+          ChowLiuTree::learn(presence, static_cast<uint32_t>(m.vocabulary->size()), 0.5, progress));
       // Evenly spaced training places stand for "somewhere new" in the sampled evidence (eq. 3.19).
       const size_t step = std::max<size_t>(1, presence.size() / std::max<size_t>(1, o.fabmap_samples));
-      for (size_t i = 0; i < presence.size() && m.samples.size() < o.fabmap_samples; i += step) m.samples.push_back(presence[i]);
+      for (size_t i = 0; i < presence.size() && m.samples.size() < o.fabmap_samples; i += step)
+        m.samples.push_back(presence[i]);
       h.k = static_cast<uint32_t>(m.vocabulary->size());
       h.levels = 1;
       h.words = m.vocabulary->size();

@@ -8,12 +8,18 @@ namespace binloop {
 
 std::string statusName(QueryStatus s) {
   switch (s) {
-    case QueryStatus::kFound: return "found";
-    case QueryStatus::kUnknownKeyframe: return "unknown_keyframe";
-    case QueryStatus::kEmptyDatabase: return "empty_database";
-    case QueryStatus::kNoReference: return "no_reference";
-    case QueryStatus::kNoPreCandidates: return "no_pre_candidates";
-    case QueryStatus::kBelowReference: return "below_reference";
+    case QueryStatus::kFound:
+      return "found";
+    case QueryStatus::kUnknownKeyframe:
+      return "unknown_keyframe";
+    case QueryStatus::kEmptyDatabase:
+      return "empty_database";
+    case QueryStatus::kNoReference:
+      return "no_reference";
+    case QueryStatus::kNoPreCandidates:
+      return "no_pre_candidates";
+    case QueryStatus::kBelowReference:
+      return "below_reference";
   }
   return "?";
 }
@@ -72,7 +78,8 @@ QueryResult PlaceRecognizer::query(KeyframeId id, const QueryScope& scope) const
 
 const Descriptors& PlaceRecognizer::descriptors(KeyframeId id) const {
   const auto it = descriptors_.find(id);
-  if (it == descriptors_.end()) throw PlaceError(name() + ": no descriptors kept for keyframe " + std::to_string(id));
+  if (it == descriptors_.end())
+    throw PlaceError(name() + ": no descriptors kept for keyframe " + std::to_string(id));
   return it->second;
 }
 

@@ -17,11 +17,15 @@ namespace {
 
 std::unique_ptr<PlaceRecognizer> make(ModelType type, const RecognizerOptions& o) {
   switch (type) {
-    case ModelType::kHbow: return std::make_unique<HbowRecognizer>(HbowRecognizer::loadVocabulary(o.model_file), o.hbow_min_bar);
-    case ModelType::kVlad: return std::make_unique<VladRecognizer>(VladRecognizer::loadVocabulary(o.model_file, type));
-    case ModelType::kHmvlad: return std::make_unique<HmvladRecognizer>(VladRecognizer::loadVocabulary(o.model_file, type));
-    case ModelType::kVladPq: return std::make_unique<VladPqRecognizer>(VladPqModel::load(o.model_file), PqVerify::kHamming,
-                                                                                 o.vladpq_shared_slack);
+    case ModelType::kHbow:
+      return std::make_unique<HbowRecognizer>(HbowRecognizer::loadVocabulary(o.model_file), o.hbow_min_bar);
+    case ModelType::kVlad:
+      return std::make_unique<VladRecognizer>(VladRecognizer::loadVocabulary(o.model_file, type));
+    case ModelType::kHmvlad:
+      return std::make_unique<HmvladRecognizer>(VladRecognizer::loadVocabulary(o.model_file, type));
+    case ModelType::kVladPq:
+      return std::make_unique<VladPqRecognizer>(VladPqModel::load(o.model_file), PqVerify::kHamming,
+                                                o.vladpq_shared_slack);
     case ModelType::kFabmap: {
       FabmapModel m = FabmapModel::load(o.model_file);
       m.params.l2_offset = o.fabmap_l2_offset;

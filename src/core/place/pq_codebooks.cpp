@@ -31,7 +31,8 @@ int16_t toFixed(float v, float scale) {
 
 }  // namespace
 
-PqCodebooks PqCodebooks::train(const std::vector<std::vector<float>>& vlads, int words, int dims, int m, uint64_t seed) {
+PqCodebooks PqCodebooks::train(const std::vector<std::vector<float>>& vlads, int words, int dims, int m,
+                               uint64_t seed) {
   if (m < 1 || m > 65535) throw PlaceError("PQ codebook size must be 1..65535, got " + std::to_string(m));
   PqCodebooks pq;
   pq.words_ = words;
@@ -40,13 +41,15 @@ PqCodebooks PqCodebooks::train(const std::vector<std::vector<float>>& vlads, int
   for (int w = 0; w < words; ++w) {
     std::vector<float> sub;
     for (const auto& v : vlads) {
-      if (v.size() != static_cast<size_t>(words) * dims) throw PlaceError("PQ training VLAD of the wrong size");
+      if (v.size() != static_cast<size_t>(words) * dims)
+        throw PlaceError("PQ training VLAD of the wrong size");
       sub.insert(sub.end(), &v[static_cast<size_t>(w) * dims], &v[static_cast<size_t>(w) * dims] + dims);
     }
     FloatKMeansResult km = floatKMeans(sub, dims, m, hashCombine(seed, w), 25);
     if (km.k < m)
       throw PlaceError("degenerate PQ codebook for word " + std::to_string(w) + ": " + std::to_string(km.k) +
-                       " distinct centroids of " + std::to_string(m) + " from " + std::to_string(vlads.size()) +
+                       " distinct centroids of " + std::to_string(m) + " from " +
+                       std::to_string(vlads.size()) +
                        " training images (train on more images or lower --pq-codes)");
     pq.codebooks_.insert(pq.codebooks_.end(), km.centres.begin(), km.centres.end());
   }
@@ -66,13 +69,15 @@ void PqCodebooks::buildTable() {
   for (int w = 0; w < words_; ++w)
     for (int a = 0; a < m_; ++a)
       for (int b = 0; b < m_; ++b)
-        sdc_table_[(static_cast<size_t>(w) * m_ + a) * m_ + b] = squaredDistance(centroid(w, a), centroid(w, b), dims_);
+        sdc_table_[(static_cast<size_t>(w) * m_ + a) * m_ + b] =
+            squaredDistance(centroid(w, a), centroid(w, b), dims_);
 }
 
 PqCodes PqCodebooks::encode(const std::vector<float>& vlad) const {
   PqCodes c(words_);
   for (int w = 0; w < words_; ++w)
-    c[w] = static_cast<uint16_t>(nearestFloatCentre(&vlad[static_cast<size_t>(w) * dims_], centroid(w, 0), m_, dims_));
+    c[w] = static_cast<uint16_t>(
+        nearestFloatCentre(&vlad[static_cast<size_t>(w) * dims_], centroid(w, 0), m_, dims_));
   return c;
 }
 
@@ -84,7 +89,8 @@ float PqCodebooks::sdc(const PqCodes& a, const PqCodes& b) const {
 
 float PqCodebooks::adc(const std::vector<float>& vlad, const PqCodes& b) const {
   float s = 0;
-  for (int w = 0; w < words_; ++w) s += squaredDistance(&vlad[static_cast<size_t>(w) * dims_], centroid(w, b[w]), dims_);
+  for (int w = 0; w < words_; ++w)
+    s += squaredDistance(&vlad[static_cast<size_t>(w) * dims_], centroid(w, b[w]), dims_);
   return s;
 }
 
@@ -92,7 +98,8 @@ void PqCodebooks::write(ModelWriter& w) const {
   w.section("QPAR", std::vector<uint32_t>{static_cast<uint32_t>(words_), static_cast<uint32_t>(dims_),
                                           static_cast<uint32_t>(m_), kFixed16});
   std::vector<int16_t> steps(codebooks_.size());
-  for (size_t i = 0; i < steps.size(); ++i) steps[i] = toFixed(codebooks_[i], scales_[i / (static_cast<size_t>(m_) * dims_)]);
+  for (size_t i = 0; i < steps.size(); ++i)
+    steps[i] = toFixed(codebooks_[i], scales_[i / (static_cast<size_t>(m_) * dims_)]);
   w.section("QSCL", scales_);
   w.section("QC16", steps);
 }
@@ -114,15 +121,18 @@ PqCodebooks PqCodebooks::read(ModelReader& r) {
     const size_t per_word = static_cast<size_t>(pq.m_) * pq.dims_;
     if (pq.scales_.size() != static_cast<size_t>(pq.words_) || steps.size() != per_word * pq.words_)
       throw PlaceError(r.path() + ": PQ codebooks hold " + std::to_string(steps.size()) + " values and " +
-                       std::to_string(pq.scales_.size()) + " scales, expected " + std::to_string(per_word * pq.words_) +
-                       " and " + std::to_string(pq.words_));
+                       std::to_string(pq.scales_.size()) + " scales, expected " +
+                       std::to_string(per_word * pq.words_) + " and " + std::to_string(pq.words_));
     pq.codebooks_.resize(steps.size());
-    for (size_t i = 0; i < steps.size(); ++i) pq.codebooks_[i] = static_cast<float>(steps[i]) * pq.scales_[i / per_word];
+    for (size_t i = 0; i < steps.size(); ++i)
+      pq.codebooks_[i] = static_cast<float>(steps[i]) * pq.scales_[i / per_word];
   }
   if (pq.m_ < 1 || pq.codebooks_.size() != static_cast<size_t>(pq.words_) * pq.m_ * pq.dims_)
-    throw PlaceError(r.path() + ": PQ codebooks hold " + std::to_string(pq.codebooks_.size()) + " floats, expected " +
+    throw PlaceError(r.path() + ": PQ codebooks hold " + std::to_string(pq.codebooks_.size()) +
+                     " floats, expected " +
                      std::to_string(static_cast<size_t>(pq.words_) * pq.m_ * pq.dims_));
-  if (pq.scales_.empty()) pq.scales_ = fixedPointScales(pq.codebooks_, pq.words_, static_cast<size_t>(pq.m_) * pq.dims_);
+  if (pq.scales_.empty())
+    pq.scales_ = fixedPointScales(pq.codebooks_, pq.words_, static_cast<size_t>(pq.m_) * pq.dims_);
   pq.buildTable();
   return pq;
 }

@@ -11,7 +11,8 @@ VladRecognizer::VladRecognizer(std::shared_ptr<const VladVocabulary> voc) : voc_
   if (!voc_) throw PlaceError("vlad: no vocabulary");
 }
 
-std::shared_ptr<const VladVocabulary> VladRecognizer::loadVocabulary(const std::string& path, ModelType type) {
+std::shared_ptr<const VladVocabulary> VladRecognizer::loadVocabulary(const std::string& path,
+                                                                     ModelType type) {
   ModelReader r(path);
   r.expectType(type);
   auto v = std::make_shared<VladVocabulary>(VladVocabulary::read(r));
@@ -23,9 +24,7 @@ void VladRecognizer::addSignature(Slot, const Descriptors& d) {
   sigs_.push(binarizeSigns(voc_->aggregate(d).back(), voc_->dims(), descriptorSeed(d)));
 }
 
-size_t VladRecognizer::indexBytesPerKeyframe() const {
-  return sigs_.words() * sizeof(uint64_t);
-}
+size_t VladRecognizer::indexBytesPerKeyframe() const { return sigs_.words() * sizeof(uint64_t); }
 
 QueryResult VladRecognizer::querySignature(const SlotScope& scope) const {
   QueryResult r;
@@ -49,9 +48,12 @@ QueryResult VladRecognizer::querySignature(const SlotScope& scope) const {
   if (scope.max_ranked) keepRanked(r, std::move(all), scope.max_ranked);
   r.timings.push_back({"scan", msSince(t)});
   std::ostringstream detail;
-  detail << "bar " << bar << " bits from " << refs << " reference keyframes; " << r.candidates.size() << " closer";
+  detail << "bar " << bar << " bits from " << refs << " reference keyframes; " << r.candidates.size()
+         << " closer";
   r.detail = detail.str();
-  r.status = !refs ? QueryStatus::kNoReference : r.candidates.empty() ? QueryStatus::kBelowReference : QueryStatus::kFound;
+  r.status = !refs                  ? QueryStatus::kNoReference
+             : r.candidates.empty() ? QueryStatus::kBelowReference
+                                    : QueryStatus::kFound;
   return r;
 }
 

@@ -30,7 +30,8 @@ std::vector<char> emptyWords(const std::vector<float>& v, int dims) {
   std::vector<char> empty;
   if (dims < 1) return empty;
   for (size_t first = 0; first + dims <= v.size(); first += dims)
-    empty.push_back(std::all_of(v.begin() + first, v.begin() + first + dims, [](float e) { return e == 0.f; }));
+    empty.push_back(
+        std::all_of(v.begin() + first, v.begin() + first + dims, [](float e) { return e == 0.f; }));
   return empty;
 }
 
@@ -113,7 +114,8 @@ VladVocabulary VladVocabulary::train(const std::vector<Descriptors>& images, con
                      std::to_string(p.levels) + " words: " + std::to_string(total) + " (need " +
                      std::to_string(min_needed) + ")");
   // Even sampling keeps every image represented and the result independent of thread timing.
-  const size_t stride = std::max<size_t>(1, (total + p.max_training_descriptors - 1) / p.max_training_descriptors);
+  const size_t stride =
+      std::max<size_t>(1, (total + p.max_training_descriptors - 1) / p.max_training_descriptors);
   std::vector<float> data;
   size_t seen = 0;
   for (const auto& im : images)
@@ -139,12 +141,15 @@ VladVocabulary VladVocabulary::train(const std::vector<Descriptors>& images, con
     for (auto& pend : level) {
       std::vector<float> sub;
       sub.reserve(pend.rows.size() * kD);
-      for (uint32_t r : pend.rows) sub.insert(sub.end(), &data[static_cast<size_t>(r) * kD], &data[static_cast<size_t>(r) * kD] + kD);
-      FloatKMeansResult km = floatKMeans(sub, kD, p.k, hashCombine(p.seed, pend.slot * 131 + l), p.max_iterations);
+      for (uint32_t r : pend.rows)
+        sub.insert(sub.end(), &data[static_cast<size_t>(r) * kD], &data[static_cast<size_t>(r) * kD] + kD);
+      FloatKMeansResult km =
+          floatKMeans(sub, kD, p.k, hashCombine(p.seed, pend.slot * 131 + l), p.max_iterations);
       if (km.k < p.k)
-        throw PlaceError("degenerate VLAD vocabulary: a node at level " + std::to_string(l + 1) + " split into " +
-                         std::to_string(km.k) + " clusters instead of " + std::to_string(p.k) + " (" +
-                         std::to_string(km.dropped_empty) + " empty); use more or more varied training images");
+        throw PlaceError("degenerate VLAD vocabulary: a node at level " + std::to_string(l + 1) +
+                         " split into " + std::to_string(km.k) + " clusters instead of " +
+                         std::to_string(p.k) + " (" + std::to_string(km.dropped_empty) +
+                         " empty); use more or more varied training images");
       const auto first = static_cast<uint32_t>(v.centres_.size() / kD);
       v.first_child_[pend.slot] = first;
       v.child_count_[pend.slot] = static_cast<uint32_t>(km.k);
@@ -170,8 +175,9 @@ VladVocabulary VladVocabulary::train(const std::vector<Descriptors>& images, con
       uint32_t parent = 0;
       for (int l = 0; l < p.levels && v.child_count_[parent]; ++l) {
         const uint32_t first = v.first_child_[parent];
-        const uint32_t node = first + nearestFloatCentre(&data[row * kD], &v.centres_[static_cast<size_t>(first) * kD],
-                                                         static_cast<int>(v.child_count_[parent]), kD);
+        const uint32_t node =
+            first + nearestFloatCentre(&data[row * kD], &v.centres_[static_cast<size_t>(first) * kD],
+                                       static_cast<int>(v.child_count_[parent]), kD);
         members[node].push_back(static_cast<uint32_t>(row));
         parent = node + 1;
       }
@@ -207,8 +213,8 @@ VladVocabulary VladVocabulary::train(const std::vector<Descriptors>& images, con
 }
 
 void VladVocabulary::write(ModelWriter& w) const {
-  const std::vector<float> par{params_.alpha, static_cast<float>(params_.pca_dims), static_cast<float>(params_.k),
-                               static_cast<float>(params_.levels)};
+  const std::vector<float> par{params_.alpha, static_cast<float>(params_.pca_dims),
+                               static_cast<float>(params_.k), static_cast<float>(params_.levels)};
   w.section("VPAR", par);
   w.section("VCEN", centres_);
   w.section("VFCH", first_child_);
@@ -222,7 +228,9 @@ void VladVocabulary::write(ModelWriter& w) const {
 VladVocabulary VladVocabulary::read(ModelReader& r) {
   VladVocabulary v;
   const auto par = r.section<float>("VPAR");
-  if (par.size() != 4) throw PlaceError(r.path() + ": VLAD parameter section has " + std::to_string(par.size()) + " values, expected 4");
+  if (par.size() != 4)
+    throw PlaceError(r.path() + ": VLAD parameter section has " + std::to_string(par.size()) +
+                     " values, expected 4");
   v.params_.alpha = par[0];
   v.params_.pca_dims = static_cast<int>(par[1]);
   v.params_.k = static_cast<int>(par[2]);
@@ -237,9 +245,11 @@ VladVocabulary VladVocabulary::read(ModelReader& r) {
   const size_t nodes = v.centres_.size() / kD;
   v.dims_ = v.params_.pca_dims > 0 ? v.params_.pca_dims : kD;
   bool ok = v.centres_.size() == nodes * kD && nodes > 0 && v.first_child_.size() == nodes + 1 &&
-            v.child_count_.size() == nodes + 1 && !v.level_begin_.empty() && v.level_begin_.size() == v.level_count_.size() &&
+            v.child_count_.size() == nodes + 1 && !v.level_begin_.empty() &&
+            v.level_begin_.size() == v.level_count_.size() &&
             (v.pca_.empty() || (v.pca_.size() == nodes * v.dims_ * kD && v.pca_mean_.size() == nodes * kD));
-  for (size_t i = 0; ok && i <= nodes; ++i) ok = v.child_count_[i] == 0 || v.first_child_[i] + v.child_count_[i] <= nodes;
+  for (size_t i = 0; ok && i <= nodes; ++i)
+    ok = v.child_count_[i] == 0 || v.first_child_[i] + v.child_count_[i] <= nodes;
   if (!ok) throw PlaceError(r.path() + ": VLAD vocabulary sections are inconsistent");
   return v;
 }

@@ -63,9 +63,12 @@ size_t VladPqRecognizer::indexBytesPerKeyframe() const {
 
 double VladPqRecognizer::distance(Slot q, Slot k) const {
   switch (verify_) {
-    case PqVerify::kHamming: return sigs_.distance(sigs_[q], k);
-    case PqVerify::kSdc: return model_.pq->sdc(codes_[q], codes_[k]);
-    case PqVerify::kAdc: return model_.pq->adc(raw_[q], codes_[k]);
+    case PqVerify::kHamming:
+      return sigs_.distance(sigs_[q], k);
+    case PqVerify::kSdc:
+      return model_.pq->sdc(codes_[q], codes_[k]);
+    case PqVerify::kAdc:
+      return model_.pq->adc(raw_[q], codes_[k]);
   }
   return 0;
 }
@@ -96,8 +99,9 @@ QueryResult VladPqRecognizer::querySignature(const SlotScope& scope) const {
   }
   r.threshold = bar;
   // The cap is in the verification distance's units: bits for Hamming; SDC/ADC distances are not capped.
-  const double cap = verify_ == PqVerify::kHamming ? ranking().distance_cap * static_cast<double>(sigs_.words() * 64)
-                                                   : std::numeric_limits<double>::max();
+  const double cap = verify_ == PqVerify::kHamming
+                         ? ranking().distance_cap * static_cast<double>(sigs_.words() * 64)
+                         : std::numeric_limits<double>::max();
   t = std::chrono::steady_clock::now();
   size_t pre = 0;
   std::vector<Candidate> all;
@@ -127,8 +131,9 @@ QueryResult VladPqRecognizer::querySignature(const SlotScope& scope) const {
   detail << "references share up to " << max_ref_shared << " (word, code) pairs, bar " << bar << "; " << pre
          << " pre-candidates, " << r.candidates.size() << " verified";
   r.detail = detail.str();
-  r.status = pre == 0 ? QueryStatus::kNoPreCandidates
-             : r.candidates.empty() ? QueryStatus::kBelowReference : QueryStatus::kFound;
+  r.status = pre == 0               ? QueryStatus::kNoPreCandidates
+             : r.candidates.empty() ? QueryStatus::kBelowReference
+                                    : QueryStatus::kFound;
   return r;
 }
 

@@ -123,7 +123,8 @@ VocabularyTree VocabularyTree::fromNodes(int k, int levels, Weighting w, const s
   std::vector<std::vector<uint32_t>> children(in.size());
   for (uint32_t i = 1; i < in.size(); ++i) {
     if (in[i].parent >= in.size() || in[i].parent == i)
-      throw PlaceError("vocabulary node " + std::to_string(i) + " has an invalid parent " + std::to_string(in[i].parent));
+      throw PlaceError("vocabulary node " + std::to_string(i) + " has an invalid parent " +
+                       std::to_string(in[i].parent));
     children[in[i].parent].push_back(i);
   }
   VocabularyTree t;
@@ -138,7 +139,8 @@ VocabularyTree VocabularyTree::fromNodes(int k, int levels, Weighting w, const s
   for (size_t pos = 0; pos < order.size(); ++pos) {
     const auto& ch = children[order[pos]];
     if (ch.size() > 0 && in[order[pos]].is_leaf && pos != 0)
-      throw PlaceError("vocabulary node " + std::to_string(order[pos]) + " is marked as a word but has children");
+      throw PlaceError("vocabulary node " + std::to_string(order[pos]) +
+                       " is marked as a word but has children");
     o->first_child[pos] = static_cast<uint32_t>(order.size());
     o->child_count[pos] = static_cast<uint32_t>(ch.size());
     for (uint32_t c : ch) {
@@ -150,7 +152,8 @@ VocabularyTree VocabularyTree::fromNodes(int k, int levels, Weighting w, const s
     if (order.size() > in.size()) throw PlaceError("vocabulary nodes form a cycle");
   }
   if (order.size() != in.size())
-    throw PlaceError("vocabulary has " + std::to_string(in.size() - order.size()) + " nodes not reachable from the root");
+    throw PlaceError("vocabulary has " + std::to_string(in.size() - order.size()) +
+                     " nodes not reachable from the root");
   for (uint32_t n = 1; n < o->desc.size(); ++n)
     if (o->child_count[n] == 0) o->weight.push_back(in[order[n]].weight);
   t.adopt(std::move(o));
@@ -171,7 +174,8 @@ uint32_t VocabularyTree::nodeOf(const Desc256& d, int depth, uint32_t from) cons
   return n;
 }
 
-void VocabularyTree::descend(const Desc256* d, size_t n, int fv_depth, uint32_t* word, uint32_t* fv_node) const {
+void VocabularyTree::descend(const Desc256* d, size_t n, int fv_depth, uint32_t* word,
+                             uint32_t* fv_node) const {
   // Descriptors go down the tree in lanes of kLanes, one level at a time: while a lane compares itself
   // with its children, the children blocks of the other lanes are already being fetched. Below the
   // cached top levels every step is a cache miss, so overlapping them is what makes a 1M-word tree fast.

@@ -18,13 +18,15 @@ double planarDistance(const Pose3& a, const Pose3& b) {
 }  // namespace
 
 LevelResult levelRevisits(const std::vector<Pose3>& route, const LevelParams& p) {
-  if (!(p.radius_m > 0) || !(p.ramp_m > 0)) throw std::invalid_argument("levelRevisits: radius and ramp must be > 0");
+  if (!(p.radius_m > 0) || !(p.ramp_m > 0))
+    throw std::invalid_argument("levelRevisits: radius and ramp must be > 0");
   const size_t n = route.size();
   LevelResult out;
   out.route = route;
   if (n == 0) return out;
   std::vector<double> s(n, 0.0);  // path length up to each frame
-  for (size_t i = 1; i < n; ++i) s[i] = s[i - 1] + (route[i].translation() - route[i - 1].translation()).norm();
+  for (size_t i = 1; i < n; ++i)
+    s[i] = s[i - 1] + (route[i].translation() - route[i - 1].translation()).norm();
 
   // In frame order, so that a third pass takes the height the second was given (which is the first's).
   std::vector<std::optional<double>> offset(n);
@@ -46,7 +48,8 @@ LevelResult levelRevisits(const std::vector<Pose3>& route, const LevelParams& p)
   std::vector<double> final_offset(n, 0.0);
   std::optional<size_t> prev;
   std::vector<std::optional<size_t>> next_of(n);
-  for (size_t i = n; i-- > 0;) next_of[i] = offset[i] ? std::optional<size_t>(i) : (i + 1 < n ? next_of[i + 1] : std::nullopt);
+  for (size_t i = n; i-- > 0;)
+    next_of[i] = offset[i] ? std::optional<size_t>(i) : (i + 1 < n ? next_of[i + 1] : std::nullopt);
   for (size_t i = 0; i < n; ++i) {
     if (offset[i]) {
       final_offset[i] = *offset[i];

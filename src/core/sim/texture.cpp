@@ -19,7 +19,8 @@ Texture::Texture(const cv::Mat& img) {
   mips_.push_back(img.clone());
   while (mips_.back().cols > 4 && mips_.back().rows > 4) {
     cv::Mat half;
-    cv::resize(mips_.back(), half, cv::Size(mips_.back().cols / 2, mips_.back().rows / 2), 0, 0, cv::INTER_AREA);
+    cv::resize(mips_.back(), half, cv::Size(mips_.back().cols / 2, mips_.back().rows / 2), 0, 0,
+               cv::INTER_AREA);
     mips_.push_back(half);
   }
 }

@@ -57,7 +57,8 @@ cv::Mat randomCrop(const cv::Mat& photo, HashRng& rng, double min_frac, double m
 void paintWindows(cv::Mat& wall, HashRng& rng) {
   const int nx = 3 + rng.below(3), ny = 3 + rng.below(3);
   const int cw = kSize / nx, ch = kSize / ny;
-  const int ww = static_cast<int>(cw * rng.uniform(0.35, 0.7)), wh = static_cast<int>(ch * rng.uniform(0.4, 0.75));
+  const int ww = static_cast<int>(cw * rng.uniform(0.35, 0.7)),
+            wh = static_cast<int>(ch * rng.uniform(0.4, 0.75));
   const int frame = 3 + rng.below(5);
   const double glass = rng.uniform(0.25, 0.55);
   const int frame_value = rng.chance(0.5) ? 210 : 50;
@@ -67,8 +68,9 @@ void paintWindows(cv::Mat& wall, HashRng& rng) {
       const cv::Rect r(i * cw + (cw - ww) / 2, j * ch + (ch - wh) / 2, ww, wh);
       wall(r).convertTo(wall(r), CV_8U, glass, 10);
       cv::rectangle(wall, r, cv::Scalar(frame_value), frame);
-      if (rng.chance(0.5)) cv::line(wall, {r.x + r.width / 2, r.y}, {r.x + r.width / 2, r.y + r.height},
-                                    cv::Scalar(frame_value), std::max(2, frame / 2));
+      if (rng.chance(0.5))
+        cv::line(wall, {r.x + r.width / 2, r.y}, {r.x + r.width / 2, r.y + r.height}, cv::Scalar(frame_value),
+                 std::max(2, frame / 2));
     }
 }
 
@@ -78,14 +80,16 @@ std::vector<std::string> defaultTexturePhotos() {
   const std::string cv_dir = "/usr/share/doc/opencv-doc/examples/data/";
   const std::string sk_dir = "/usr/lib/python3/dist-packages/skimage/data/";
   const std::vector<std::string> candidates = {
-      cv_dir + "building.jpg", cv_dir + "aero1.jpg",      cv_dir + "aero3.jpg",       cv_dir + "aloeL.jpg",
-      cv_dir + "baboon.jpg",   cv_dir + "board.jpg",      cv_dir + "fruits.jpg",      cv_dir + "home.jpg",
-      cv_dir + "leuvenA.jpg",  cv_dir + "leuvenB.jpg",    cv_dir + "messi5.jpg",      cv_dir + "orange.jpg",
-      cv_dir + "stuff.jpg",    cv_dir + "graf1.png",      cv_dir + "basketball1.png", cv_dir + "box_in_scene.png",
-      cv_dir + "HappyFish.jpg", cv_dir + "squirrel_cls.jpg", cv_dir + "starry_night.jpg", cv_dir + "lena.jpg",
-      sk_dir + "astronaut.png", sk_dir + "brick.png",     sk_dir + "camera.png",      sk_dir + "chelsea.png",
-      sk_dir + "coffee.png",   sk_dir + "coins.png",      sk_dir + "motorcycle_left.png", sk_dir + "rocket.jpg",
-      sk_dir + "grass.png",    sk_dir + "gravel.png"};
+      cv_dir + "building.jpg",     cv_dir + "aero1.jpg",     cv_dir + "aero3.jpg",
+      cv_dir + "aloeL.jpg",        cv_dir + "baboon.jpg",    cv_dir + "board.jpg",
+      cv_dir + "fruits.jpg",       cv_dir + "home.jpg",      cv_dir + "leuvenA.jpg",
+      cv_dir + "leuvenB.jpg",      cv_dir + "messi5.jpg",    cv_dir + "orange.jpg",
+      cv_dir + "stuff.jpg",        cv_dir + "graf1.png",     cv_dir + "basketball1.png",
+      cv_dir + "box_in_scene.png", cv_dir + "HappyFish.jpg", cv_dir + "squirrel_cls.jpg",
+      cv_dir + "starry_night.jpg", cv_dir + "lena.jpg",      sk_dir + "astronaut.png",
+      sk_dir + "brick.png",        sk_dir + "camera.png",    sk_dir + "chelsea.png",
+      sk_dir + "coffee.png",       sk_dir + "coins.png",     sk_dir + "motorcycle_left.png",
+      sk_dir + "rocket.jpg",       sk_dir + "grass.png",     sk_dir + "gravel.png"};
   std::vector<std::string> found;
   for (const auto& c : candidates)
     if (std::filesystem::exists(c)) found.push_back(c);
@@ -99,9 +103,12 @@ TextureBank TextureBank::build(const std::vector<std::string>& photo_paths, uint
     cv::Mat img = cv::imread(p, cv::IMREAD_GRAYSCALE);
     if (img.empty() || img.cols < 64 || img.rows < 64) continue;
     const std::string name = std::filesystem::path(p).filename().string();
-    if (name == "gravel.png") gravel = img;
-    else if (name == "grass.png") grass = img;
-    else if (name == "brick.png") brick = img;
+    if (name == "gravel.png")
+      gravel = img;
+    else if (name == "grass.png")
+      grass = img;
+    else if (name == "brick.png")
+      brick = img;
     photos.push_back(img);  // ground photos serve as façade material too
   }
   TextureBank bank;
@@ -113,8 +120,8 @@ TextureBank TextureBank::build(const std::vector<std::string>& photo_paths, uint
   };
   auto material = [&](int i, double crop_lo, double crop_hi) {
     if (photos.empty()) return valueNoise(kSize, rng, 4 + rng.below(8), 5);
-    return randomCrop(photos[(i * 7 + rng.below(static_cast<int>(photos.size()))) % photos.size()], rng, crop_lo,
-                      crop_hi);
+    return randomCrop(photos[(i * 7 + rng.below(static_cast<int>(photos.size()))) % photos.size()], rng,
+                      crop_lo, crop_hi);
   };
 
   for (int i = 0; i < n_facades; ++i) {
@@ -123,7 +130,8 @@ TextureBank TextureBank::build(const std::vector<std::string>& photo_paths, uint
     bank.facades.push_back(add(wall));
   }
   for (int i = 0; i < n_facades / 3; ++i)
-    bank.walls.push_back(add(normalizeContrast(material(i, 0.2, 0.6), rng.uniform(90, 170), rng.uniform(20, 40))));
+    bank.walls.push_back(
+        add(normalizeContrast(material(i, 0.2, 0.6), rng.uniform(90, 170), rng.uniform(20, 40))));
   for (int i = 0; i < 12; ++i) {
     cv::Mat body = normalizeContrast(material(i, 0.1, 0.4), rng.uniform(50, 180), rng.uniform(15, 30));
     // A dark window band across the upper part, the way car sides look.
@@ -134,7 +142,8 @@ TextureBank TextureBank::build(const std::vector<std::string>& photo_paths, uint
     cv::Mat base = normalizeContrast(valueNoise(kSize, rng, 32, 4), mean, sd * 0.6);
     if (!photo.empty()) {
       cv::Mat p;
-      cv::resize(photo, p, cv::Size(kSize, kSize), 0, 0, photo.cols >= kSize ? cv::INTER_AREA : cv::INTER_CUBIC);
+      cv::resize(photo, p, cv::Size(kSize, kSize), 0, 0,
+                 photo.cols >= kSize ? cv::INTER_AREA : cv::INTER_CUBIC);
       cv::addWeighted(base, 0.5, normalizeContrast(p, mean, sd), 0.5, 0, base);
     }
     return base;

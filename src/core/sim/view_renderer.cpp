@@ -77,9 +77,11 @@ void ViewRenderer::drawGround(const World& world, const StereoCamera& cam, const
       const double ray_len = ray.norm();
       const double range = t * ray_len;
       const double cosang = denom / ray_len;
-      const int level = mipLevel(static_cast<float>(range * kGroundTexelsPerM / (cam.fx * std::sqrt(cosang))));
+      const int level =
+          mipLevel(static_cast<float>(range * kGroundTexelsPerM / (cam.fx * std::sqrt(cosang))));
       const Texture& tex = bank.textures[world.groundMaterial(p.x(), p.z())];
-      const float u = static_cast<float>(p.x() * kGroundTexelsPerM), v = static_cast<float>(p.z() * kGroundTexelsPerM);
+      const float u = static_cast<float>(p.x() * kGroundTexelsPerM),
+                  v = static_cast<float>(p.z() * kGroundTexelsPerM);
       g[x] = aperiodic ? aperiodicSample(tex, u, v, level) : tex.sample(u, v, level);
       z[x] = static_cast<float>(t);
     }
@@ -140,7 +142,8 @@ void ViewRenderer::drawQuad(const World& world, const Quad& q, const StereoCamer
   const float cosang = std::max(0.05f, std::abs(n_c.dot((R_cw * (centre - c)).normalized())));
   const float level_scale = q.texels_per_m / (static_cast<float>(cam.fx) * std::sqrt(cosang));
 
-  const int y0 = std::max(0, static_cast<int>(std::ceil(ymin))), y1 = std::min(cam.height - 1, static_cast<int>(std::floor(ymax)));
+  const int y0 = std::max(0, static_cast<int>(std::ceil(ymin))),
+            y1 = std::min(cam.height - 1, static_cast<int>(std::floor(ymax)));
   for (int y = y0; y <= y1; ++y) {
     // The polygon is convex: its span on this row is between the extreme edge crossings.
     float xl = 1e9f, xr = -1e9f;
@@ -148,14 +151,16 @@ void ViewRenderer::drawQuad(const World& world, const Quad& q, const StereoCamer
       const Eigen::Vector2f& p = poly[i];
       const Eigen::Vector2f& r = poly[(i + 1) % np];
       if ((p.y() <= y && r.y() >= y) || (r.y() <= y && p.y() >= y)) {
-        const float x = std::abs(r.y() - p.y()) < 1e-6f ? std::min(p.x(), r.x())
-                                                          : p.x() + (y - p.y()) * (r.x() - p.x()) / (r.y() - p.y());
+        const float x = std::abs(r.y() - p.y()) < 1e-6f
+                            ? std::min(p.x(), r.x())
+                            : p.x() + (y - p.y()) * (r.x() - p.x()) / (r.y() - p.y());
         const float x2 = std::abs(r.y() - p.y()) < 1e-6f ? std::max(p.x(), r.x()) : x;
         xl = std::min(xl, x);
         xr = std::max(xr, x2);
       }
     }
-    const int xa = std::max(0, static_cast<int>(std::ceil(xl))), xb = std::min(cam.width - 1, static_cast<int>(std::floor(xr)));
+    const int xa = std::max(0, static_cast<int>(std::ceil(xl))),
+              xb = std::min(cam.width - 1, static_cast<int>(std::floor(xr)));
     if (xa > xb) continue;
     float* g = gray.ptr<float>(y);
     float* z = depth.ptr<float>(y);
@@ -166,7 +171,8 @@ void ViewRenderer::drawQuad(const World& world, const Quad& q, const StereoCamer
       const float zc = A.z() * u + B.z() * v + C.z();
       if (zc >= z[x] || zc < near_) continue;
       const float tu = q.off_u + u * q.texels_per_m, tv = q.off_v + (q.lv - v) * q.texels_per_m;
-      if (q.shape == Quad::kTree && !treeOpaque(u, v, q.lu, q.lv, tex.sample(tu * 0.25f, tv * 0.25f, 3) / 255.0f))
+      if (q.shape == Quad::kTree &&
+          !treeOpaque(u, v, q.lu, q.lv, tex.sample(tu * 0.25f, tv * 0.25f, 3) / 255.0f))
         continue;
       g[x] = q.shade * tex.sample(tu, tv, mipLevel(zc * level_scale));
       z[x] = zc;

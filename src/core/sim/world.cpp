@@ -13,8 +13,8 @@ namespace binloop::sim {
 namespace {
 
 using Vec2 = Eigen::Vector2d;
-constexpr double kStep = 2.0;          // route resampling step (m)
-constexpr double kRouteCell = 10.0;    // cell of the route-sample grid (m)
+constexpr double kStep = 2.0;        // route resampling step (m)
+constexpr double kRouteCell = 10.0;  // cell of the route-sample grid (m)
 
 Vec2 xz(const Eigen::Vector3d& p) { return {p.x(), p.z()}; }
 
@@ -30,8 +30,8 @@ double segmentDistance(const Vec2& a, const Vec2& b, const Vec2& c, const Vec2& 
   const double d1 = cross2(b - a, c - a), d2 = cross2(b - a, d - a);
   const double d3 = cross2(d - c, a - c), d4 = cross2(d - c, b - c);
   if (((d1 > 0) != (d2 > 0)) && ((d3 > 0) != (d4 > 0))) return 0.0;  // they cross
-  return std::min({pointSegmentDistance(a, c, d), pointSegmentDistance(b, c, d), pointSegmentDistance(c, a, b),
-                   pointSegmentDistance(d, a, b)});
+  return std::min({pointSegmentDistance(a, c, d), pointSegmentDistance(b, c, d),
+                   pointSegmentDistance(c, a, b), pointSegmentDistance(d, a, b)});
 }
 
 // Everything the builder needs while placing things; discarded after World::build.
@@ -40,7 +40,7 @@ struct Builder {
   uint64_t seed;
   const std::vector<Eigen::Vector3d>& pts;  // resampled route
   const std::vector<Eigen::Vector3d>& dirs;
-  std::function<int(double, double)> nearest;  // nearest route sample
+  std::function<int(double, double)> nearest;     // nearest route sample
   std::vector<std::pair<Vec2, Vec2>> footprints;  // façades and walls placed so far (2-D segments)
   std::vector<Quad>* quads;
 
@@ -63,7 +63,8 @@ struct Builder {
   double groundY(int i) const { return pts[i].y() + prm.camera_height_m; }
 
   // A vertical quad from a to b (2-D), from `y_base` (below ground, y down) up `height`.
-  Quad wall(const Vec2& a, const Vec2& b, double y_base, double height, int tex, HashRng& rng, float tpm) const {
+  Quad wall(const Vec2& a, const Vec2& b, double y_base, double height, int tex, HashRng& rng,
+            float tpm) const {
     Quad q;
     q.o = Eigen::Vector3f(a.x(), y_base, a.y());
     const Vec2 ab = b - a;
@@ -85,8 +86,9 @@ struct Builder {
   void box(const Eigen::Vector3d& base_centre, const Eigen::Vector3d& fwd, double len, double wid, double h,
            int tex, HashRng& rng, float tpm, float max_dist) {
     const Eigen::Vector3d f = fwd.normalized(), r(f.z(), 0, -f.x());
-    const Eigen::Vector3d c[4] = {base_centre - f * len / 2 - r * wid / 2, base_centre + f * len / 2 - r * wid / 2,
-                                  base_centre + f * len / 2 + r * wid / 2, base_centre - f * len / 2 + r * wid / 2};
+    const Eigen::Vector3d c[4] = {
+        base_centre - f * len / 2 - r * wid / 2, base_centre + f * len / 2 - r * wid / 2,
+        base_centre + f * len / 2 + r * wid / 2, base_centre - f * len / 2 + r * wid / 2};
     for (int k = 0; k < 4; ++k) {
       Quad q = wall(xz(c[k]), xz(c[(k + 1) % 4]), base_centre.y(), h, tex, rng, tpm);
       q.max_distance = max_dist;
@@ -121,8 +123,9 @@ struct Builder {
         i += 2;
         continue;
       }
-      Quad q = wall(a, b, y_base, height + 1.0, bank.facades[rng.below(static_cast<int>(bank.facades.size()))], rng,
-                    static_cast<float>(512.0 / rng.uniform(6.0, 10.0)));
+      Quad q =
+          wall(a, b, y_base, height + 1.0, bank.facades[rng.below(static_cast<int>(bank.facades.size()))],
+               rng, static_cast<float>(512.0 / rng.uniform(6.0, 10.0)));
       if (!placed_facades.empty() && rng.chance(prm.repeat_probability)) {
         // Perceptual aliasing: this front is a copy of one at least 30 samples (60 m) back.
         const size_t k = static_cast<size_t>(rng.below(static_cast<int>(placed_facades.size())));
@@ -162,8 +165,8 @@ struct Builder {
         const Eigen::Vector3d c = ground + r * (kerb - 1.0);
         const Vec2 f = xz(dirs[i]) * 2.2;
         if (routeDistance(xz(c) + f) > 3.2 && routeDistance(xz(c) - f) > 3.2 && routeDistance(xz(c)) > 3.2)
-          box(c, dirs[i], 4.2, 1.8, rng.uniform(1.4, 1.7), bank.cars[rng.below(static_cast<int>(bank.cars.size()))],
-              rng, 90.0f, 90.0f);
+          box(c, dirs[i], 4.2, 1.8, rng.uniform(1.4, 1.7),
+              bank.cars[rng.below(static_cast<int>(bank.cars.size()))], rng, 90.0f, 90.0f);
       }
       if (rng.chance(prm.tree_probability)) {
         const Eigen::Vector3d c = ground + r * (kerb + prm.pavement_width_m + rng.uniform(0.5, 2.0));
@@ -188,7 +191,8 @@ struct Builder {
 
 }  // namespace
 
-World World::build(const std::vector<Pose3>& route_T_w_c, TextureBank bank, const WorldParams& params, uint64_t seed) {
+World World::build(const std::vector<Pose3>& route_T_w_c, TextureBank bank, const WorldParams& params,
+                   uint64_t seed) {
   if (route_T_w_c.size() < 2) throw std::invalid_argument("World: the route needs at least 2 poses");
   if (bank.facades.empty()) throw std::invalid_argument("World: the texture bank has no façades");
   World w;
@@ -202,7 +206,8 @@ World World::build(const std::vector<Pose3>& route_T_w_c, TextureBank bank, cons
     while ((p - w.route_.back()).norm() >= kStep)
       w.route_.push_back(w.route_.back() + (p - w.route_.back()).normalized() * kStep);
   }
-  if (w.route_.size() < 3) w.route_.push_back(route_T_w_c.back().translation() + Eigen::Vector3d(0, 0, kStep));
+  if (w.route_.size() < 3)
+    w.route_.push_back(route_T_w_c.back().translation() + Eigen::Vector3d(0, 0, kStep));
   const size_t n = w.route_.size();
   for (size_t i = 0; i < n; ++i) {
     const size_t i0 = i >= 3 ? i - 3 : 0, i1 = std::min(n - 1, i + 3);
@@ -235,8 +240,13 @@ World World::build(const std::vector<Pose3>& route_T_w_c, TextureBank bank, cons
     w.route_grid_[static_cast<size_t>(cz) * rw + cx].push_back(static_cast<int>(i));
   }
 
-  Builder b{params, seed, w.route_, w.route_dir_, [&w](double x, double z) { return w.nearestRouteSample(x, z); },
-            {}, &w.quads_};
+  Builder b{params,
+            seed,
+            w.route_,
+            w.route_dir_,
+            [&w](double x, double z) { return w.nearestRouteSample(x, z); },
+            {},
+            &w.quads_};
   if (params.populate) {
     b.facadesOnSide(+1, w.bank_);
     b.facadesOnSide(-1, w.bank_);

@@ -14,7 +14,8 @@ namespace {
 bool agrees(const StereoCamera& cam, const FarMatch& m, const Pose3& T_w_c, const Pose3& T_c_w,
             const Eigen::Vector3d& x_c, double chi2) {
   bool in_front = false;
-  if (reprojectionChi2(cam, T_c_w, m.p_w, m.keypoint, static_cast<float>(m.inv_sigma2), &in_front) <= chi2) return true;
+  if (reprojectionChi2(cam, T_c_w, m.p_w, m.keypoint, static_cast<float>(m.inv_sigma2), &in_front) <= chi2)
+    return true;
   const Eigen::Vector3d x_w = T_w_c * x_c;
   for (const KeyframeSighting& s : m.sightings)
     if (reprojectionChi2(cam, s.T_c_w, x_w, s.keypoint, static_cast<float>(s.inv_sigma2), &in_front) > chi2)
@@ -24,8 +25,8 @@ bool agrees(const StereoCamera& cam, const FarMatch& m, const Pose3& T_w_c, cons
 
 }  // namespace
 
-FarPoseResult farKeyframePose(const StereoCamera& cam, const std::vector<FarMatch>& matches, const Pose3& prior_T_w_c,
-                              const FarPoseParams& p, uint64_t seed) {
+FarPoseResult farKeyframePose(const StereoCamera& cam, const std::vector<FarMatch>& matches,
+                              const Pose3& prior_T_w_c, const FarPoseParams& p, uint64_t seed) {
   FarPoseResult out;
   const int n = static_cast<int>(matches.size());
   out.inlier.assign(matches.size(), 0);
@@ -35,7 +36,8 @@ FarPoseResult farKeyframePose(const StereoCamera& cam, const std::vector<FarMatc
 
   auto near_prior = [&](const Pose3& T) {
     return (T.translation() - prior_T_w_c.translation()).norm() <= p.max_offset_m &&
-           Eigen::AngleAxisd(prior_T_w_c.linear().transpose() * T.linear()).angle() <= p.max_turn_deg * M_PI / 180;
+           Eigen::AngleAxisd(prior_T_w_c.linear().transpose() * T.linear()).angle() <=
+               p.max_turn_deg * M_PI / 180;
   };
   auto score = [&](const Pose3& T) {
     const Pose3 T_c_w = T.inverse();

@@ -38,13 +38,14 @@ FrameBuilder::FrameBuilder(const StereoCamera& cam, const OrbSlamParams& orb, co
 
 Frame FrameBuilder::build(const StereoFrame& in) const {
   if (in.left.empty() || in.right.empty())
-    throw DataError("frame " + std::to_string(in.index) + ": empty " + (in.left.empty() ? "left" : "right") + " image");
+    throw DataError("frame " + std::to_string(in.index) + ": empty " + (in.left.empty() ? "left" : "right") +
+                    " image");
   if (in.left.size() != in.right.size())
     throw DataError("frame " + std::to_string(in.index) + ": left image is " + sizeText(in.left) +
                     " but right is " + sizeText(in.right));
   if (in.left.cols != cam_.width || in.left.rows != cam_.height)
-    throw DataError("frame " + std::to_string(in.index) + ": image is " + sizeText(in.left) + ", calibration says " +
-                    std::to_string(cam_.width) + "x" + std::to_string(cam_.height));
+    throw DataError("frame " + std::to_string(in.index) + ": image is " + sizeText(in.left) +
+                    ", calibration says " + std::to_string(cam_.width) + "x" + std::to_string(cam_.height));
   if (in.left.type() != CV_8UC1 || in.right.type() != CV_8UC1)
     throw DataError("frame " + std::to_string(in.index) + ": images must be 8-bit grey (mono8)");
 
@@ -72,7 +73,8 @@ Frame FrameBuilder::build(const StereoFrame& in) const {
   f.keypoints.resize(n);
   for (size_t i = 0; i < n; ++i) {
     const cv::KeyPoint& k = left.keypoints[i];
-    f.keypoints[i] = msg::KeyPoint{k.pt.x, k.pt.y, k.angle, static_cast<uint8_t>(k.octave), sm.right_x[i], sm.depth[i]};
+    f.keypoints[i] =
+        msg::KeyPoint{k.pt.x, k.pt.y, k.angle, static_cast<uint8_t>(k.octave), sm.right_x[i], sm.depth[i]};
   }
   f.descriptors = std::move(left.descriptors);
   f.grid = KeypointGrid(f.keypoints, cam_.width, cam_.height);

@@ -62,9 +62,8 @@ std::vector<SlamKeyframeId> KeyframeDatabase::candidates(const Descriptors& d, s
     groups.push_back(g);
   }
   // Highest sum first; ties by id so that the order never depends on the hash map's.
-  std::sort(groups.begin(), groups.end(), [](const Group& a, const Group& b) {
-    return a.sum != b.sum ? a.sum > b.sum : a.best < b.best;
-  });
+  std::sort(groups.begin(), groups.end(),
+            [](const Group& a, const Group& b) { return a.sum != b.sum ? a.sum > b.sum : a.best < b.best; });
   std::vector<SlamKeyframeId> out;
   for (const Group& g : groups) {
     if (g.sum < 0.75 * best_sum || out.size() >= max) break;

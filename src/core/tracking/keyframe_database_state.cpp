@@ -28,7 +28,8 @@ void KeyframeDatabase::load(StateReader& r) {
     for (BowEntry& e : b) {
       e.word = r.get<uint32_t>("word");
       e.value = r.get<float>("word weight");
-      if (voc_ && e.word >= voc_->words()) r.fail("word " + std::to_string(e.word) + " is not in the vocabulary");
+      if (voc_ && e.word >= voc_->words())
+        r.fail("word " + std::to_string(e.word) + " is not in the vocabulary");
     }
     for (const BowEntry& e : b) inverted_[e.word].push_back(id);
     bows_[id] = std::move(b);

@@ -7,8 +7,8 @@
 
 namespace binloop {
 
-bool projectIntoFrame(const msg::MapPoint& mp, const Pose3& T_c_w, const StereoCamera& cam, const ScalePyramid& s,
-                      ProjectedPoint* out) {
+bool projectIntoFrame(const msg::MapPoint& mp, const Pose3& T_c_w, const StereoCamera& cam,
+                      const ScalePyramid& s, ProjectedPoint* out) {
   const Eigen::Vector3d p_c = T_c_w * mp.p_w;
   if (p_c.z() <= 0) return false;
   const double inv_z = 1.0 / p_c.z();
@@ -39,7 +39,8 @@ int matchProjectedPoints(Frame& f, const std::vector<ProjectedPoint>& pts, const
   for (const ProjectedPoint& pp : pts) {
     const float r = th * (pp.view_cos > 0.998f ? 2.5f : 4.0f) * s.scale[pp.level];
     const std::vector<int> near = f.grid.near(pp.u, pp.v, r, pp.level - 1, pp.level);
-    int best = std::numeric_limits<int>::max(), second = best, best_idx = -1, best_level = -1, second_level = -1;
+    int best = std::numeric_limits<int>::max(), second = best, best_idx = -1, best_level = -1,
+        second_level = -1;
     for (int i : near) {
       if (f.points[i] != kNoId && !f.outlier[i]) continue;
       const msg::KeyPoint& k = f.keypoints[i];
@@ -86,8 +87,9 @@ std::vector<uint8_t> rotationConsistent(const std::vector<float>& angle_diff_deg
   return out;
 }
 
-int matchFromLastFrame(Frame& cur, const Frame& last, const std::function<const msg::MapPoint*(MapPointId)>& lookup,
-                       const StereoCamera& cam, const ScalePyramid& s, float th, const ProjectionParams& p) {
+int matchFromLastFrame(Frame& cur, const Frame& last,
+                       const std::function<const msg::MapPoint*(MapPointId)>& lookup, const StereoCamera& cam,
+                       const ScalePyramid& s, float th, const ProjectionParams& p) {
   const Pose3 T_c_w = cur.T_w_c.inverse();
   // Moving forward by more than a baseline, points look bigger and are found at the same or coarser levels;
   // moving backward, at the same or finer ones (ORB-SLAM2's bForward / bBackward).
@@ -107,7 +109,7 @@ int matchFromLastFrame(Frame& cur, const Frame& last, const std::function<const 
     if (u < 0 || u >= cam.width || v < 0 || v >= cam.height) continue;
     const int oct = last.keypoints[i].octave;
     const float r = th * s.scale[oct];
-    std::vector<int> near = forward ? cur.grid.near(u, v, r, oct, -1)
+    std::vector<int> near = forward    ? cur.grid.near(u, v, r, oct, -1)
                             : backward ? cur.grid.near(u, v, r, 0, oct)
                                        : cur.grid.near(u, v, r, std::max(0, oct - 1), oct + 1);
     const float ur = static_cast<float>(u - cam.bf() / p_c.z());
@@ -140,8 +142,9 @@ int matchFromLastFrame(Frame& cur, const Frame& last, const std::function<const 
   return n;
 }
 
-int matchByDescriptor(Frame& cur, const Frame& last, const std::function<const msg::MapPoint*(MapPointId)>& lookup,
-                      int max_hamming_strict, float ratio) {
+int matchByDescriptor(Frame& cur, const Frame& last,
+                      const std::function<const msg::MapPoint*(MapPointId)>& lookup, int max_hamming_strict,
+                      float ratio) {
   // Best current keypoint for each last-frame point; a keypoint claimed twice keeps the closer claim.
   std::vector<int> claim_dist(cur.size(), std::numeric_limits<int>::max());
   std::vector<int> claim_from(cur.size(), -1);

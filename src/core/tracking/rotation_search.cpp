@@ -81,7 +81,8 @@ RotationSearchResult searchRotation(const Frame& f, const Pose3& predicted_T_w_c
     const int a = rng.below(n), b = rng.below(n);
     // Two bearings a degree apart or less leave the rotation about them loose.
     if (a == b || pairs[a].pred.cross(pairs[b].pred).norm() < 0.02) continue;
-    const Eigen::Matrix3d R = rotationBetweenBearings({pairs[a].obs, pairs[b].obs}, {pairs[a].pred, pairs[b].pred});
+    const Eigen::Matrix3d R =
+        rotationBetweenBearings({pairs[a].obs, pairs[b].obs}, {pairs[a].pred, pairs[b].pred});
     if (Eigen::AngleAxisd(R).angle() > max_angle) continue;
     const int count = countInliers(pairs, R, nullptr);
     if (count > best_count) best_count = count, best_R = R;

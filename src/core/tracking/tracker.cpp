@@ -36,10 +36,14 @@ Pose3 scaledMotion(const Pose3& T, double k) {
 
 const char* msg::toString(TrackingState s) {
   switch (s) {
-    case TrackingState::kNotInitialized: return "not initialized";
-    case TrackingState::kOk: return "ok";
-    case TrackingState::kLost: return "lost";
-    case TrackingState::kRelocalized: return "relocalized";
+    case TrackingState::kNotInitialized:
+      return "not initialized";
+    case TrackingState::kOk:
+      return "ok";
+    case TrackingState::kLost:
+      return "lost";
+    case TrackingState::kRelocalized:
+      return "relocalized";
   }
   return "?";
 }
@@ -50,7 +54,8 @@ Tracker::Tracker(const StereoCamera& cam, const TrackerParams& p)
 }
 
 Pose3 Tracker::lastPose() const {
-  if (const msg::KeyframeState* ref = map_.keyframe(last_ref_)) return orthonormalized(ref->T_w_c * T_ref_last_);
+  if (const msg::KeyframeState* ref = map_.keyframe(last_ref_))
+    return orthonormalized(ref->T_w_c * T_ref_last_);
   return last_->T_w_c;
 }
 
@@ -65,7 +70,8 @@ Tracker::Output Tracker::track(const StereoFrame& in, int mapping_queue) {
 
   if (have_stamp_ && !(in.stamp_s > last_stamp_)) {
     tf.problem = "frame " + std::to_string(in.index) + ": time " + std::to_string(in.stamp_s) +
-                 " s does not come after the last frame's " + std::to_string(last_stamp_) + " s; frame skipped";
+                 " s does not come after the last frame's " + std::to_string(last_stamp_) +
+                 " s; frame skipped";
     return out;
   }
   Frame f;
@@ -105,14 +111,16 @@ Tracker::Output Tracker::track(const StereoFrame& in, int mapping_queue) {
     // A pose hint while lost stands in for the prediction: the frame is searched for there and must be found
     // within its radius.
     const bool hinted = hint_ && state_ == msg::TrackingState::kLost;
-    const Pose3 predicted =
-        hinted  ? hint_->T_w_c
-        : predict ? orthonormalized(last_pose * scaledMotion(velocity_, dt / velocity_dt_))
-                  : last_pose;
+    const Pose3 predicted = hinted ? hint_->T_w_c
+                            : predict
+                                ? orthonormalized(last_pose * scaledMotion(velocity_, dt / velocity_dt_))
+                                : last_pose;
     f.T_w_c = predicted;
     MotionReach reach;
-    if (hinted) reach = MotionReach(predicted.translation(), hint_->radius_m, 0, 0);
-    else if (predict) reach = MotionReach(predicted.translation(), p_.recovery_min_gate_m, p_.recovery_max_accel_mps2, dt);
+    if (hinted)
+      reach = MotionReach(predicted.translation(), hint_->radius_m, 0, 0);
+    else if (predict)
+      reach = MotionReach(predicted.translation(), p_.recovery_min_gate_m, p_.recovery_max_accel_mps2, dt);
     bool ok = false;
     bool relocalized = false;  // found from scratch, not near the prediction
     if (state_ == msg::TrackingState::kOk) {
@@ -159,7 +167,8 @@ Tracker::Output Tracker::track(const StereoFrame& in, int mapping_queue) {
       // repeats lets a wrong pose gather dozens of inliers.
       const SlamKeyframeId reference_before = reference_;
       ok = trackLocalMap(f, p_.lost_radius, p_.min_inliers_after_loss) && reach.admits(f.T_w_c);
-      if (!ok && predict && p_.recover_rotation_first) ok = recoverRotationFirst(f, predicted) && reach.admits(f.T_w_c);
+      if (!ok && predict && p_.recover_rotation_first)
+        ok = recoverRotationFirst(f, predicted) && reach.admits(f.T_w_c);
       // Still nothing: the pose is unknown; find it from scratch against recent keyframes.
       // Localisation only: the map is as loaded, and two parts of it may show one place a metre apart (a
       // revisit never closed); a pose found in the other part is no less right, so no gate.
@@ -195,7 +204,8 @@ Tracker::Output Tracker::track(const StereoFrame& in, int mapping_queue) {
       tf.problem = "lost: " + std::to_string(inliers_) + " inliers";
       if (reach.nearestRefusedM() >= 0)
         tf.problem += "; a pose " + fixedDecimals(reach.nearestRefusedM(), 1) + " m from the " +
-                      (hinted ? std::string("pose hint") : "motion model's prediction after " + fixedDecimals(reach.dtS(), 1) + " s") +
+                      (hinted ? std::string("pose hint")
+                              : "motion model's prediction after " + fixedDecimals(reach.dtS(), 1) + " s") +
                       " was rejected (at most " + fixedDecimals(reach.radiusM(), 1) + " m)";
       tf.T_w_c = predicted;  // not what a failed attempt left in f
       tf.track_ms = msSinceT(t0);
@@ -261,9 +271,11 @@ int Tracker::optimizePose(Frame& f) {
   std::vector<int> index;
   const std::vector<PoseObservation> obs = observationsOf(f, &index);
   if (obs.size() < 3) return 0;
-  const PoseOptimizationResult r = binloop::optimizePose(cam_, orthonormalized(f.T_w_c.inverse()), obs, p_.pose);
+  const PoseOptimizationResult r =
+      binloop::optimizePose(cam_, orthonormalized(f.T_w_c.inverse()), obs, p_.pose);
   f.T_w_c = orthonormalized(r.T_c_w.inverse());
-  // Every caller drops the outliers' matches, so that the next search may give those keypoints to other points.
+  // Every caller drops the outliers' matches, so that the next search may give those keypoints to other
+  // points.
   int inliers = 0;
   for (size_t j = 0; j < index.size(); ++j) {
     if (r.outlier[j]) f.points[index[j]] = kNoId;
@@ -304,8 +316,10 @@ void matchPointsByDescriptor(Frame& f, const std::vector<const msg::MapPoint*>& 
     int best = 256, second = 256, best_j = -1;
     for (size_t j = 0; j < f.size(); ++j) {
       const int d = hamming(mp->descriptor, f.descriptors[j]);
-      if (d < best) second = best, best = d, best_j = static_cast<int>(j);
-      else if (d < second) second = d;
+      if (d < best)
+        second = best, best = d, best_j = static_cast<int>(j);
+      else if (d < second)
+        second = d;
     }
     if (best_j < 0 || best > 64 || best > 0.8 * second || f.points[best_j] != kNoId) continue;
     f.points[best_j] = mp->id;
@@ -449,20 +463,21 @@ bool Tracker::relocalize(Frame& f, MotionReach& reach, bool hinted) {
   // An empty index (a map adopted from local mapping carries no descriptors to index) finds nothing: the
   // most recent keyframes then, as without a vocabulary.
   if (keyframe_db_ && keyframe_db_->size() > 0) {
-    tries = keyframe_db_->candidates(f.descriptors, static_cast<size_t>(p_.reloc_keyframes), [this](SlamKeyframeId k) {
-      std::vector<SlamKeyframeId> n;
-      if (const msg::KeyframeState* kf = map_.keyframe(k))
-        for (const auto& e : kf->covisible)
-          if (n.size() < 10) n.push_back(e.id);
-      return n;
-    });
+    tries = keyframe_db_->candidates(f.descriptors, static_cast<size_t>(p_.reloc_keyframes),
+                                     [this](SlamKeyframeId k) {
+                                       std::vector<SlamKeyframeId> n;
+                                       if (const msg::KeyframeState* kf = map_.keyframe(k))
+                                         for (const auto& e : kf->covisible)
+                                           if (n.size() < 10) n.push_back(e.id);
+                                       return n;
+                                     });
   } else {
     tries = map_.recentKeyframes(static_cast<size_t>(p_.reloc_keyframes));
   }
   // A hint's nearest keyframes go first (the vocabulary may not rank them: the view may have changed).
   if (hinted) {
-    std::vector<SlamKeyframeId> near =
-        map_.keyframesNear(hint_->T_w_c.translation(), hint_->radius_m, static_cast<size_t>(p_.reloc_keyframes));
+    std::vector<SlamKeyframeId> near = map_.keyframesNear(hint_->T_w_c.translation(), hint_->radius_m,
+                                                          static_cast<size_t>(p_.reloc_keyframes));
     for (SlamKeyframeId k : tries)
       if (std::find(near.begin(), near.end(), k) == near.end()) near.push_back(k);
     tries = std::move(near);
@@ -545,19 +560,24 @@ bool Tracker::trackLocalMap(Frame& f, float radius, int min_inliers) {
 bool Tracker::needKeyframe(const Frame& f, int mapping_queue) const {
   if (mapping_queue >= p_.max_mapping_queue) return false;
   const size_t kfs = map_.keyframeCount();
-  const size_t min_obs = std::min<size_t>(kfs <= 2 ? 2 : 3, static_cast<size_t>(p_.keyframe_ref_min_observers));
+  const size_t min_obs =
+      std::min<size_t>(kfs <= 2 ? 2 : 3, static_cast<size_t>(p_.keyframe_ref_min_observers));
   int ref_matches = 0;
   if (const msg::KeyframeState* ref = map_.keyframe(reference_))
     for (MapPointId id : ref->point_ids)
-      if (id != kNoId && map_.resolve(id) != kNoId && map_.observers(map_.resolve(id)).size() >= min_obs) ++ref_matches;
+      if (id != kNoId && map_.resolve(id) != kNoId && map_.observers(map_.resolve(id)).size() >= min_obs)
+        ++ref_matches;
   int tracked_close = 0, untracked_close = 0;
   for (size_t i = 0; i < f.size(); ++i) {
     const float d = f.keypoints[i].depth;
     if (d <= 0 || !isCloseDepth(d, cam_, p_.stereo)) continue;
-    if (f.points[i] != kNoId && !f.outlier[i]) ++tracked_close;
-    else ++untracked_close;
+    if (f.points[i] != kNoId && !f.outlier[i])
+      ++tracked_close;
+    else
+      ++untracked_close;
   }
-  const bool need_close = tracked_close < p_.keyframe_close_tracked_max && untracked_close > p_.keyframe_close_untracked_min;
+  const bool need_close =
+      tracked_close < p_.keyframe_close_tracked_max && untracked_close > p_.keyframe_close_untracked_min;
   const float ref_ratio = kfs < 2 ? 0.4f : p_.keyframe_ref_ratio;
   const int inliers = f.matchedInliers();
   const bool c1a = f.index >= last_keyframe_frame_ + static_cast<uint64_t>(p_.keyframe_max_frames);

@@ -21,12 +21,15 @@ void Tracker::save(StateWriter& w) const {
 }
 
 void Tracker::load(StateReader& r) {
-  if (state_ != msg::TrackingState::kNotInitialized) r.fail("tracking has started already; a map loads into a new tracker");
+  if (state_ != msg::TrackingState::kNotInitialized)
+    r.fail("tracking has started already; a map loads into a new tracker");
   const StereoCamera cam = readCamera(r);
-  if (!(cam == cam_)) r.fail("the map was made with another camera:\n" + cam.describe() + "\nthis tracker has\n" + cam_.describe());
+  if (!(cam == cam_))
+    r.fail("the map was made with another camera:\n" + cam.describe() + "\nthis tracker has\n" +
+           cam_.describe());
   std::string extractor = r.getString("extractor");
-  // Maps saved before the BRIEF pattern became a setting (2026-11-25) name the Gaussian tests "binloop ORB (":
-  // the same descriptors as "binloop ORB with the Gaussian BRIEF pattern (".
+  // Maps saved before the BRIEF pattern became a setting (2026-11-25) name the Gaussian tests "binloop ORB
+  // (": the same descriptors as "binloop ORB with the Gaussian BRIEF pattern (".
   const std::string old_name = "binloop ORB (";
   if (extractor.rfind(old_name, 0) == 0)
     extractor = "binloop ORB with the Gaussian BRIEF pattern (" + extractor.substr(old_name.size());
@@ -50,8 +53,9 @@ void Tracker::load(StateReader& r) {
       KeyframeDatabase(nullptr).load(r);  // read past it: relocalisation then tries the most recent keyframes
     }
   } else if (keyframe_db_) {
-    r.fail("the map has no relocalisation index (it was saved by a tracker without a vocabulary), so this "
-           "tracker's vocabulary could not find its places; load it with reloc_vocab none");
+    r.fail(
+        "the map has no relocalisation index (it was saved by a tracker without a vocabulary), so this "
+        "tracker's vocabulary could not find its places; load it with reloc_vocab none");
   }
   r.expectEnd();
   startLostAtLastKeyframe();

@@ -4,7 +4,8 @@
 
 namespace binloop {
 
-TrackingStage::TrackingStage(TrackerParams params, std::optional<StereoCamera> camera, double keyframe_timeout_s)
+TrackingStage::TrackingStage(TrackerParams params, std::optional<StereoCamera> camera,
+                             double keyframe_timeout_s)
     : params_(std::move(params)), fixed_camera_(std::move(camera)), in_flight_(keyframe_timeout_s) {
   if (fixed_camera_) tracker_ = freshTracker(*fixed_camera_);
 }

@@ -8,7 +8,7 @@ namespace binloop {
 Eigen::Matrix<double, 3, 4> StereoCamera::projectionMatrix(bool right) const {
   Eigen::Matrix<double, 3, 4> P;
   P << fx, 0, cx, right ? -fx * baseline_m : 0.0,  //
-      0, fy, cy, 0,                               //
+      0, fy, cy, 0,                                //
       0, 0, 1, 0;
   return P;
 }

@@ -86,7 +86,8 @@ long CliArgs::integer(const std::string& name) const {
   errno = 0;
   char* end = nullptr;
   const long v = std::strtol(s.c_str(), &end, 10);
-  if (s.empty() || *end != '\0' || errno) throw CliError("--" + name + " must be a whole number, got '" + s + "'");
+  if (s.empty() || *end != '\0' || errno)
+    throw CliError("--" + name + " must be a whole number, got '" + s + "'");
   return v;
 }
 

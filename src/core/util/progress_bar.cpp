@@ -22,7 +22,8 @@ void ProgressBar::update(size_t done) {
   const double secs = std::chrono::duration<double>(now - start_).count();
   const double eta = frac > 0 ? secs * (1 - frac) / frac : 0;
   std::fprintf(stderr, "\r%s [%.*s%*s] %zu/%zu %3.0f%% %.0fs left %s ", label_.c_str(), fill,
-               "##############################", width - fill, "", done, total_, 100 * frac, eta, status_.c_str());
+               "##############################", width - fill, "", done, total_, 100 * frac, eta,
+               status_.c_str());
   std::fflush(stderr);
 }
 

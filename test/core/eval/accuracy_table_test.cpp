@@ -41,10 +41,11 @@ std::vector<Pose3> outAndBack() {
 }  // namespace
 
 TEST(AccuracyTable, MedianRangeWrongLoopsAndSegmentsClosedInEveryRun) {
-  const AccuracyRow r = summarizeRuns("hbow",
-                                      {run(0.30, 0.20, 2, 2, {true, false}, 0), run(0.10, 0.10, 3, 2, {true, true}, 4),
-                                       run(0.20, NAN, 1, 1, {true, false}, 1)},
-                                      2);
+  const AccuracyRow r =
+      summarizeRuns("hbow",
+                    {run(0.30, 0.20, 2, 2, {true, false}, 0), run(0.10, 0.10, 3, 2, {true, true}, 4),
+                     run(0.20, NAN, 1, 1, {true, false}, 1)},
+                    2);
   EXPECT_EQ(r.runs, 3);
   EXPECT_DOUBLE_EQ(r.ate_median, 0.20);
   EXPECT_DOUBLE_EQ(r.ate_min, 0.10);
@@ -87,5 +88,6 @@ TEST(AccuracyTable, APeersRunsAreGroupedByFolderAndScoredAlike) {
   EXPECT_NE(table.find("\npeer:loops,2,"), std::string::npos) << table;
   EXPECT_THROW_WITH(scorePeerRuns(tmp / "none", "peer:", gt, segments), DataError, "no such folder");
   test::writeText(tmp / "loops-1/TrackingTimes.txt", "0 0.0 tracked\n");
-  EXPECT_THROW_WITH(scorePeerRuns(tmp.path(), "peer:", gt, segments), DataError, "expected 'frame stamp seconds state'");
+  EXPECT_THROW_WITH(scorePeerRuns(tmp.path(), "peer:", gt, segments), DataError,
+                    "expected 'frame stamp seconds state'");
 }

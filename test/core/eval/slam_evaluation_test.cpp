@@ -25,7 +25,8 @@ std::vector<Pose3> outAndBack() {
 
 TEST(RevisitSegments, SplitWhereQueryFramesJumpByMoreThanTheGap) {
   // Queries 50..60 with a hole of 20 frames (60 -> 80 stays together), then 101 after a jump of 21.
-  const std::vector<std::pair<int, int>> pairs{{80, 3}, {50, 1}, {50, 2}, {55, 4}, {60, 5}, {101, 7}, {103, 8}, {200, 0}};
+  const std::vector<std::pair<int, int>> pairs{{80, 3}, {50, 1},  {50, 2},  {55, 4},
+                                               {60, 5}, {101, 7}, {103, 8}, {200, 0}};
   const auto s = revisitSegments(pairs);
   ASSERT_EQ(s.size(), 3u);
   EXPECT_EQ(s[0].first, 50);
@@ -69,7 +70,8 @@ TEST(LoopScore, ACorrectLoopClosesOnlyTheSegmentHoldingItsQuery) {
 
 TEST(LoopScore, AFrameOutsideTheGroundTruthIsAnError) {
   const auto gt = outAndBack();
-  EXPECT_THROW_WITH(scoreLoops({{250, 10}}, gt, {}), DataError, "frame 250 is outside the 201 ground-truth poses");
+  EXPECT_THROW_WITH(scoreLoops({{250, 10}}, gt, {}), DataError,
+                    "frame 250 is outside the 201 ground-truth poses");
 }
 
 // A loop between frames at the same place whose relative pose is 1.5 m or 3 degrees off is wrong: it would

@@ -23,7 +23,8 @@ TEST(TemporalConsistency, NeedsThreeConsistentQueriesAndTakesTheWeakestLink) {
 
 TEST(TemporalConsistency, PrefersTheChainWithTheStrongerWeakestLink) {
   // Two ways to reach 205 in three links: through 201 (weak, 0.2) or through 204 (0.8).
-  const std::vector<QueryOffers> q{{1, {{200, 1.0}}}, {2, {{201, 0.2}, {204, 0.8}}}, {3, {{205, 0.9}}}, {4, {{207, 0.7}}}};
+  const std::vector<QueryOffers> q{
+      {1, {{200, 1.0}}}, {2, {{201, 0.2}, {204, 0.8}}}, {3, {{205, 0.9}}}, {4, {{207, 0.7}}}};
   const auto p = consistentPredictions(q, 3, 4);
   EXPECT_EQ(p[2].candidate, 205);
   EXPECT_DOUBLE_EQ(p[2].confidence, 0.8);
@@ -40,7 +41,8 @@ TEST(TemporalConsistency, ChainOfOneIsTheRawPrediction) {
 TEST(TemporalConsistency, PassedOnlyWhenEveryLinkPassedItsBar) {
   // The same chain, once with a middle link that did not pass its model's bar (a best rejected keyframe).
   for (const bool middle_passed : {true, false}) {
-    const std::vector<QueryOffers> q{{1, {{100, 1.0, true}}}, {2, {{101, 0.9, middle_passed}}}, {3, {{102, 1.1, true}}}};
+    const std::vector<QueryOffers> q{
+        {1, {{100, 1.0, true}}}, {2, {{101, 0.9, middle_passed}}}, {3, {{102, 1.1, true}}}};
     const auto p = consistentPredictions(q, 3, 4);
     EXPECT_EQ(p[2].candidate, 102);
     EXPECT_DOUBLE_EQ(p[2].confidence, 0.9);

@@ -39,7 +39,8 @@ std::vector<Pose3> windingDrive(int n) {
   double heading = 0;
   for (int i = 0; i < n; ++i) {
     heading += 0.02 * std::sin(i / 40.0);
-    const Eigen::Matrix3d R = yaw(heading) * Eigen::AngleAxisd(0.03 * std::cos(i / 25.0), Eigen::Vector3d::UnitX());
+    const Eigen::Matrix3d R =
+        yaw(heading) * Eigen::AngleAxisd(0.03 * std::cos(i / 25.0), Eigen::Vector3d::UnitX());
     p.push_back(pose(R, t));
     t += R * Eigen::Vector3d(0, 0, 1.0);
   }
@@ -89,8 +90,9 @@ TEST(TrajectoryMetrics, IdenticalTrajectoriesHaveNoError) {
 
 TEST(TrajectoryMetrics, RigidlyMovedEstimateHasNoErrorAfterAlignment) {
   const auto gt = windingDrive(1200);
-  const Pose3 T_est_gt = pose(Eigen::AngleAxisd(2.0, Eigen::Vector3d(0.2, -1, 0.5).normalized()).toRotationMatrix(),
-                              Eigen::Vector3d(30, -4, 120));
+  const Pose3 T_est_gt =
+      pose(Eigen::AngleAxisd(2.0, Eigen::Vector3d(0.2, -1, 0.5).normalized()).toRotationMatrix(),
+           Eigen::Vector3d(30, -4, 120));
   std::vector<Pose3> est;
   for (const auto& T : gt) est.push_back(T_est_gt * T);
   const TrajectoryMetrics m = evalAll(gt, est);
@@ -229,8 +231,10 @@ TEST(TrajectoryMetrics, FileErrors) {
   EXPECT_THROW_WITH(readEstimateFile(tmp / "empty.txt"), DataError, "empty.txt: holds no poses");
   EXPECT_THROW_WITH(readGroundTruthPoses(tmp / "empty.txt"), DataError, "empty.txt: holds no poses");
   writeText(tmp / "nan.txt", I + "0\n" + I + "nan\n");
-  EXPECT_THROW_WITH(readEstimateFile(tmp / "nan.txt"), DataError, "nan.txt:2: holds a number that is not finite");
-  EXPECT_THROW_WITH(readGroundTruthPoses(tmp / "nan.txt"), DataError, "nan.txt:2: holds a number that is not finite");
+  EXPECT_THROW_WITH(readEstimateFile(tmp / "nan.txt"), DataError,
+                    "nan.txt:2: holds a number that is not finite");
+  EXPECT_THROW_WITH(readGroundTruthPoses(tmp / "nan.txt"), DataError,
+                    "nan.txt:2: holds a number that is not finite");
   writeText(tmp / "mixed.txt", I + "0\n0 0 0 0 0 0 0 1\n");
   EXPECT_THROW_WITH(readEstimateFile(tmp / "mixed.txt"), DataError,
                     "mixed.txt:2: has 8 numbers, but the first pose line has 12 (KITTI)");
@@ -245,17 +249,21 @@ TEST(TrajectoryMetrics, MatchingErrors) {
                     "11 poses, but the ground truth has only 10");
   // TUM stamps as indices: beyond the ground truth, not whole, repeated.
   auto est = tumEstimate(gt, 1, [](int f) { return double(f) + 5; });
-  EXPECT_THROW_WITH(matchByFrameIndex(gt, est), DataError, "pose 6 is frame 10, but the ground truth has only 10");
+  EXPECT_THROW_WITH(matchByFrameIndex(gt, est), DataError,
+                    "pose 6 is frame 10, but the ground truth has only 10");
   est = tumEstimate(gt, 1, [](int f) { return f * 0.1; });
-  EXPECT_THROW_WITH(matchByFrameIndex(gt, est), DataError, "pose 2 has stamp 0.1, which is not a frame index");
+  EXPECT_THROW_WITH(matchByFrameIndex(gt, est), DataError,
+                    "pose 2 has stamp 0.1, which is not a frame index");
   est = tumEstimate(gt, 1, [](int f) { return double(f / 2); });
   EXPECT_THROW_WITH(matchByFrameIndex(gt, est), DataError, "poses 1 and 2 both match ground-truth frame 0");
   // By time: the times must match the ground truth, and KITTI files have no stamps.
   EXPECT_THROW_WITH(matchByTime(gt, {0, 0.1}, est), DataError, "the times file has 2 stamps for 10");
-  EXPECT_THROW_WITH(matchByTime(gt, std::vector<double>(10, 0), kittiEstimate(gt)), DataError, "no time stamps");
+  EXPECT_THROW_WITH(matchByTime(gt, std::vector<double>(10, 0), kittiEstimate(gt)), DataError,
+                    "no time stamps");
   // Too few poses, and poses that are not finite.
   const MatchedPoses two = matchByFrameIndex(gt, tumEstimate(gt, 5, [](int f) { return double(f); }));
-  EXPECT_THROW_WITH(evaluateTrajectory(two), DataError, "only 2 poses matched the ground truth; at least 3 are needed");
+  EXPECT_THROW_WITH(evaluateTrajectory(two), DataError,
+                    "only 2 poses matched the ground truth; at least 3 are needed");
   MatchedPoses bad = matchByFrameIndex(gt, kittiEstimate(gt));
   bad.est[4].translation().x() = std::nan("");
   EXPECT_THROW_WITH(evaluateTrajectory(bad), DataError, "the estimated pose of frame 4 is not finite");

@@ -22,8 +22,10 @@ cv::Mat texturedImage(int w, int h, uint64_t seed) {
   cv::Mat img(h, w, CV_8UC1, cv::Scalar(128));
   HashRng rng(seed);
   for (int i = 0; i < w * h / 400; ++i) {
-    const int x = static_cast<int>(rng.below(static_cast<uint64_t>(w))), y = static_cast<int>(rng.below(static_cast<uint64_t>(h)));
-    cv::rectangle(img, {x, y}, {x + 4 + static_cast<int>(rng.below(20)), y + 4 + static_cast<int>(rng.below(20))},
+    const int x = static_cast<int>(rng.below(static_cast<uint64_t>(w))),
+              y = static_cast<int>(rng.below(static_cast<uint64_t>(h)));
+    cv::rectangle(img, {x, y},
+                  {x + 4 + static_cast<int>(rng.below(20)), y + 4 + static_cast<int>(rng.below(20))},
                   cv::Scalar(static_cast<double>(rng.below(256))), -1);
   }
   return img;
@@ -53,7 +55,8 @@ TEST(ImageFeatures, DefaultsAreTheSlamExtractorOfConfigKitti) {
   const SlamConfig c = loadSlamConfig(std::string(BINLOOP_ROOT_DIR) + "/config/kitti.yaml");
   EXPECT_TRUE(d.orb == c.tracker.orb)
       << "config/kitti.yaml's orb: section differs from the defaults of train and eval-loops; the shipped "
-         "vocabularies are trained with those defaults (vocab/make_vocab.sh): retrain them, or keep both equal";
+         "vocabularies are trained with those defaults (vocab/make_vocab.sh): retrain them, or keep both "
+         "equal";
   EXPECT_EQ(d.max_side, 0) << "the SLAM extracts from full-size images";
   EXPECT_EQ(extractorSettings(d), extractorSettings(c.tracker.orb));
   // The command line's defaults are the same.
@@ -95,8 +98,9 @@ TEST(ImageFeatures, ExtractsWithTheSlamExtractor) {
 }
 
 TEST(ImageFeatures, CommandLineSetsEveryExtractorSetting) {
-  const ExtractOptions o = parse({"--features", "1000", "--scale-factor", "1.3", "--pyramid-levels", "6", "--ini-fast", "25",
-                                  "--min-fast", "9", "--cell-px", "40", "--max-side", "1024", "--threads", "1"});
+  const ExtractOptions o =
+      parse({"--features", "1000", "--scale-factor", "1.3", "--pyramid-levels", "6", "--ini-fast", "25",
+             "--min-fast", "9", "--cell-px", "40", "--max-side", "1024", "--threads", "1"});
   EXPECT_EQ(o.orb.features, 1000);
   EXPECT_EQ(o.orb.scale_factor, 1.3f);
   EXPECT_EQ(o.orb.levels, 6);
@@ -106,16 +110,19 @@ TEST(ImageFeatures, CommandLineSetsEveryExtractorSetting) {
   EXPECT_EQ(o.max_side, 1024);
   EXPECT_EQ(o.threads, 1);
   EXPECT_EQ(extractorSettings(o).describe(),
-            "binloop ORB with the Gaussian BRIEF pattern (1000 features, scale 1.3, 6 levels, FAST 25/9, 40-px cells, images scaled to a longer "
+            "binloop ORB with the Gaussian BRIEF pattern (1000 features, scale 1.3, 6 levels, FAST 25/9, "
+            "40-px cells, images scaled to a longer "
             "side <= 1024 px)");
-  EXPECT_THROW_WITH(parse({"--min-fast", "30"}), CliError,
-                    "extractor options: ORB-SLAM extractor: FAST thresholds need 1 <= min_fast <= ini_fast, got 30 and 20");
+  EXPECT_THROW_WITH(
+      parse({"--min-fast", "30"}), CliError,
+      "extractor options: ORB-SLAM extractor: FAST thresholds need 1 <= min_fast <= ini_fast, got 30 and 20");
   EXPECT_THROW_WITH(parse({"--max-side", "-1"}), CliError, "--max-side must be >= 0");
   EXPECT_THROW_WITH(parse({"--grid-cell", "64"}), CliError, "--grid-cell is retired");
   EXPECT_EQ(parse({}).orb.pattern, BriefPatternKind::kGaussian);
   EXPECT_EQ(parse({"--pattern", "orb"}).orb.pattern, BriefPatternKind::kOrbLearned);
   EXPECT_EQ(extractorSettings(parse({"--pattern", "orb"})).kind, ExtractorKind::kBinloopOrbRbrief);
-  EXPECT_THROW_WITH(parse({"--pattern", "brisk"}), CliError, "--pattern: unknown BRIEF pattern 'brisk' (known: orb, gaussian)");
+  EXPECT_THROW_WITH(parse({"--pattern", "brisk"}), CliError,
+                    "--pattern: unknown BRIEF pattern 'brisk' (known: orb, gaussian)");
 }
 
 // The shipped vocabularies (vocab/make_vocab.sh) were trained on what the SLAM and the tools extract by
@@ -128,11 +135,13 @@ TEST(ImageFeatures, ShippedVocabulariesRecordTheExtractorMakeVocabUsed) {
   photos.orb.pattern = BriefPatternKind::kOrbLearned;
   int checked = 0;
   for (const char* m : {"hbow", "fabmap", "vlad", "hmvlad", "vladpq"}) {
-    for (const auto& [dir, expected] : {std::pair{std::string("kitti08/"), extractorSettings(ExtractOptions{})},
-                                        std::pair{std::string("photos/"), extractorSettings(photos)}}) {
+    for (const auto& [dir, expected] :
+         {std::pair{std::string("kitti08/"), extractorSettings(ExtractOptions{})},
+          std::pair{std::string("photos/"), extractorSettings(photos)}}) {
       const std::string f = root + dir + m + ".bin";
       if (!test::exists(f)) continue;  // hbow files are made by vocab/make_vocab.sh, not tracked
-      EXPECT_EQ(readModelHeader(f).extractor, expected) << f << ": " << readModelHeader(f).extractor.describe();
+      EXPECT_EQ(readModelHeader(f).extractor, expected)
+          << f << ": " << readModelHeader(f).extractor.describe();
       ++checked;
     }
   }

@@ -47,8 +47,8 @@ double angleDiff(double a, double b) {
 struct Pair {
   int a, b;
 };
-std::vector<Pair> samePoints(const OrbFeatures& a, const OrbFeatures& b, const cv::Matx23d& a_to_b, int octave_shift,
-                             cv::Point2f centre = {}, float radius = 0) {
+std::vector<Pair> samePoints(const OrbFeatures& a, const OrbFeatures& b, const cv::Matx23d& a_to_b,
+                             int octave_shift, cv::Point2f centre = {}, float radius = 0) {
   std::vector<Pair> pairs;
   for (int i = 0; i < static_cast<int>(a.keypoints.size()); ++i) {
     const auto& ka = a.keypoints[i];
@@ -99,7 +99,8 @@ TEST(OrbSlamExtractor, KeepsTheBudgetOfEveryLevelOnARealFrame) {
   BINLOOP_REQUIRE_DATA(kittiLeft(0));
   const cv::Mat img = readGrayImage(kittiLeft(0));
   const OrbSlamExtractor ex;
-  const std::vector<int> expected = {434, 362, 302, 251, 209, 175, 145, 122};  // 2000 * (1 - 1/1.2) / (1 - 1.2^-8) ...
+  const std::vector<int> expected = {434, 362, 302, 251,
+                                     209, 175, 145, 122};  // 2000 * (1 - 1/1.2) / (1 - 1.2^-8) ...
   ASSERT_EQ(ex.featuresPerLevel(), expected);
   const OrbFeatures f = ex.extract(img);
   ASSERT_EQ(f.keypoints.size(), f.descriptors.size());
@@ -202,7 +203,8 @@ TEST(OrbSlamExtractor, DescriptorsAndAnglesFollowARotation) {
     std::printf(
         "%2.0f deg: %zu same points, median Hamming %.0f, %.0f %% <= 50, median angle error %.1f deg, "
         "%.0f %% within 10 deg, %.0f %% nearest neighbours\n",
-        deg, pairs.size(), median(hamming_of), 100 * close / n, median(angle_error), 100 * good_angle / n, 100 * nn);
+        deg, pairs.size(), median(hamming_of), 100 * close / n, median(angle_error), 100 * good_angle / n,
+        100 * nn);
     EXPECT_GE(close / n, 0.7) << deg << " deg";
     EXPECT_LE(median(hamming_of), 35) << deg << " deg";
     EXPECT_LE(median(angle_error), 4) << deg << " deg";
@@ -241,8 +243,8 @@ TEST(OrbSlamExtractor, DescriptorsSurviveAScaleChangeOfTwoOctaves) {
   std::printf(
       "%zu keypoints at octave <= 5: %zu found two octaves up, median Hamming %.0f, %.0f %% <= 50, "
       "%.0f %% nearest neighbours; %zu at the same octave, median Hamming %.0f\n",
-      low.keypoints.size(), pairs.size(), median(h), 100.0 * close / pairs.size(), 100 * nn, same_octave.size(),
-      median(h_same));
+      low.keypoints.size(), pairs.size(), median(h), 100.0 * close / pairs.size(), 100 * nn,
+      same_octave.size(), median(h_same));
   EXPECT_GE(static_cast<double>(pairs.size()) / low.keypoints.size(), 0.3);
   EXPECT_GT(median(h_same), 3 * median(h) + 10) << "the octave two up should hold the same descriptor";
   EXPECT_LE(median(h), 40);
@@ -277,7 +279,8 @@ TEST(OrbSlamExtractor, PyramidShrinksByTheScaleFactor) {
 TEST(OrbSlamExtractor, RefusesBadImagesParametersAndPyramids) {
   const OrbSlamExtractor ex;
   EXPECT_THROW_WITH(ex.extract(cv::Mat()), PlaceError, "empty image");
-  EXPECT_THROW_WITH(ex.extract(cv::Mat(64, 64, CV_8UC3)), PlaceError, "8-bit single-channel (grey) image, got CV_8UC3");
+  EXPECT_THROW_WITH(ex.extract(cv::Mat(64, 64, CV_8UC3)), PlaceError,
+                    "8-bit single-channel (grey) image, got CV_8UC3");
   EXPECT_THROW_WITH(ex.extract(cv::Mat(64, 64, CV_16UC1)), PlaceError, "got CV_16UC1");
   OrbSlamParams p;
   p.levels = 0;

@@ -89,11 +89,13 @@ TEST(StereoMatcher, RecoversAKnownDisparityToASubPixel) {
   equiangular.fit = StereoMatchParams::SubPixelFit::kEquiangular;
   orbslam2.centre_pixel_offset = true;
   for (double d : {12.0, 7.5, 20.25, 33.7}) {
-    const ShiftResult r = matchShift(left, d), e = matchShift(left, d, equiangular), o = matchShift(left, d, orbslam2);
+    const ShiftResult r = matchShift(left, d), e = matchShift(left, d, equiangular),
+                      o = matchShift(left, d, orbslam2);
     std::printf(
         "disparity %5.2f: %.0f %% of keypoints matched (%d more dropped by SAD); within 0.2 px: %.0f %% "
         "(parabola), %.0f %% (equiangular), %.0f %% (ORB-SLAM2's centre offset); within 1 px: %.0f %%\n",
-        d, 100 * r.match_rate, r.rejected_by_sad, 100 * r.accurate, 100 * e.accurate, 100 * o.accurate, 100 * r.near_d);
+        d, 100 * r.match_rate, r.rejected_by_sad, 100 * r.accurate, 100 * e.accurate, 100 * o.accurate,
+        100 * r.near_d);
     EXPECT_GE(r.match_rate, 0.45) << "d = " << d;
     EXPECT_GE(r.accurate, 0.7) << "d = " << d;
     EXPECT_GE(r.near_d, 0.97) << "d = " << d;
@@ -145,7 +147,8 @@ TEST(StereoMatcher, DropsMatchesWhoseSadIsFarAboveTheMedian) {
   for (int y = 0; y < right.rows; ++y)
     for (int x = 0; x < right.cols; ++x) {
       const double sigma = band.contains({x, y}) ? 30 : 2;
-      right.at<uint8_t>(y, x) = cv::saturate_cast<uint8_t>(clean_right.at<uint8_t>(y, x) + sigma * rng.normal());
+      right.at<uint8_t>(y, x) =
+          cv::saturate_cast<uint8_t>(clean_right.at<uint8_t>(y, x) + sigma * rng.normal());
     }
   const Side l = extract(left), r = extract(right);
   StereoMatchParams keep_all;
@@ -192,7 +195,8 @@ TEST(StereoMatcher, GivesPlausibleDepthsOnTheRealKittiPairs) {
   StereoCamera cam = readKittiCalib(test::sharedData("kitti/sample_00/calib.txt"));
   double rate = 0;
   for (int f = 0; f <= 10; ++f) {
-    const Side l = extract(readGrayImage(kitti("image_0", f))), r = extract(readGrayImage(kitti("image_1", f)));
+    const Side l = extract(readGrayImage(kitti("image_0", f))),
+               r = extract(readGrayImage(kitti("image_1", f)));
     const StereoMatches m = matchStereo(l.features, l.pyramid, r.features, r.pyramid, cam);
     int far = 0, close = 0;
     std::vector<float> road;
@@ -250,7 +254,8 @@ TEST(StereoMatcher, RefusesInconsistentInput) {
                     "right keypoint of octave 9 but the pyramid has 8 levels");
   StereoCamera mono = cam;
   mono.baseline_m = 0;
-  EXPECT_THROW_WITH(matchStereo(s.features, s.pyramid, s.features, s.pyramid, mono), PlaceError, "positive baseline");
+  EXPECT_THROW_WITH(matchStereo(s.features, s.pyramid, s.features, s.pyramid, mono), PlaceError,
+                    "positive baseline");
   StereoMatchParams no_slide;
   no_slide.sad_search_px = 0;
   EXPECT_THROW_WITH(matchStereo(s.features, s.pyramid, s.features, s.pyramid, cam, no_slide), PlaceError,

@@ -8,7 +8,8 @@
 TEST(Filesystem, NaturalOrder) {
   std::vector<std::string> v{"10.jpg", "2.jpg", "1.png", "img10b.png", "img2b.png", "000003.png"};
   std::sort(v.begin(), v.end(), binloop::naturalLess);
-  EXPECT_EQ(v, (std::vector<std::string>{"1.png", "2.jpg", "000003.png", "10.jpg", "img2b.png", "img10b.png"}));
+  EXPECT_EQ(v,
+            (std::vector<std::string>{"1.png", "2.jpg", "000003.png", "10.jpg", "img2b.png", "img10b.png"}));
 }
 
 TEST(Filesystem, ListsOnlyWantedExtensionsInNaturalOrder) {

@@ -90,7 +90,8 @@ TEST(KittiSequence, ShortCalibLine) {
   BINLOOP_REQUIRE_DATA(sample());
   TempDir tmp;
   const auto dir = copySample(tmp);
-  writeText(dir + "/calib.txt", "P0: 718.856 0 607.1928 0 0 718.856 185.2157 0 0 0 1 0\nP1: 718.856 0 607.19\n");
+  writeText(dir + "/calib.txt",
+            "P0: 718.856 0 607.1928 0 0 718.856 185.2157 0 0 0 1 0\nP1: 718.856 0 607.19\n");
   EXPECT_THROW_WITH(KittiSequence::open(dir), DataError,
                     "calib.txt:2: P1 (a 3x4 projection matrix) needs 12 numbers, found 3");
 }

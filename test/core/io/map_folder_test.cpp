@@ -44,7 +44,8 @@ void writeBytes(const std::string& path, const std::string& bytes) {
 // A map of both toy stages saved into `dir` as one transaction; returns its id.
 uint64_t saveToyMap(const std::string& dir, uint32_t value) {
   MapSave save(dir);
-  for (const std::string& s : kStages) saveStateFile(ToyStage{{value, value + 1}}, stageStatePath(save.staging(), s), s, save.mapId());
+  for (const std::string& s : kStages)
+    saveStateFile(ToyStage{{value, value + 1}}, stageStatePath(save.staging(), s), s, save.mapId());
   save.commit();
   return save.mapId();
 }

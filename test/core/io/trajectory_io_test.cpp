@@ -47,7 +47,8 @@ TEST(TrajectoryIo, ShortPoseLine) {
 TEST(TrajectoryIo, NotARotation) {
   TempDir tmp;
   writeText(tmp / "p.txt", "2 0 0 0 0 1 0 0 0 0 1 0\n");
-  EXPECT_THROW_WITH(binloop::readKittiPoses(tmp / "p.txt"), DataError, "p.txt:1: the 3x3 part is not a rotation");
+  EXPECT_THROW_WITH(binloop::readKittiPoses(tmp / "p.txt"), DataError,
+                    "p.txt:1: the 3x3 part is not a rotation");
 }
 
 TEST(TrajectoryIo, TimesGoingBackwards) {

@@ -70,7 +70,8 @@ TEST(EssentialGraph, OptimisingItClosesTheLoop) {
 
 TEST(EssentialGraph, ALoopToAnUnknownKeyframeIsRefused) {
   const Drifted d = drifted();
-  EXPECT_THROW(buildEssentialGraph(d.states, {}, LoopEdge{139, 999, Pose3::Identity()}, {100}), std::invalid_argument);
+  EXPECT_THROW(buildEssentialGraph(d.states, {}, LoopEdge{139, 999, Pose3::Identity()}, {100}),
+               std::invalid_argument);
 }
 
 }  // namespace

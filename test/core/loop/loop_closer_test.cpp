@@ -74,7 +74,8 @@ class LoopCloserTest : public ::testing::Test {
     for (int n = 0; n < 300; ++n) {
       Desc256 d;
       for (auto& w : d.w) w = rng.next();
-      test::addStereoKeypoint(*kf, Eigen::Vector3d(rng.uniform(-10, 10), rng.uniform(-3, 2), rng.uniform(4, 40)), d);
+      test::addStereoKeypoint(
+          *kf, Eigen::Vector3d(rng.uniform(-10, 10), rng.uniform(-3, 2), rng.uniform(4, 40)), d);
     }
     return kf;
   }
@@ -88,7 +89,8 @@ class LoopCloserTest : public ::testing::Test {
 
   // The lap: keyframes 0..59, keyframes 0..5 each at its own place.
   void driveLap(LoopCloser& lc) {
-    for (int i = 0; i < kLap; ++i) lc.addKeyframe(keyframe(i, truthOnCircle(i), i < 6 ? i : -1, truthOnCircle(i)));
+    for (int i = 0; i < kLap; ++i)
+      lc.addKeyframe(keyframe(i, truthOnCircle(i), i < 6 ? i : -1, truthOnCircle(i)));
   }
   static msg::LoopCandidates proposal(int query, int match) {
     msg::LoopCandidates c;
@@ -227,7 +229,8 @@ TEST_F(LoopCloserTest, ASecondConsistentLoopConfirmsAHeldOne) {
   EXPECT_EQ(out.closures[0]->status, msg::LoopStatus::kAccepted) << out.closures[0]->detail;
   EXPECT_EQ(out.closures[1]->status, msg::LoopStatus::kAccepted) << out.closures[1]->detail;
   EXPECT_EQ(out.closures[1]->query, id(kLap));
-  EXPECT_EQ(out.closures[1]->query_frame, 3u * kLap);  // the held loop's own numbers, not the confirming one's
+  EXPECT_EQ(out.closures[1]->query_frame,
+            3u * kLap);  // the held loop's own numbers, not the confirming one's
   EXPECT_EQ(out.closures[0]->query_frame, 3u * (kLap + 3));
   ASSERT_TRUE(out.correction);
   EXPECT_EQ(lc.loops().size(), 2u);
@@ -250,15 +253,16 @@ TEST_F(LoopCloserTest, LoopsTooNearToConfirmAHeldOneWaitWithIt) {
     const LoopCloser::Output out = lc.process(proposal(kLap + k, k));
     for (const auto& c : out.closures) {
       for (int i = 0; i <= 3; ++i)
-        if (c->query == id(kLap + i)) seen.push_back(msg::loopStatusName(c->status) + std::string("@") + std::to_string(i));
+        if (c->query == id(kLap + i))
+          seen.push_back(msg::loopStatusName(c->status) + std::string("@") + std::to_string(i));
       if (k < 3) {
         EXPECT_EQ(c->status, msg::LoopStatus::kHeld) << c->detail;
       }
     }
     EXPECT_EQ(static_cast<bool>(out.correction), k == 3);
   }
-  const std::vector<std::string> expected{"held@0",     "held@1",     "held@2",
-                                          "accepted@3", "accepted@0", "agreed@1", "agreed@2"};
+  const std::vector<std::string> expected{"held@0",     "held@1",   "held@2",  "accepted@3",
+                                          "accepted@0", "agreed@1", "agreed@2"};
   EXPECT_EQ(seen, expected);
   EXPECT_EQ(lc.loops().size(), 2u);
 
@@ -272,7 +276,8 @@ TEST_F(LoopCloserTest, LoopsTooNearToConfirmAHeldOneWaitWithIt) {
     const int place = k < 2 ? k : -1;
     alone.addKeyframe(keyframe(kLap + k, truthOnCircle(kLap + k), place, truthOnCircle(k)));
     for (const auto& c : alone.process(proposal(kLap + k, place)).closures)
-      seen.push_back(msg::loopStatusName(c->status) + std::string("@") + std::to_string(c->query == id(kLap) ? 0 : 1));
+      seen.push_back(msg::loopStatusName(c->status) + std::string("@") +
+                     std::to_string(c->query == id(kLap) ? 0 : 1));
   }
   const std::vector<std::string> rejected{"held@0", "held@1", "beyond_drift_bound@0", "beyond_drift_bound@1"};
   EXPECT_EQ(seen, rejected);
@@ -285,7 +290,8 @@ TEST_F(LoopCloserTest, ALoopStillHeldWhenTheInputEndsGetsItsFinalStatus) {
   driveLap(lc);
   for (int k = 0; k < 2; ++k) {
     lc.addKeyframe(keyframe(kLap + k, truthOnCircle(kLap + k), k, truthOnCircle(k)));
-    for (const auto& c : lc.process(proposal(kLap + k, k)).closures) EXPECT_EQ(c->status, msg::LoopStatus::kHeld) << c->detail;
+    for (const auto& c : lc.process(proposal(kLap + k, k)).closures)
+      EXPECT_EQ(c->status, msg::LoopStatus::kHeld) << c->detail;
   }
   const LoopCloser::Output end = lc.finish();
   ASSERT_EQ(end.closures.size(), 2u);
@@ -363,7 +369,8 @@ TEST_F(LoopCloserTest, AProposalOfACulledKeyframeIsVerifiedAgainstItsParent) {
   const msg::LoopClosure& c = *out.closures[0];
   EXPECT_EQ(c.status, msg::LoopStatus::kAccepted) << c.detail;
   EXPECT_EQ(c.match, id(0));
-  EXPECT_NE(c.detail.find("keyframe 2 was culled, its spanning-tree parent 1 stands for it"), std::string::npos)
+  EXPECT_NE(c.detail.find("keyframe 2 was culled, its spanning-tree parent 1 stands for it"),
+            std::string::npos)
       << c.detail;
 }
 

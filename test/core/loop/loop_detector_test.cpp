@@ -106,7 +106,8 @@ TEST_F(LoopDetectorTest, ARevisitIsAcceptedAfterTheConsistencyCheckAndPointsAtTh
         ASSERT_EQ(out.active->accepted_words.size(), 450u);
         if (indexOf(out.active->accepted) == i - 30) {
           int same = 0;
-          for (size_t k = 0; k < 300; ++k) same += out.active->query_words[k] == out.active->accepted_words[k];
+          for (size_t k = 0; k < 300; ++k)
+            same += out.active->query_words[k] == out.active->accepted_words[k];
           EXPECT_GT(same, 250) << "of 300 views of the same descriptors";
         }
       } else if (out.active->accepted == kNoId) {
@@ -126,7 +127,8 @@ TEST_F(LoopDetectorTest, SwitchingModelsRebuildsTheIndexAndTakesOverAtTheNextKey
   EXPECT_EQ(d.activeModel(), "vlad");
   EXPECT_EQ(out.active->model, "vlad");
   ASSERT_FALSE(out.active->candidates.empty()) << out.active->status << ": " << out.active->detail;
-  EXPECT_NEAR(indexOf(out.active->candidates.front().id), 11, 1) << "the rebuilt index holds the old keyframes";
+  EXPECT_NEAR(indexOf(out.active->candidates.front().id), 11, 1)
+      << "the rebuilt index holds the old keyframes";
   EXPECT_EQ(d.keyframeCount(), 42u);
 }
 

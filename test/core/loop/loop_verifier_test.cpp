@@ -27,7 +27,8 @@ class LoopVerifierTest : public ::testing::Test {
   Desc256 view(const Desc256& d) { return test::flipBits(d, 3, rng); }
   // `words` (optional) gets a coarse word per keypoint, as a vocabulary would give: point i's is i % 50 in
   // every view, clutter's a word of its own.
-  msg::KeyFrame keyframe(uint64_t id, const Pose3& T_w_c, int shared_points, std::vector<uint32_t>* words = nullptr) {
+  msg::KeyFrame keyframe(uint64_t id, const Pose3& T_w_c, int shared_points,
+                         std::vector<uint32_t>* words = nullptr) {
     msg::KeyFrame kf;
     kf.id = kf.state.id = id;
     kf.camera = cam;
@@ -77,7 +78,8 @@ TEST_F(LoopVerifierTest, MatchesWithoutACommonGeometryFindNoConsensus) {
   const msg::KeyFrame q = keyframe(2, T_w_q, 600);
   // The candidate's descriptors shuffled among its keypoints: every match lands on the wrong 3-D point.
   HashRng shuffle(4);
-  for (size_t i = c.descriptors.size(); i > 1; --i) std::swap(c.descriptors[i - 1], c.descriptors[shuffle.below(static_cast<int>(i))]);
+  for (size_t i = c.descriptors.size(); i > 1; --i)
+    std::swap(c.descriptors[i - 1], c.descriptors[shuffle.below(static_cast<int>(i))]);
   const LoopVerification v = verifyLoop(q, c, {});
   EXPECT_FALSE(v.accepted);
   EXPECT_EQ(v.rejection, LoopRejection::kNoConsensus) << v.detail;
@@ -122,8 +124,9 @@ TEST_F(LoopVerifierTest, MatchingWithinWordsFindsTheRevisitAndOnlyWithinWords) {
   EXPECT_NE(unfit.detail.find("words not used"), std::string::npos) << unfit.detail;
 }
 
-// From a pose 0.3 m and 0.3 degrees off (a verified loop carried to a keyframe beside its match), the search by
-// projection finds the shared points and the true pose; from a keyframe that shares nothing it finds too few.
+// From a pose 0.3 m and 0.3 degrees off (a verified loop carried to a keyframe beside its match), the search
+// by projection finds the shared points and the true pose; from a keyframe that shares nothing it finds too
+// few.
 TEST_F(LoopVerifierTest, AVerificationFromAKnownPoseFindsTheTruePose) {
   const msg::KeyFrame c = keyframe(1, Pose3::Identity(), 600), q = keyframe(2, T_w_q, 600);
   const Pose3 truth = T_w_q.inverse();

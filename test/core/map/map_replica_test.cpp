@@ -1,4 +1,5 @@
-// MapReplica: a stage's own copy of the map, kept up to date from messages (include/binloop/map/map_replica.h).
+// MapReplica: a stage's own copy of the map, kept up to date from messages
+// (include/binloop/map/map_replica.h).
 #include "binloop/map/map_replica.h"
 
 #include <gtest/gtest.h>
@@ -34,7 +35,8 @@ KeyframeState keyframe(SlamKeyframeId id, std::vector<MapPointId> point_ids, dou
   return k;
 }
 
-msg::KeyFrame keyframeMessage(SlamKeyframeId id, std::vector<MapPointId> point_ids, std::vector<MapPointId> new_ids) {
+msg::KeyFrame keyframeMessage(SlamKeyframeId id, std::vector<MapPointId> point_ids,
+                              std::vector<MapPointId> new_ids) {
   msg::KeyFrame kf;
   kf.id = id;
   kf.state = keyframe(id, std::move(point_ids));
@@ -370,7 +372,8 @@ TEST(MapReplica, KeyframesNotYetSentMoveWithTheirAncestorAfterACorrection) {
   MapPoint p1 = point(P1, 3);
   p1.reference = K1;
   u.points.push_back(p1);
-  MapPoint p2 = point(P2, -4);  // made by unsent K2, yet in the update (mapping had it from elsewhere): as sent
+  MapPoint p2 =
+      point(P2, -4);  // made by unsent K2, yet in the update (mapping had it from elsewhere): as sent
   p2.reference = K2;
   u.points.push_back(p2);
 

@@ -100,7 +100,8 @@ TEST_F(EpipolarMatcherTest, AnIdenticalDescriptorOffTheEpipolarLineIsNotMatched)
 
 TEST_F(EpipolarMatcherTest, KeypointsWithAMapPointAreLeftAlone) {
   for (size_t i = 0; i < a.ids.size(); i += 2) a.ids[i] = 42;
-  for (const auto& [i, j] : matchAlongEpipolarLines(a.view(cam), b.view(cam), scales)) EXPECT_EQ(a.ids[i], kNoId);
+  for (const auto& [i, j] : matchAlongEpipolarLines(a.view(cam), b.view(cam), scales))
+    EXPECT_EQ(a.ids[i], kNoId);
 }
 
 TEST_F(EpipolarMatcherTest, MatchesWithAnInconsistentRotationAreDropped) {

@@ -32,7 +32,8 @@ class LocalMapperTest : public ::testing::Test {
   // A keyframe at (x, 0, z) seeing the scene points `which`; `creates` of them become new stereo points
   // (ids from the tracking counter), the other already created ones are named, and `mono` ones are
   // keypoints without stereo and without a point.
-  msg::KeyFrame keyframe(double z, const std::vector<int>& which, bool creates, bool mono = false, double x = 0) {
+  msg::KeyFrame keyframe(double z, const std::vector<int>& which, bool creates, bool mono = false,
+                         double x = 0) {
     msg::KeyFrame kf;
     kf.id = kf.state.id = kf_ids.next();
     kf.frame_index = frame++;
@@ -126,10 +127,12 @@ TEST_F(LocalMapperTest, KeypointsWithoutStereoSeenFromTwoKeyframesBecomePoints) 
   auto withMono = [&](msg::KeyFrame kf, const msg::KeyFrame& mono) {
     kf.keypoints.insert(kf.keypoints.end(), mono.keypoints.begin(), mono.keypoints.end());
     kf.descriptors.insert(kf.descriptors.end(), mono.descriptors.begin(), mono.descriptors.end());
-    kf.state.point_ids.insert(kf.state.point_ids.end(), mono.state.point_ids.begin(), mono.state.point_ids.end());
+    kf.state.point_ids.insert(kf.state.point_ids.end(), mono.state.point_ids.begin(),
+                              mono.state.point_ids.end());
     return kf;
   };
-  const msg::KeyFrame k1 = withMono(keyframe(0, range(0, 150), true), keyframe(0, range(150, 300), false, true));
+  const msg::KeyFrame k1 =
+      withMono(keyframe(0, range(0, 150), true), keyframe(0, range(150, 300), false, true));
   // Sideways as well as forwards: straight ahead, 4 m of forward motion give far points too little parallax.
   const msg::KeyFrame k2 =
       withMono(keyframe(4, range(0, 150), false, false, 2), keyframe(4, range(150, 300), false, true, 2));
@@ -187,7 +190,8 @@ TEST_F(LocalMapperTest, TheMapsKeyframesAreSentAgainInTheOrderTheyCame) {
   LocalMapperParams p;
   p.cull_keyframes = false;
   LocalMapper m(p);
-  const std::vector<msg::KeyFrame> sent = {keyframe(0, range(0, 100), true), keyframe(0.5, range(50, 150), true),
+  const std::vector<msg::KeyFrame> sent = {keyframe(0, range(0, 100), true),
+                                           keyframe(0.5, range(50, 150), true),
                                            keyframe(1.0, range(100, 200), true)};
   for (const auto& k : sent) m.process(k);
   const auto again = m.keyframeMessages();
@@ -243,7 +247,9 @@ TEST_F(LocalMapperTest, ACorrectionMovesKeyframesWithTheirParentAndPointsWithThe
   ASSERT_TRUE(m.keyframePose(k1.id, &T));
   EXPECT_LT((T.translation() - k1.state.T_w_c.translation()).norm(), 1e-12);
   for (const msg::MapPoint& mp : u->points) {
-    const int i = static_cast<int>(std::find_if(scene.begin(), scene.end(), [&](const ScenePoint& s) { return s.id == mp.id; }) - scene.begin());
+    const int i = static_cast<int>(
+        std::find_if(scene.begin(), scene.end(), [&](const ScenePoint& s) { return s.id == mp.id; }) -
+        scene.begin());
     ASSERT_LT(i, 220);
     const Eigen::Vector3d expected = i < 100 ? scene[i].p_w : Eigen::Vector3d(delta * scene[i].p_w);
     EXPECT_LT((mp.p_w - expected).norm(), 1e-9) << "point " << i;
@@ -258,7 +264,8 @@ TEST_F(LocalMapperTest, ACorrectionMovesKeyframesWithTheirParentAndPointsWithThe
   EXPECT_LT((o4.refined->state.T_w_c.translation() - (delta * k4.state.T_w_c).translation()).norm(), 1e-9);
   for (const msg::MapPoint& mp : o4.update->points) {
     if (issuerOf(mp.id) != IdIssuer::kTracking || mp.reference != k4.id) continue;
-    const auto it = std::find_if(scene.begin(), scene.end(), [&](const ScenePoint& s) { return s.id == mp.id; });
+    const auto it =
+        std::find_if(scene.begin(), scene.end(), [&](const ScenePoint& s) { return s.id == mp.id; });
     EXPECT_LT((mp.p_w - delta * it->p_w).norm(), 1e-9);
   }
 }

@@ -35,8 +35,9 @@ TEST(TriangulationTest, LinearTriangulationRecoversTheTruePointWithoutNoise) {
   const Pose3 a = cameraAt(0), b = cameraAt(2.0, 1.0);
   const Eigen::Vector3d X(1.5, -0.7, 12.0);
   const msg::KeyPoint ka = keypointOf(cam, a, X, 0, false), kb = keypointOf(cam, b, X, 0, false);
-  const auto t = triangulateLinear(a.inverse(), b.inverse(), {(ka.x - cam.cx) / cam.fx, (ka.y - cam.cy) / cam.fy},
-                                   {(kb.x - cam.cx) / cam.fx, (kb.y - cam.cy) / cam.fy});
+  const auto t =
+      triangulateLinear(a.inverse(), b.inverse(), {(ka.x - cam.cx) / cam.fx, (ka.y - cam.cy) / cam.fy},
+                        {(kb.x - cam.cx) / cam.fx, (kb.y - cam.cy) / cam.fy});
   ASSERT_TRUE(t.has_value());
   EXPECT_LT((*t - X).norm(), 1e-3);  // float keypoints: ~1e-4 px rounding at 12 m
 }

@@ -13,7 +13,8 @@ namespace {
 
 // A camera 10 m into the world, turned 20 deg, seeing `n` points at 3-50 m with Gaussian pixel noise of
 // `pixel_sigma` at octave 0 (scaled by the octave, as the weights assume).
-std::vector<PoseObservation> observe(const StereoCamera& cam, const Pose3& T_c_w, int n, double pixel_sigma, HashRng& rng) {
+std::vector<PoseObservation> observe(const StereoCamera& cam, const Pose3& T_c_w, int n, double pixel_sigma,
+                                     HashRng& rng) {
   std::vector<PoseObservation> obs;
   while (static_cast<int>(obs.size()) < n) {
     const Eigen::Vector3d p_w =
@@ -64,8 +65,9 @@ TEST(PoseCovariance, PredictsTheSpreadOfOptimisedPoses) {
     const Eigen::Matrix<double, 6, 1> e = errorOf(r.T_c_w.inverse(), T_w_c);
     seen += e * e.transpose() / trials;
   }
-  std::cout << "predicted sd: " << predicted.diagonal().cwiseSqrt().transpose() << "\nseen sd:      "
-            << seen.diagonal().cwiseSqrt().transpose() << "\nsigma_px " << sigma_px << "\n";
+  std::cout << "predicted sd: " << predicted.diagonal().cwiseSqrt().transpose()
+            << "\nseen sd:      " << seen.diagonal().cwiseSqrt().transpose() << "\nsigma_px " << sigma_px
+            << "\n";
   // Outliers cut at chi2 95 % trim the residuals a little: the measured sigma is just under the true 1 px.
   EXPECT_GT(sigma_px, 0.85);
   EXPECT_LT(sigma_px, 1.05);
@@ -84,7 +86,8 @@ TEST(PoseCovariance, ScalesWithTheNoiseAndShrinksWithMorePoints) {
   const PoseCovariance a = poseCovariance(cam, T_w_c, few), b = poseCovariance(cam, T_w_c, many);
   ASSERT_TRUE(a.valid && b.valid);
   EXPECT_NEAR(a.sigma_px, 2.0, 0.3) << "the residuals' own spread sets the scale";
-  EXPECT_LT(b.covariance.trace(), 0.5 * a.covariance.trace()) << "four times the points, about a quarter of the variance";
+  EXPECT_LT(b.covariance.trace(), 0.5 * a.covariance.trace())
+      << "four times the points, about a quarter of the variance";
 }
 
 TEST(PoseCovariance, TooFewObservationsGiveNone) {

@@ -52,7 +52,8 @@ Loop makeLoop(bool with_loop_edge) {
 
 double meanError(const Loop& l, const std::vector<Pose3>& T_c_w) {
   double e = 0;
-  for (size_t i = 0; i < l.truth.size(); ++i) e += (T_c_w[i].inverse().translation() - l.truth[i].translation()).norm();
+  for (size_t i = 0; i < l.truth.size(); ++i)
+    e += (T_c_w[i].inverse().translation() - l.truth[i].translation()).norm();
   return e / static_cast<double>(l.truth.size());
 }
 
@@ -74,7 +75,8 @@ TEST(PoseGraph, WithoutALoopEdgeNothingMoves) {
   const Loop l = makeLoop(false);
   const PoseGraphResult r = optimizePoseGraph(l.nodes, l.edges);
   for (size_t i = 0; i < l.nodes.size(); ++i)
-    EXPECT_LT((r.T_c_w[i].inverse().translation() - l.nodes[i].T_c_w.inverse().translation()).norm(), 1e-6) << i;
+    EXPECT_LT((r.T_c_w[i].inverse().translation() - l.nodes[i].T_c_w.inverse().translation()).norm(), 1e-6)
+        << i;
 }
 
 TEST(PoseGraph, AWrongLoopEdgeKeepsALargeResidual) {

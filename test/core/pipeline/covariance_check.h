@@ -11,13 +11,14 @@
 namespace binloop::test {
 
 struct CovarianceCheck {
-  int steps = 0;          // consecutive pairs with both covariances known
+  int steps = 0;  // consecutive pairs with both covariances known
   double rms_error_m = 0, predicted_sd_m = 0;
-  double ratio = 0;       // summed squared errors / summed predicted variances: 1 when the covariance is right
+  double ratio = 0;  // summed squared errors / summed predicted variances: 1 when the covariance is right
 };
 
 /// `truth[i]` is the true T_w_c of `frames[i]`.
-inline CovarianceCheck checkCovariances(const std::vector<msg::TrackedFrame>& frames, const std::vector<Pose3>& truth) {
+inline CovarianceCheck checkCovariances(const std::vector<msg::TrackedFrame>& frames,
+                                        const std::vector<Pose3>& truth) {
   CovarianceCheck c;
   double err2 = 0, predicted = 0;
   for (size_t k = 1; k < frames.size() && k < truth.size(); ++k) {
@@ -25,7 +26,8 @@ inline CovarianceCheck checkCovariances(const std::vector<msg::TrackedFrame>& fr
     if (a.pose_covariance.isZero(0) || b.pose_covariance.isZero(0)) continue;
     const Pose3 est = a.T_w_c.inverse() * b.T_w_c, real = truth[k - 1].inverse() * truth[k];
     err2 += (est.translation() - real.translation()).squaredNorm();
-    predicted += a.pose_covariance.topLeftCorner<3, 3>().trace() + b.pose_covariance.topLeftCorner<3, 3>().trace();
+    predicted +=
+        a.pose_covariance.topLeftCorner<3, 3>().trace() + b.pose_covariance.topLeftCorner<3, 3>().trace();
     ++c.steps;
   }
   if (c.steps == 0) return c;

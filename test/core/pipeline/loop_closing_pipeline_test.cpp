@@ -14,8 +14,8 @@
 #include "binloop/sim/builtin_route.h"
 #include "binloop/sim/stereo_renderer.h"
 #include "binloop/sim/texture_bank.h"
-#include "support/test_support.h"
 #include "core/pipeline/loop_drive.h"
+#include "support/test_support.h"
 
 using namespace binloop;
 using binloop::test::LoopDrive;
@@ -74,7 +74,8 @@ TEST(LoopClosingPipeline, TheRevisitIsClosedCorrectlyTheErrorThereDropsAndReruns
   const auto loops = accepted(closed);
   ASSERT_FALSE(loops.empty()) << "no loop accepted";
   for (const msg::LoopClosure* c : loops) {
-    const double apart = (d->route[c->query_frame].translation() - d->route[c->match_frame].translation()).norm();
+    const double apart =
+        (d->route[c->query_frame].translation() - d->route[c->match_frame].translation()).norm();
     EXPECT_LT(apart, 10) << "frames " << c->query_frame << " and " << c->match_frame << ": " << c->detail;
     EXPECT_GT(c->query_frame, d->lap - 20);
   }
@@ -82,7 +83,8 @@ TEST(LoopClosingPipeline, TheRevisitIsClosedCorrectlyTheErrorThereDropsAndReruns
   const size_t last = d->frames.size() - 1;
   const double err_open = (open.poses[last].translation() - d->route[last].translation()).norm();
   const double err_closed = (closed.poses[last].translation() - d->route[last].translation()).norm();
-  std::cout << "end error: " << err_open << " m open, " << err_closed << " m closed (" << loops.size() << " loops)\n";
+  std::cout << "end error: " << err_open << " m open, " << err_closed << " m closed (" << loops.size()
+            << " loops)\n";
   EXPECT_LT(err_closed, 0.25);
   EXPECT_LT(err_closed, 0.5 * err_open);
 
@@ -102,13 +104,14 @@ TEST(LoopClosingPipeline, ThreadedModeClosesTheLoopAndVerifiesExternalLoops) {
   auto isKeyframe = [](const SlamPipeline& slam, const msg::TrackedFrame& tf) {
     return tf.new_keyframe != kNoId && slam.tracker().map().keyframe(tf.new_keyframe) != nullptr;
   };
-  auto keyframeAfter = [&](const SlamPipeline& slam, const std::vector<msg::TrackedFrame>& tracked, size_t frame) {
+  auto keyframeAfter = [&](const SlamPipeline& slam, const std::vector<msg::TrackedFrame>& tracked,
+                           size_t frame) {
     for (size_t i = frame; i < tracked.size(); ++i)
       if (isKeyframe(slam, tracked[i])) return i;
     return tracked.size();
   };
-  // The second pass's keyframe nearest the start in the ground truth: which frames become keyframes depends on
-  // the threads' timing, and a pair 10 m apart sees too little in common to be a fair test of the API.
+  // The second pass's keyframe nearest the start in the ground truth: which frames become keyframes depends
+  // on the threads' timing, and a pair 10 m apart sees too little in common to be a fair test of the API.
   auto nearestKeyframeAfter = [&](const SlamPipeline& slam, const std::vector<msg::TrackedFrame>& tracked,
                                   size_t from, size_t to) {
     size_t best = tracked.size();
@@ -119,27 +122,32 @@ TEST(LoopClosingPipeline, ThreadedModeClosesTheLoopAndVerifiesExternalLoops) {
     }
     return best;
   };
-  const DriveRun r = runDrive(*d, true, PipelineMode::kThreaded, [&](SlamPipeline& slam, const auto& tracked) {
-    const size_t start_frame = keyframeAfter(slam, tracked, 5), far_frame = keyframeAfter(slam, tracked, d->lap / 2);
-    ASSERT_LT(start_frame, tracked.size());
-    ASSERT_LT(far_frame, tracked.size());
-    const size_t again_frame = nearestKeyframeAfter(slam, tracked, d->lap, start_frame);
-    ASSERT_LT(again_frame, tracked.size());
-    const SlamKeyframeId start = tracked[start_frame].new_keyframe, far = tracked[far_frame].new_keyframe,
-                         again = tracked[again_frame].new_keyframe;
-    slam.addExternalLoop(again, start, "operator");
-    slam.addExternalLoop(again, far, "operator");
-  });
+  const DriveRun r =
+      runDrive(*d, true, PipelineMode::kThreaded, [&](SlamPipeline& slam, const auto& tracked) {
+        const size_t start_frame = keyframeAfter(slam, tracked, 5),
+                     far_frame = keyframeAfter(slam, tracked, d->lap / 2);
+        ASSERT_LT(start_frame, tracked.size());
+        ASSERT_LT(far_frame, tracked.size());
+        const size_t again_frame = nearestKeyframeAfter(slam, tracked, d->lap, start_frame);
+        ASSERT_LT(again_frame, tracked.size());
+        const SlamKeyframeId start = tracked[start_frame].new_keyframe, far = tracked[far_frame].new_keyframe,
+                             again = tracked[again_frame].new_keyframe;
+        slam.addExternalLoop(again, start, "operator");
+        slam.addExternalLoop(again, far, "operator");
+      });
   std::vector<std::string> external;
   for (const auto& e : r.log)
     for (const auto& c : e.closures) {
-      std::cout << c->model << " " << c->query_frame << "->" << c->match_frame << " " << c->status << ": " << c->detail << "\n";
-      if (c->model == "operator") external.push_back(msg::loopStatusName(c->status) + std::string(": ") + c->detail);
+      std::cout << c->model << " " << c->query_frame << "->" << c->match_frame << " " << c->status << ": "
+                << c->detail << "\n";
+      if (c->model == "operator")
+        external.push_back(msg::loopStatusName(c->status) + std::string(": ") + c->detail);
     }
   ASSERT_EQ(external.size(), 2u);
   EXPECT_EQ(external[0].rfind("accepted", 0), 0u) << external[0];
   // The far side shares textures with the start (the world repeats its photos), so a few matches are found.
-  EXPECT_TRUE(external[1].rfind("too_few_matches", 0) == 0 || external[1].rfind("no_consensus", 0) == 0) << external[1];
+  EXPECT_TRUE(external[1].rfind("too_few_matches", 0) == 0 || external[1].rfind("no_consensus", 0) == 0)
+      << external[1];
   const auto loops = accepted(r);
   size_t detected = 0;
   for (const msg::LoopClosure* c : loops) {
@@ -166,8 +174,8 @@ TEST(LoopClosingPipeline, ABackgroundGlobalBaIsMergedWithoutLosingKeyframesAdded
   LocalMapper::GlobalBaStats g;
   const DriveRun r = runDrive(*d, true, PipelineMode::kThreaded, {}, mp, &g);
   std::cout << "global BA: " << g.started << " started, " << g.merged << " merged, " << g.aborted
-            << " stopped by a loop; the last over " << g.last_keyframes << " keyframes in " << g.last_ms << " ms, "
-            << g.last_added_meanwhile << " keyframes added meanwhile\n";
+            << " stopped by a loop; the last over " << g.last_keyframes << " keyframes in " << g.last_ms
+            << " ms, " << g.last_added_meanwhile << " keyframes added meanwhile\n";
   size_t detected = 0;
   for (const auto* c : accepted(r)) detected += c->model != "operator";
   ASSERT_GT(detected, 0u) << "the detector closed no loop";

@@ -15,8 +15,8 @@
 #include "binloop/sim/stereo_renderer.h"
 #include "binloop/sim/texture_bank.h"
 #include "binloop/tracking/frame.h"
-#include "support/test_support.h"
 #include "small_vocabulary.h"
+#include "support/test_support.h"
 
 namespace binloop::test {
 

@@ -3,10 +3,10 @@
 
 #include <gtest/gtest.h>
 
-#include "binloop/eval/slam_evaluation.h"
-#include "binloop/io/data_error.h"
 #include <fstream>
 #include <sstream>
+#include "binloop/eval/slam_evaluation.h"
+#include "binloop/io/data_error.h"
 
 #include "support/test_support.h"
 
@@ -14,7 +14,8 @@ using namespace binloop;
 
 namespace {
 
-SlamPipeline::LoopLogEntry entry(uint64_t query, uint64_t frame, msg::LoopStatus status, uint64_t match_frame) {
+SlamPipeline::LoopLogEntry entry(uint64_t query, uint64_t frame, msg::LoopStatus status,
+                                 uint64_t match_frame) {
   SlamPipeline::LoopLogEntry e;
   auto c = std::make_shared<msg::LoopCandidates>();
   c->query = query;
@@ -47,7 +48,8 @@ SlamPipeline::LoopLogEntry entry(uint64_t query, uint64_t frame, msg::LoopStatus
 
 TEST(LoopLog, WhatIsWrittenIsReadBack) {
   test::TempDir tmp;
-  writeLoopLog(tmp / "loops.csv", {entry(1, 30, msg::LoopStatus::kTooFewMatches, 2), entry(2, 40, msg::LoopStatus::kAccepted, 3)});
+  writeLoopLog(tmp / "loops.csv", {entry(1, 30, msg::LoopStatus::kTooFewMatches, 2),
+                                   entry(2, 40, msg::LoopStatus::kAccepted, 3)});
   const std::vector<LoggedLoop> loops = readLoopLog(tmp / "loops.csv");
   ASSERT_EQ(loops.size(), 2u);  // shadow rows carry no closure
   EXPECT_EQ(loops[0].status, msg::LoopStatus::kTooFewMatches);

@@ -161,7 +161,9 @@ TEST(MapSaveLoad, BrokenOrMismatchedFilesAreRefusedWithTheReason) {
 
   const std::string path = stageStatePath(map, "local_mapping");
   const std::string good = bytesOf(path);
-  auto rewrite = [&](const std::string& bytes) { std::ofstream(path, std::ios::binary | std::ios::trunc) << bytes; };
+  auto rewrite = [&](const std::string& bytes) {
+    std::ofstream(path, std::ios::binary | std::ios::trunc) << bytes;
+  };
   rewrite(good.substr(0, good.size() / 2));
   EXPECT_THROW_WITH(loadInto(map), DataError, "truncated state file");
   std::string flipped = good;
@@ -169,7 +171,8 @@ TEST(MapSaveLoad, BrokenOrMismatchedFilesAreRefusedWithTheReason) {
   rewrite(flipped);
   EXPECT_THROW_WITH(loadInto(map), DataError, "checksum differs");
   rewrite(bytesOf(stageStatePath(map, "tracking")));
-  EXPECT_THROW_WITH(loadInto(map), DataError, "this is the tracking stage's state, not the local_mapping stage's");
+  EXPECT_THROW_WITH(loadInto(map), DataError,
+                    "this is the tracking stage's state, not the local_mapping stage's");
   rewrite("not a state file at all, just some text that is long enough");
   EXPECT_THROW_WITH(loadInto(map), DataError, "not a binloop state file");
   rewrite(good);
@@ -198,6 +201,7 @@ TEST(MapSaveLoad, BrokenOrMismatchedFilesAreRefusedWithTheReason) {
   learned.orb.pattern = BriefPatternKind::kOrbLearned;
   Tracker t3(d->cam, learned);
   StateReader r3(stageStatePath(map, "tracking"), "tracking");
-  EXPECT_THROW_WITH(t3.load(r3), DataError,
-                    "the map's descriptors come from binloop ORB with the Gaussian BRIEF pattern (2000 features");
+  EXPECT_THROW_WITH(
+      t3.load(r3), DataError,
+      "the map's descriptors come from binloop ORB with the Gaussian BRIEF pattern (2000 features");
 }

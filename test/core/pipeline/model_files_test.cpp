@@ -16,7 +16,8 @@ TEST(ShadowModelNames, AllIsEveryModelWithAFileButTheActiveOne) {
   test::TempDir dir;
   for (const char* n : {"vlad", "hmvlad", "fabmap"}) std::ofstream(dir / (std::string(n) + ".bin")) << "x";
   std::vector<std::string> skipped;
-  EXPECT_EQ(shadowModelNames("all", "hmvlad", dir.path(), &skipped), (std::vector<std::string>{"fabmap", "vlad"}));
+  EXPECT_EQ(shadowModelNames("all", "hmvlad", dir.path(), &skipped),
+            (std::vector<std::string>{"fabmap", "vlad"}));
   EXPECT_EQ(skipped, (std::vector<std::string>{"hbow", "vladpq"}));
 }
 

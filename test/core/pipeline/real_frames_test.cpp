@@ -31,8 +31,9 @@ std::vector<Pose3> trackLockStep(const KittiSequence& seq) {
   for (const auto& tf : out) {
     EXPECT_EQ(tf.state, msg::TrackingState::kOk) << "frame " << tf.frame_index << ": " << tf.problem;
     Pose3 T_ref;
-    poses.push_back(tf.reference != kNoId && slam.mapper().keyframePose(tf.reference, &T_ref) ? Pose3(T_ref * tf.T_ref_c)
-                                                                                                 : tf.T_w_c);
+    poses.push_back(tf.reference != kNoId && slam.mapper().keyframePose(tf.reference, &T_ref)
+                        ? Pose3(T_ref * tf.T_ref_c)
+                        : tf.T_w_c);
   }
   return poses;
 }
@@ -53,9 +54,10 @@ double median(std::vector<double> v) {
 
 }  // namespace
 
-// sample_00: the ground truth of its first 16 frames is a constant-velocity fill (docs/results/2026-11-26-slam-measurements.md, "Real images");
-// ORB-SLAM2's three runs agree within 3 cm, and binloop's last pose must lie within 0.10 m and 0.5 degrees
-// of theirs (median over the three). Measured 2026-11-25: 0.033 m, 0.045 degrees.
+// sample_00: the ground truth of its first 16 frames is a constant-velocity fill
+// (docs/results/2026-11-26-slam-measurements.md, "Real images"); ORB-SLAM2's three runs agree within 3 cm,
+// and binloop's last pose must lie within 0.10 m and 0.5 degrees of theirs (median over the three). Measured
+// 2026-11-25: 0.033 m, 0.045 degrees.
 TEST(RealFrames, Sample00EndsWhereThePeerEnds) {
   const std::string dir = test::sharedData("kitti/sample_00");
   const std::string peer = test::sharedData("../reference/orbslam2/real_sample_00");
@@ -89,8 +91,8 @@ TEST(RealFrames, ATrackedFramesCovarianceMatchesItsFrameToFrameError) {
   for (size_t i = 0; i < seq.size(); ++i) out.push_back(slam.process(seq.load(i)));
   slam.finish();
   const test::CovarianceCheck c = test::checkCovariances(out, truth);
-  std::cout << c.steps << " steps: rms frame-to-frame error " << c.rms_error_m << " m, predicted " << c.predicted_sd_m
-            << " m, ratio of squares " << c.ratio << "\n";
+  std::cout << c.steps << " steps: rms frame-to-frame error " << c.rms_error_m << " m, predicted "
+            << c.predicted_sd_m << " m, ratio of squares " << c.ratio << "\n";
   EXPECT_GE(c.steps, 48);
   // With pose_covariance_scale (15) the prediction is within a factor of 2.5 of the error, either way
   // (rendered 06: 1.37, real KITTI 06: 0.67).

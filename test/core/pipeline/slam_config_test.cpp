@@ -90,7 +90,8 @@ TEST(SlamConfig, KeysGivenOverrideTheRestKeepDefaults) {
   EXPECT_EQ(c.mapper.local_ba_max_keyframes, 12);
 }
 
-// The place models' thresholds are loop detection's keys; the runner and the nodelet hand them to the factory.
+// The place models' thresholds are loop detection's keys; the runner and the nodelet hand them to the
+// factory.
 TEST(SlamConfig, ModelThresholdsAreLoopDetectionKeys) {
   TempDir dir;
   const SlamConfig c = loadSlamConfig(configFile(
@@ -99,7 +100,8 @@ TEST(SlamConfig, ModelThresholdsAreLoopDetectionKeys) {
   EXPECT_DOUBLE_EQ(c.models.hbow_min_bar, 0.01);
   EXPECT_DOUBLE_EQ(c.models.fabmap_l2_offset, 0.1);
   EXPECT_EQ(c.detector.consistency, SlamConfig{}.detector.consistency);
-  EXPECT_THROW(loadSlamConfig(configFile(dir, "loop_detection:\n  vladpq_shared_slack: -1\n", "neg.yaml")), ConfigError);
+  EXPECT_THROW(loadSlamConfig(configFile(dir, "loop_detection:\n  vladpq_shared_slack: -1\n", "neg.yaml")),
+               ConfigError);
 }
 
 TEST(SlamConfig, SectionsMayBeLeftOut) {
@@ -123,7 +125,8 @@ TEST(SlamConfig, UnknownSectionNamesFileAndSection) {
   TempDir dir;
   const std::string path = configFile(dir, "orb:\n  features: 1000\nmaping:\n  fuse: 0\n");
   EXPECT_THROW_WITH(loadSlamConfig(path), ConfigError, path + ": unknown section 'maping'");
-  EXPECT_THROW_WITH(loadSlamConfig(path), ConfigError, "known: loop_closing, loop_detection, mapping, orb, recovery, stereo, tracking");
+  EXPECT_THROW_WITH(loadSlamConfig(path), ConfigError,
+                    "known: loop_closing, loop_detection, mapping, orb, recovery, stereo, tracking");
 }
 
 TEST(SlamConfig, RecoveryKeysReachTheTracker) {
@@ -137,8 +140,8 @@ TEST(SlamConfig, RecoveryKeysReachTheTracker) {
   EXPECT_EQ(c.tracker.far_pose.max_turn_deg, 3.5);
   EXPECT_EQ(c.tracker.reloc_keyframes, 7);
   EXPECT_EQ(c.tracker.far_pose.iterations, SlamConfig{}.tracker.far_pose.iterations);
-  EXPECT_THROW_WITH(loadSlamConfig(configFile(dir, "recovery:\n  rotation_iterations: 0\n", "bad.yaml")), ConfigError,
-                    "recovery.rotation_iterations = 0.000000 is out of range (at least 1");
+  EXPECT_THROW_WITH(loadSlamConfig(configFile(dir, "recovery:\n  rotation_iterations: 0\n", "bad.yaml")),
+                    ConfigError, "recovery.rotation_iterations = 0.000000 is out of range (at least 1");
 }
 
 TEST(SlamConfig, UnknownKeyNamesFileAndKey) {
@@ -193,7 +196,8 @@ TEST(SlamConfig, NonIntegerForAnIntKeyNamesFileAndKey) {
 
 TEST(SlamConfig, LearnedPatternChoosesTheBriefTests) {
   TempDir dir;
-  EXPECT_EQ(loadSlamConfig(configFile(dir, "orb:\n  learned_pattern: 0\n")).tracker.orb.pattern, BriefPatternKind::kGaussian);
+  EXPECT_EQ(loadSlamConfig(configFile(dir, "orb:\n  learned_pattern: 0\n")).tracker.orb.pattern,
+            BriefPatternKind::kGaussian);
   EXPECT_EQ(loadSlamConfig(configFile(dir, "orb:\n  learned_pattern: 1\n", "b.yaml")).tracker.orb.pattern,
             BriefPatternKind::kOrbLearned);
   EXPECT_EQ(SlamConfig{}.tracker.orb.pattern, BriefPatternKind::kGaussian) << "the default";
@@ -201,7 +205,8 @@ TEST(SlamConfig, LearnedPatternChoosesTheBriefTests) {
   EXPECT_THROW_WITH(loadSlamConfig(two), ConfigError, two + ": orb.learned_pattern must be 0 or 1");
   const std::string half = configFile(dir, "orb:\n  learned_pattern: 0.5\n", "d.yaml");
   EXPECT_THROW_WITH(loadSlamConfig(half), ConfigError, half + ": orb.learned_pattern must be a whole number");
-  EXPECT_NE(describe(loadSlamConfig(configFile(dir, "orb:\n  learned_pattern: 1\n", "e.yaml"))).find("orb.learned_pattern: 1"),
+  EXPECT_NE(describe(loadSlamConfig(configFile(dir, "orb:\n  learned_pattern: 1\n", "e.yaml")))
+                .find("orb.learned_pattern: 1"),
             std::string::npos);
 }
 
@@ -236,7 +241,8 @@ TEST(SlamConfig, MalformedFilesNameTheFile) {
   const std::string broken = configFile(dir, "orb:\n  features: [1, 2\n", "broken.yaml");
   EXPECT_THROW_WITH(loadSlamConfig(broken), ConfigError, broken);
   const std::string scalar = configFile(dir, "orb: 5\n", "scalar.yaml");
-  EXPECT_THROW_WITH(loadSlamConfig(scalar), ConfigError, scalar + ": section 'orb' must hold key: value lines");
+  EXPECT_THROW_WITH(loadSlamConfig(scalar), ConfigError,
+                    scalar + ": section 'orb' must hold key: value lines");
 }
 
 }  // namespace

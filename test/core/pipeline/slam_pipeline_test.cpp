@@ -4,11 +4,12 @@
 
 #include <cmath>
 #include <filesystem>
+#include <limits>
 #include <map>
 #include <set>
 #include <tuple>
-#include <limits>
 
+#include <opencv2/imgproc.hpp>
 #include "binloop/eval/trajectory_metrics.h"
 #include "binloop/io/kitti_sequence.h"
 #include "binloop/io/trajectory_io.h"
@@ -17,19 +18,16 @@
 #include "binloop/sim/stereo_renderer.h"
 #include "binloop/sim/texture_bank.h"
 #include "binloop/tracking/tracking_stage.h"
-#include <opencv2/imgproc.hpp>
 
 #include "covariance_check.h"
-#include "support/test_support.h"
 #include "small_vocabulary.h"
+#include "support/test_support.h"
 
 using namespace binloop;
 
 namespace {
 
-double rotationDeg(const Pose3& T) {
-  return Eigen::AngleAxisd(T.linear()).angle() * 180.0 / M_PI;
-}
+double rotationDeg(const Pose3& T) { return Eigen::AngleAxisd(T.linear()).angle() * 180.0 / M_PI; }
 
 // Frames first..first+n-1 of KITTI route 06 rendered as the `render` tool does (kitti04 camera, seed 1): by
 // default with its road texture that repeats every 8 m, or as `render --aperiodic-ground`. frames[k] shows
@@ -52,14 +50,15 @@ const RenderedStretch* renderedStretch(int n, bool aperiodic_ground = false, int
   s.first = first;
   sim::WorldParams wp;
   wp.aperiodic_ground = aperiodic_ground;
-  const auto world = sim::World::build(s.route, sim::TextureBank::build(sim::defaultTexturePhotos(), 1), wp, 1);
+  const auto world =
+      sim::World::build(s.route, sim::TextureBank::build(sim::defaultTexturePhotos(), 1), wp, 1);
   sim::StereoRenderer r(world, s.cam, {}, 1);
   s.frames = sim::renderFrames(r, s.route, static_cast<size_t>(first), static_cast<size_t>(n));
   return &s;
 }
 
-std::vector<msg::TrackedFrame> runOn(const std::vector<StereoFrame>& frames, const StereoCamera& cam, PipelineMode mode,
-                                     std::vector<Pose3>* final_poses = nullptr) {
+std::vector<msg::TrackedFrame> runOn(const std::vector<StereoFrame>& frames, const StereoCamera& cam,
+                                     PipelineMode mode, std::vector<Pose3>* final_poses = nullptr) {
   SlamPipeline slam(cam, {}, {}, mode);
   std::vector<msg::TrackedFrame> out;
   for (const auto& f : frames) out.push_back(slam.process(f));
@@ -89,7 +88,8 @@ TEST(SlamPipeline, RealKittiSampleIsTrackedThroughout) {
   std::vector<Pose3> poses;
   const auto tracked = runOn(frames, seq.camera(), PipelineMode::kLockStep, &poses);
   ASSERT_EQ(tracked.size(), 11u);
-  for (const auto& tf : tracked) EXPECT_EQ(tf.state, msg::TrackingState::kOk) << "frame " << tf.frame_index << ": " << tf.problem;
+  for (const auto& tf : tracked)
+    EXPECT_EQ(tf.state, msg::TrackingState::kOk) << "frame " << tf.frame_index << ": " << tf.problem;
   const Pose3 err = seq.poses().back().inverse() * poses.back();
   const double travelled = seq.poses().back().translation().norm();
   EXPECT_LT(err.translation().norm(), 0.2 * travelled) << "last pose " << err.translation().transpose();
@@ -103,7 +103,8 @@ TEST(SlamPipeline, RenderedRoute06StretchIsTrackedWithLowDrift) {
   if (!s) GTEST_SKIP() << "needs " << test::sharedData("kitti/poses/06.txt");
   std::vector<Pose3> poses;
   const auto tracked = runOn(s->frames, s->cam, PipelineMode::kLockStep, &poses);
-  for (const auto& tf : tracked) ASSERT_EQ(tf.state, msg::TrackingState::kOk) << "frame " << tf.frame_index << ": " << tf.problem;
+  for (const auto& tf : tracked)
+    ASSERT_EQ(tf.state, msg::TrackingState::kOk) << "frame " << tf.frame_index << ": " << tf.problem;
   MatchedPoses m;
   for (size_t i = 0; i < poses.size(); ++i) {
     m.frames.push_back(static_cast<int>(i));
@@ -173,7 +174,8 @@ TEST(SlamPipeline, BadFramesAreReportedAndTrackingGoesOn) {
   tf = slam.process(back);
   EXPECT_NE(tf.problem.find("does not come after the last frame's"), std::string::npos) << tf.problem;
 
-  // New pixels: a copied StereoFrame shares the cached frame's, and assigning Mat::zeros() would write into them.
+  // New pixels: a copied StereoFrame shares the cached frame's, and assigning Mat::zeros() would write into
+  // them.
   StereoFrame black = s->frames[10];
   black.left = cv::Mat(black.left.size(), CV_8UC1, cv::Scalar(0));
   black.right = cv::Mat(black.right.size(), CV_8UC1, cv::Scalar(0));
@@ -311,7 +313,8 @@ TEST(SlamPipeline, APoseHintFindsAFrameCarriedFarFromTheRecentKeyframes) {
     return f;
   };
   for (int i = 40; i < 43; ++i)
-    EXPECT_EQ(slam.process(carried(i)).state, msg::TrackingState::kLost) << "frame " << i << " found without a hint";
+    EXPECT_EQ(slam.process(carried(i)).state, msg::TrackingState::kLost)
+        << "frame " << i << " found without a hint";
   Pose3 hint = drift * s->route[43];
   hint.translation() += Eigen::Vector3d(0.8, 0, 0.6);  // 1 m off
   slam.hintPose(hint, 10);
@@ -337,8 +340,8 @@ TEST(SlamPipeline, ATrackedFramesCovarianceMatchesItsFrameToFrameError) {
   if (!s) GTEST_SKIP() << "needs " << test::sharedData("kitti/poses/06.txt");
   const std::vector<msg::TrackedFrame> out = runOn(s->frames, s->cam, PipelineMode::kLockStep);
   const test::CovarianceCheck c = test::checkCovariances(out, s->route);
-  std::cout << c.steps << " steps: rms frame-to-frame error " << c.rms_error_m << " m, predicted " << c.predicted_sd_m
-            << " m, ratio of squares " << c.ratio << "\n";
+  std::cout << c.steps << " steps: rms frame-to-frame error " << c.rms_error_m << " m, predicted "
+            << c.predicted_sd_m << " m, ratio of squares " << c.ratio << "\n";
   EXPECT_GE(c.steps, 290);
   // With pose_covariance_scale (15) the prediction is within a factor of 2.5 of the error, either way
   // (rendered 06: 1.37, real KITTI 06: 0.67).
@@ -347,8 +350,9 @@ TEST(SlamPipeline, ATrackedFramesCovarianceMatchesItsFrameToFrameError) {
 }
 
 // A tracking process restarted alone in the split graph: the new tracker takes local mapping's map (the
-// whole_map update mapping sends a new subscriber), starts lost at its last keyframe, finds the frames after a
-// second's gap in it, and issues keyframe and point ids the map has never held (mapping refuses ids it holds).
+// whole_map update mapping sends a new subscriber), starts lost at its last keyframe, finds the frames after
+// a second's gap in it, and issues keyframe and point ids the map has never held (mapping refuses ids it
+// holds).
 TEST(SlamPipeline, ARestartedTrackerTakesTheMapAndTracksOnInIt) {
   const RenderedStretch* s = renderedStretch(200, true);
   if (!s) GTEST_SKIP() << "needs " << test::sharedData("kitti/poses/06.txt");
@@ -385,15 +389,18 @@ TEST(SlamPipeline, ARestartedTrackerTakesTheMapAndTracksOnInIt) {
       ++keyframes;
       EXPECT_EQ(held.count(out.keyframe->id), 0u) << "keyframe id issued again";
       EXPECT_GT(counterOf(out.keyframe->id), whole->tracking_keyframe_ids);
-      for (const auto& p : out.keyframe->new_points) EXPECT_EQ(held.count(p.id), 0u) << "point id issued again";
+      for (const auto& p : out.keyframe->new_points)
+        EXPECT_EQ(held.count(p.id), 0u) << "point id issued again";
     }
     if (out.frame.state == msg::TrackingState::kLost) continue;
     ++found;
-    // A pose found from scratch carries the error far points give it (docs/decisions.md, recovery): 0.6 m here.
+    // A pose found from scratch carries the error far points give it (docs/decisions.md, recovery): 0.6 m
+    // here.
     worst = std::max(worst, (uninterrupted[i].translation() - out.frame.T_w_c.translation()).norm());
   }
-  std::cout << "after the restart: " << found << " of 40 frames tracked, " << keyframes << " keyframes made, at most "
-            << worst << " m from where the graph that was not restarted put them\n";
+  std::cout << "after the restart: " << found << " of 40 frames tracked, " << keyframes
+            << " keyframes made, at most " << worst
+            << " m from where the graph that was not restarted put them\n";
   EXPECT_GE(found, 35);
   EXPECT_LT(worst, 1.0);
   EXPECT_GE(keyframes, 1);
@@ -427,7 +434,8 @@ TEST(TrackingStage, TakesLocalMappingsMapWhenTheCameraIsKnownAndCountsKeyframesI
   EXPECT_EQ(stage.inFlight().count(), 1);
   stage.apply(msg::LocalMapUpdate{}, 200);  // mapping's answer
   EXPECT_EQ(stage.inFlight().count(), 0);
-  EXPECT_EQ(stage.adopt(whole), TrackingStage::Adopted::kIgnored) << "a tracker on the map does not start over";
+  EXPECT_EQ(stage.adopt(whole), TrackingStage::Adopted::kIgnored)
+      << "a tracker on the map does not start over";
   stage.reset();
   EXPECT_EQ(stage.tracker(), nullptr);
 

@@ -16,7 +16,8 @@ inline void trainSmallHbow(const std::vector<StereoFrame>& frames, size_t from, 
   const OrbSlamParams orb;
   OrbSlamExtractor ex(orb);
   std::vector<Descriptors> images;
-  for (size_t i = from; i < to && i < frames.size(); i += step) images.push_back(ex.extract(frames[i].left).descriptors);
+  for (size_t i = from; i < to && i < frames.size(); i += step)
+    images.push_back(ex.extract(frames[i].left).descriptors);
   TrainOptions o;
   o.k = 10;
   o.levels = 3;

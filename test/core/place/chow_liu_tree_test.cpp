@@ -10,7 +10,7 @@
 using namespace binloop;
 
 TEST(ChowLiuTree, MutualInformationByHand) {
-  EXPECT_NEAR(ChowLiuTree::mutualInformation(100, 50, 50, 25), 0.0, 1e-12);        // independent
+  EXPECT_NEAR(ChowLiuTree::mutualInformation(100, 50, 50, 25), 0.0, 1e-12);            // independent
   EXPECT_NEAR(ChowLiuTree::mutualInformation(100, 50, 50, 50), std::log(2.0), 1e-12);  // identical
   EXPECT_NEAR(ChowLiuTree::mutualInformation(100, 50, 50, 0), std::log(2.0), 1e-12);   // complementary
 }
@@ -33,7 +33,8 @@ TEST(ChowLiuTree, RecoversTheTreeThatGeneratedTheData) {
   std::set<std::pair<uint32_t, uint32_t>> edges;
   for (uint32_t i = 0; i < 6; ++i)
     if (i != t.root()) edges.insert({std::min(i, t.parent(i)), std::max(i, t.parent(i))});
-  for (auto e : std::set<std::pair<uint32_t, uint32_t>>{{0, 1}, {0, 2}, {1, 3}, {2, 4}}) EXPECT_TRUE(edges.count(e)) << e.first << "-" << e.second;
+  for (auto e : std::set<std::pair<uint32_t, uint32_t>>{{0, 1}, {0, 2}, {1, 3}, {2, 4}})
+    EXPECT_TRUE(edges.count(e)) << e.first << "-" << e.second;
   EXPECT_EQ(edges.size(), 5u);
   // Conditionals follow the generating model: p(z3 = 1 | z1 = 1) ≈ 0.9.
   const uint32_t child = t.parent(3) == 1 ? 3 : 1, par = t.parent(3) == 1 ? 1 : 3;

@@ -43,8 +43,10 @@ TEST(Dbow2Import, ReadsOrbSlamTextFormat) {
 TEST(Dbow2Import, MalformedTextNamesTheLine) {
   TempDir dir;
   writeText(dir / "short.txt", "10 6 0 0\n0 0 1 2 3\n");
-  EXPECT_THROW_WITH(importDbow2(dir / "short.txt"), PlaceError, "short.txt:2: node: descriptor needs 32 byte values");
+  EXPECT_THROW_WITH(importDbow2(dir / "short.txt"), PlaceError,
+                    "short.txt:2: node: descriptor needs 32 byte values");
   writeText(dir / "head.txt", "ten six\n");
-  EXPECT_THROW_WITH(importDbow2(dir / "head.txt"), PlaceError, "head.txt:1: expected 'k L scoring weighting'");
+  EXPECT_THROW_WITH(importDbow2(dir / "head.txt"), PlaceError,
+                    "head.txt:1: expected 'k L scoring weighting'");
   EXPECT_THROW_WITH(importDbow2(dir / "missing.yml.gz"), PlaceError, "cannot open");
 }

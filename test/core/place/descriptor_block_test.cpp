@@ -16,14 +16,17 @@ DescriptorBlock::Nearest byHand(const Descriptors& set, const Desc256& q) {
   for (size_t k = 0; k < set.size(); ++k) {
     const int d = hamming(q, set[k]);
     if (d < n.second) {
-      if (d < n.best) n.second = n.best, n.best = d, n.index = static_cast<int>(k);
-      else n.second = d;
+      if (d < n.best)
+        n.second = n.best, n.best = d, n.index = static_cast<int>(k);
+      else
+        n.second = d;
     }
   }
   return n;
 }
 
-void expectSame(const DescriptorBlock::Nearest& a, const DescriptorBlock::Nearest& b, const std::string& what) {
+void expectSame(const DescriptorBlock::Nearest& a, const DescriptorBlock::Nearest& b,
+                const std::string& what) {
   EXPECT_EQ(a.index, b.index) << what;
   EXPECT_EQ(a.best, b.best) << what;
   EXPECT_EQ(a.second, b.second) << what;
@@ -42,7 +45,8 @@ TEST(DescriptorBlock, FindsTheNearestAndSecondNearestAsTheByHandLoopDoes) {
     ASSERT_EQ(block.size(), n);
     for (int t = 0; t < 20; ++t) {
       // Half the queries are a set member with a few bits changed, so that a clear nearest exists.
-      const Desc256 q = t % 2 ? test::flipBits(set[rng.below(static_cast<int>(n))], 10, rng) : randomDescriptor(rng);
+      const Desc256 q =
+          t % 2 ? test::flipBits(set[rng.below(static_cast<int>(n))], 10, rng) : randomDescriptor(rng);
       const std::string what = "n " + std::to_string(n) + ", query " + std::to_string(t);
       expectSame(block.nearest(q), byHand(set, q), what);
       expectSame(block.nearestPortable(q), byHand(set, q), what);

@@ -2,8 +2,8 @@
 
 #include <gtest/gtest.h>
 
-#include <filesystem>
 #include <cstring>
+#include <filesystem>
 #include <fstream>
 #include <iterator>
 
@@ -59,7 +59,8 @@ TEST(ModelFile, CorruptPayloadIsRefused) {
   s.seekp(300);
   s.put('\x5a');
   s.close();
-  EXPECT_THROW_WITH(makePlaceRecognizer("hbow", {f}), PlaceError, "corrupt model file (payload checksum differs)");
+  EXPECT_THROW_WITH(makePlaceRecognizer("hbow", {f}), PlaceError,
+                    "corrupt model file (payload checksum differs)");
 }
 
 TEST(ModelFile, WrongDescriptorSizeIsRefused) {
@@ -67,7 +68,8 @@ TEST(ModelFile, WrongDescriptorSizeIsRefused) {
   ModelHeader h;
   h.descriptor_bits = 512;
   ModelWriter(h).save(dir / "wide.bin");
-  EXPECT_THROW_WITH(ModelReader(dir / "wide.bin"), PlaceError, "vocabulary of 512-bit descriptors; binloop uses 256-bit");
+  EXPECT_THROW_WITH(ModelReader(dir / "wide.bin"), PlaceError,
+                    "vocabulary of 512-bit descriptors; binloop uses 256-bit");
   EXPECT_THROW_WITH(descriptorsFromMat(cv::Mat(5, 64, CV_8U)), PlaceError, "32-byte binary rows");
   EXPECT_THROW_WITH(descriptorsFromMat(cv::Mat(5, 32, CV_32F)), PlaceError, "got 32 columns of depth 5");
 }
@@ -107,8 +109,10 @@ void rewriteAsVersion1(const std::string& v2, const std::string& v1) {
     std::memcpy(&es, &f[pos + 4], 4);
     std::memcpy(&count, &f[pos + 8], 8);
     const size_t data = (pos + 16 + 63) / 64 * 64;
-    payload.insert(payload.end(), f.begin() + static_cast<long>(pos), f.begin() + static_cast<long>(pos + 16));
-    payload.insert(payload.end(), f.begin() + static_cast<long>(data), f.begin() + static_cast<long>(data + es * count));
+    payload.insert(payload.end(), f.begin() + static_cast<long>(pos),
+                   f.begin() + static_cast<long>(pos + 16));
+    payload.insert(payload.end(), f.begin() + static_cast<long>(data),
+                   f.begin() + static_cast<long>(data + es * count));
     pos = data + es * count;
   }
   std::vector<uint8_t> out(f.begin(), f.begin() + 128);
@@ -118,7 +122,8 @@ void rewriteAsVersion1(const std::string& v2, const std::string& v1) {
   std::memcpy(&out[72], &size, 8);  // after magic, 6 uint32 and 5 uint64 header fields
   std::memcpy(&out[80], &checksum, 8);
   out.insert(out.end(), payload.begin(), payload.end());
-  std::ofstream(v1, std::ios::binary).write(reinterpret_cast<const char*>(out.data()), static_cast<long>(out.size()));
+  std::ofstream(v1, std::ios::binary)
+      .write(reinterpret_cast<const char*>(out.data()), static_cast<long>(out.size()));
 }
 
 }  // namespace
@@ -171,7 +176,8 @@ void rewriteAsVersion2(const std::string& v3, const std::string& v2) {
   const uint32_t version = 2;
   std::memcpy(&f[8], &version, 4);
   std::fill(f.begin() + 88, f.begin() + 128, 0);
-  std::ofstream(v2, std::ios::binary).write(reinterpret_cast<const char*>(f.data()), static_cast<long>(f.size()));
+  std::ofstream(v2, std::ios::binary)
+      .write(reinterpret_cast<const char*>(f.data()), static_cast<long>(f.size()));
 }
 
 }  // namespace
@@ -202,17 +208,20 @@ TEST(ModelFile, HeaderRecordsTheExtractorAndItsSettings) {
     EXPECT_EQ(h.training_images, 10u);
   }
   EXPECT_NE(ModelReader(f).header().describe().find(
-                "from binloop ORB with the Gaussian BRIEF pattern (1500 features, scale 1.25, 6 levels, FAST 18/5, 40-px cells, images scaled to a "
+                "from binloop ORB with the Gaussian BRIEF pattern (1500 features, scale 1.25, 6 levels, FAST "
+                "18/5, 40-px cells, images scaled to a "
                 "longer side <= 1024 px)"),
             std::string::npos)
       << ModelReader(f).header().describe();
   EXPECT_EQ(slamExtractor().describe(),
-            "binloop ORB with the Gaussian BRIEF pattern (2000 features, scale 1.2, 8 levels, FAST 20/7, 30-px cells, full-size images)");
+            "binloop ORB with the Gaussian BRIEF pattern (2000 features, scale 1.2, 8 levels, FAST 20/7, "
+            "30-px cells, full-size images)");
   // A model trained from descriptors of unknown origin says so.
   TempDir dir2;
   EXPECT_FALSE(ModelReader(trainSmallHbow(dir2)).header().extractor.known());
-  EXPECT_NE(ModelReader(dir2 / "hbow.bin").header().describe().find("from an unknown extractor (not recorded)"),
-            std::string::npos);
+  EXPECT_NE(
+      ModelReader(dir2 / "hbow.bin").header().describe().find("from an unknown extractor (not recorded)"),
+      std::string::npos);
 }
 
 TEST(ModelFile, OtherExtractorSettingsAreRefusedWithBothNamed) {
@@ -220,16 +229,20 @@ TEST(ModelFile, OtherExtractorSettingsAreRefusedWithBothNamed) {
   const std::string f = trainSmallHbow(dir, slamExtractor(1000, 1024));
   RecognizerOptions o{f};
   o.extractor.expected = slamExtractor();
-  EXPECT_THROW_WITH(
-      makePlaceRecognizer("hbow", o), PlaceError,
-      f + ": trained on descriptors of binloop ORB with the Gaussian BRIEF pattern (1000 features, scale 1.2, 8 levels, FAST 20/7, 30-px cells, "
-          "images scaled to a longer side <= 1024 px), but they will come from binloop ORB with the Gaussian BRIEF pattern (2000 features, scale 1.2, "
-          "8 levels, FAST 20/7, 30-px cells, full-size images) (differ: features 1000 vs 2000, max side 1024 vs "
-          "none); a vocabulary only fits descriptors like those it was trained on: retrain it with these settings, "
-          "or use it anyway with --force-extractor");
+  EXPECT_THROW_WITH(makePlaceRecognizer("hbow", o), PlaceError,
+                    f + ": trained on descriptors of binloop ORB with the Gaussian BRIEF pattern (1000 "
+                        "features, scale 1.2, 8 levels, FAST 20/7, 30-px cells, "
+                        "images scaled to a longer side <= 1024 px), but they will come from binloop ORB "
+                        "with the Gaussian BRIEF pattern (2000 features, scale 1.2, "
+                        "8 levels, FAST 20/7, 30-px cells, full-size images) (differ: features 1000 vs 2000, "
+                        "max side 1024 vs "
+                        "none); a vocabulary only fits descriptors like those it was trained on: retrain it "
+                        "with these settings, "
+                        "or use it anyway with --force-extractor");
   // The hint names what the caller offers (e.g. a SLAM config key).
   o.extractor.force_hint = "orb.force_vocabulary: true";
-  EXPECT_THROW_WITH(makePlaceRecognizer("hbow", o), PlaceError, "use it anyway with orb.force_vocabulary: true");
+  EXPECT_THROW_WITH(makePlaceRecognizer("hbow", o), PlaceError,
+                    "use it anyway with orb.force_vocabulary: true");
   // Without an expectation nothing is checked (models trained in memory, tests).
   EXPECT_NO_THROW(makePlaceRecognizer("hbow", {f}));
   // An imported DBoW2 vocabulary was trained on another BRIEF pattern.
@@ -253,10 +266,13 @@ TEST(ModelFile, ForcedExtractorMismatchWarnsAndLoads) {
   ASSERT_TRUE(rec);
   rec->add(1, randomPlace(3, 1, 50));
   ASSERT_EQ(warnings.size(), 1u);
-  EXPECT_EQ(warnings[0], f + ": trained on descriptors of binloop ORB with the Gaussian BRIEF pattern (1000 features, scale 1.2, 8 levels, FAST 20/7, "
-                             "30-px cells, full-size images), but they will come from binloop ORB with the Gaussian BRIEF pattern (2000 features, "
-                             "scale 1.2, 8 levels, FAST 20/7, 30-px cells, full-size images) (differ: features 1000 vs "
-                             "2000); used anyway (--force-extractor)");
+  EXPECT_EQ(warnings[0],
+            f + ": trained on descriptors of binloop ORB with the Gaussian BRIEF pattern (1000 features, "
+                "scale 1.2, 8 levels, FAST 20/7, "
+                "30-px cells, full-size images), but they will come from binloop ORB with the Gaussian BRIEF "
+                "pattern (2000 features, "
+                "scale 1.2, 8 levels, FAST 20/7, 30-px cells, full-size images) (differ: features 1000 vs "
+                "2000); used anyway (--force-extractor)");
   // Equal settings: no warning.
   warnings.clear();
   TempDir dir2;
@@ -281,15 +297,18 @@ TEST(ModelFile, ReadsVersion2FilesAsExtractorUnknownAndWarns) {
   o.extractor.warn = [&](const std::string& w) { warnings.push_back(w); };
   EXPECT_NO_THROW(makePlaceRecognizer("hbow", o));  // not forced, still loaded: it may well fit
   ASSERT_EQ(warnings.size(), 1u);
-  EXPECT_EQ(warnings[0], v2 + ": the model file (version 2) does not record which extractor it was trained with; "
-                              "descriptors will come from binloop ORB with the Gaussian BRIEF pattern (2000 features, scale 1.2, 8 levels, FAST 20/7, "
-                              "30-px cells, full-size images) (retrain it if they differ)");
+  EXPECT_EQ(warnings[0],
+            v2 + ": the model file (version 2) does not record which extractor it was trained with; "
+                 "descriptors will come from binloop ORB with the Gaussian BRIEF pattern (2000 features, "
+                 "scale 1.2, 8 levels, FAST 20/7, "
+                 "30-px cells, full-size images) (retrain it if they differ)");
   // A version from the future is refused.
   std::fstream s(v2, std::ios::in | std::ios::out | std::ios::binary);
   const uint32_t v4 = 4;
   s.seekp(8);
   s.write(reinterpret_cast<const char*>(&v4), 4);
   s.close();
-  EXPECT_THROW_WITH(readModelHeader(v2), PlaceError, "model file version 4, this build reads versions 1 to 3");
+  EXPECT_THROW_WITH(readModelHeader(v2), PlaceError,
+                    "model file version 4, this build reads versions 1 to 3");
   EXPECT_THROW_WITH(ModelReader{v2}, PlaceError, "model file version 4, this build reads versions 1 to 3");
 }

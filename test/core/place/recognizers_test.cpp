@@ -45,7 +45,9 @@ class Recognizers : public ::testing::TestWithParam<std::string> {
     trainModel(modelTypeFromName(m), training, o, f);
     return f;
   }
-  std::unique_ptr<PlaceRecognizer> make() const { return makePlaceRecognizer(GetParam(), {modelFile(GetParam())}); }
+  std::unique_ptr<PlaceRecognizer> make() const {
+    return makePlaceRecognizer(GetParam(), {modelFile(GetParam())});
+  }
   static TempDir* dir_;
 };
 TempDir* Recognizers::dir_ = nullptr;
@@ -132,12 +134,13 @@ TEST_P(Recognizers, StrongTrueLoopOutranksWeakMatchWithTinyReference) {
   EXPECT_TRUE(top_a->id == 8 || top_a->id == 9) << GetParam() << ": A matched keyframe " << top_a->id;
   if (top_b) {
     EXPECT_GT(top_a->confidence, top_b->confidence)
-        << GetParam() << ": true loop " << top_a->id << " (" << ra.detail << ") vs weak match " << top_b->id << " ("
-        << rb.detail << ")";
+        << GetParam() << ": true loop " << top_a->id << " (" << ra.detail << ") vs weak match " << top_b->id
+        << " (" << rb.detail << ")";
   }
 }
 
-INSTANTIATE_TEST_SUITE_P(AllModels, Recognizers, ::testing::Values("hbow", "fabmap", "vlad", "hmvlad", "vladpq"),
+INSTANTIATE_TEST_SUITE_P(AllModels, Recognizers,
+                         ::testing::Values("hbow", "fabmap", "vlad", "hmvlad", "vladpq"),
                          [](const auto& info) { return info.param; });
 
 TEST(Fabmap, FastLikelihoodEqualsTheDirectSum) {
@@ -155,8 +158,10 @@ TEST(Fabmap, FastLikelihoodEqualsTheDirectSum) {
   const double direct_same = rec.logLikelihood(2, 0), direct_other = rec.logLikelihood(2, 1);
   EXPECT_GT(direct_same, direct_other);  // the revisit is likelier under its own place
   const auto& voc = FabmapModel::load(dir / "f.bin").vocabulary;
-  EXPECT_NEAR(rec.logLikelihood(2, 0), rec.logLikelihoodDirect(voc->presence(rec.descriptors(2)), voc->presence(training[0])), 1e-3);
-  EXPECT_NEAR(rec.logLikelihood(2, 1), rec.logLikelihoodDirect(voc->presence(rec.descriptors(2)), voc->presence(training[1])), 1e-3);
+  EXPECT_NEAR(rec.logLikelihood(2, 0),
+              rec.logLikelihoodDirect(voc->presence(rec.descriptors(2)), voc->presence(training[0])), 1e-3);
+  EXPECT_NEAR(rec.logLikelihood(2, 1),
+              rec.logLikelihoodDirect(voc->presence(rec.descriptors(2)), voc->presence(training[1])), 1e-3);
 }
 
 // hbow's bar never drops below its floor: a query whose reference shares nothing with it (open ground, sky)

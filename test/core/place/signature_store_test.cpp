@@ -11,8 +11,8 @@ TEST(SignatureStore, DistancesAreThoseOfTheSignaturesPushed) {
   SignatureStore s;
   EXPECT_TRUE(s.empty());
   s.push({0x0, 0x0});
-  s.push({0xFF, 0x1});            // 8 + 1 bits set
-  s.push({~uint64_t{0}, 0x0});    // 64 bits set
+  s.push({0xFF, 0x1});          // 8 + 1 bits set
+  s.push({~uint64_t{0}, 0x0});  // 64 bits set
   ASSERT_EQ(s.size(), 3u);
   EXPECT_EQ(s.words(), 2u);
   EXPECT_EQ(s.distance(s[0], 1), 9);

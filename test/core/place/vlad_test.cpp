@@ -141,7 +141,8 @@ TEST(ProductQuantization, SdcAndAdcMatchBruteForce) {
     EXPECT_NEAR(pq.sdc(ca, cb), sdc, 1e-4);
     EXPECT_NEAR(pq.adc(a, cb), adc, 1e-4);
   }
-  EXPECT_THROW_WITH(PqCodebooks::train({vlads[0], vlads[0]}, words, dims, m, 1), PlaceError, "degenerate PQ codebook");
+  EXPECT_THROW_WITH(PqCodebooks::train({vlads[0], vlads[0]}, words, dims, m, 1), PlaceError,
+                    "degenerate PQ codebook");
 }
 
 TEST(ProductQuantization, SixteenBitFileGivesTheTrainedCodesAndOldFloatFilesStillLoad) {
@@ -161,7 +162,8 @@ TEST(ProductQuantization, SixteenBitFileGivesTheTrainedCodesAndOldFloatFilesStil
   for (int w = 0; w < words; ++w)
     for (int c = 0; c < m; ++c)
       for (int j = 0; j < dims; ++j) EXPECT_EQ(back.centroid(w, c)[j], pq.centroid(w, c)[j]);
-  EXPECT_EQ(back.sdc(back.encode(vlads[0]), back.encode(vlads[1])), pq.sdc(pq.encode(vlads[0]), pq.encode(vlads[1])));
+  EXPECT_EQ(back.sdc(back.encode(vlads[0]), back.encode(vlads[1])),
+            pq.sdc(pq.encode(vlads[0]), pq.encode(vlads[1])));
 
   // A file written before the 16-bit codebooks: three parameters and the floats themselves.
   std::vector<float> floats;

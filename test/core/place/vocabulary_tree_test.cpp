@@ -25,10 +25,10 @@ Desc256 bits(int from, int to) {  // descriptor with bits [from, to) set
 
 // k = 2, L = 2: root → {A = no bits, B = all bits}; A → {A1, A2}, B → {B1, B2}.
 VocabularyTree handTree() {
-  std::vector<VocabularyTree::InputNode> n{
-      {0, Desc256{}, false, 0},       {0, bits(0, 0), false, 0},     {0, bits(0, 256), false, 0},
-      {1, bits(0, 8), true, 1.0f},    {1, bits(8, 16), true, 2.0f},  {2, bits(0, 248), true, 3.0f},
-      {2, bits(8, 256), true, 4.0f}};
+  std::vector<VocabularyTree::InputNode> n{{0, Desc256{}, false, 0},     {0, bits(0, 0), false, 0},
+                                           {0, bits(0, 256), false, 0},  {1, bits(0, 8), true, 1.0f},
+                                           {1, bits(8, 16), true, 2.0f}, {2, bits(0, 248), true, 3.0f},
+                                           {2, bits(8, 256), true, 4.0f}};
   return VocabularyTree::fromNodes(2, 2, Weighting::kTfIdf, n);
 }
 

@@ -11,7 +11,8 @@ TEST(BuiltinRoute, ClosesTheLoopAndRevisits) {
   EXPECT_LT((r[one_lap].translation() - r[0].translation()).norm(), 1.0);
   EXPECT_LT(Eigen::AngleAxisd(r[one_lap].rotation().transpose() * r[0].rotation()).angle(), 0.05);
   // Steps are 0.8 m everywhere, corners included.
-  for (size_t i = 1; i < r.size(); ++i) EXPECT_NEAR((r[i].translation() - r[i - 1].translation()).norm(), 0.8, 0.01);
+  for (size_t i = 1; i < r.size(); ++i)
+    EXPECT_NEAR((r[i].translation() - r[i - 1].translation()).norm(), 0.8, 0.01);
   // The far side of the block is 120 m across.
   double max_x = 0;
   for (const auto& T : r) max_x = std::max(max_x, std::abs(T.translation().x()));

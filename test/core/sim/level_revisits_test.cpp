@@ -14,9 +14,10 @@ using binloop::test::poseAt;
 // fade into it without a step.
 TEST(LevelRevisits, ARevisitTakesTheEarlierPassHeightAndTheChangeFadesAlongThePath) {
   std::vector<Pose3> route;
-  for (int i = 0; i < 400; ++i) route.push_back(poseAt(0, 0, i));           // first pass, 1 m steps
-  for (int i = 0; i < 400; ++i) route.push_back(poseAt(100, -4, 399 - i));  // detour, 100 m away, back down the z
-  for (int i = 0; i < 400; ++i) route.push_back(poseAt(1, -4, i));          // second pass, 1 m beside the first
+  for (int i = 0; i < 400; ++i) route.push_back(poseAt(0, 0, i));  // first pass, 1 m steps
+  for (int i = 0; i < 400; ++i)
+    route.push_back(poseAt(100, -4, 399 - i));                      // detour, 100 m away, back down the z
+  for (int i = 0; i < 400; ++i) route.push_back(poseAt(1, -4, i));  // second pass, 1 m beside the first
   const LevelResult r = levelRevisits(route);
   ASSERT_EQ(r.route.size(), route.size());
   EXPECT_EQ(r.revisit_frames, 400u);

@@ -144,8 +144,8 @@ TEST(StereoRenderer, NearerSurfaceOccludesFartherOne) {
   // Pixel straight ahead at the small near wall's height sees it, not the far wall behind; the same
   // holds in whichever order the quads were added (the far one was first).
   EXPECT_NEAR(depth.at<float>(static_cast<int>(s.cam.cy), static_cast<int>(s.cam.cx)), 10.0f, 1e-3f);
-  EXPECT_NEAR(depth.at<float>(static_cast<int>(s.cam.cy), static_cast<int>(s.cam.cx + s.cam.fx * 4.0 / 30)), 30.0f,
-              1e-3f);
+  EXPECT_NEAR(depth.at<float>(static_cast<int>(s.cam.cy), static_cast<int>(s.cam.cx + s.cam.fx * 4.0 / 30)),
+              30.0f, 1e-3f);
 }
 
 TEST(StereoRenderer, SameSeedSameBytesOtherSeedOtherTextures) {
@@ -170,7 +170,8 @@ TEST(StereoRenderer, SameSeedSameBytesOtherSeedOtherTextures) {
     return ss.str();
   };
   int same_ab = 0, same_ac = 0;
-  for (const char* f : {"image_0/000000.png", "image_1/000001.png", "image_0/000002.png", "poses.txt", "times.txt"}) {
+  for (const char* f :
+       {"image_0/000000.png", "image_1/000001.png", "image_0/000002.png", "poses.txt", "times.txt"}) {
     const auto a = bytes(tmp / "a/" + f), b = bytes(tmp / "b/" + f), c = bytes(tmp / "c/" + f);
     ASSERT_FALSE(a.empty()) << f;
     same_ab += a == b;
@@ -183,7 +184,8 @@ TEST(StereoRenderer, SameSeedSameBytesOtherSeedOtherTextures) {
 // Loops: frames that ground truth says are at the same place share many more ORB matches than frames of
 // distinct places.
 TEST(StereoRenderer, LoopPairsOfRoute06MatchFarBetterThanDistinctPlaces) {
-  const std::string poses = test::sharedData("kitti/poses/06.txt"), gt = test::sharedData("kitti/loop_gt/06.txt");
+  const std::string poses = test::sharedData("kitti/poses/06.txt"),
+                    gt = test::sharedData("kitti/loop_gt/06.txt");
   BINLOOP_REQUIRE_DATA(poses);
   BINLOOP_REQUIRE_DATA(gt);
   const auto route = readKittiPoses(poses);
@@ -231,7 +233,8 @@ TEST(StereoRenderer, LoopPairsOfRoute06MatchFarBetterThanDistinctPlaces) {
   for (int c : distinct_counts) msg << " " << c;
   std::cout << msg.str() << "\n";
   EXPECT_GT(loop_counts.front(), 2 * distinct_counts.back()) << msg.str();
-  EXPECT_GT(loop_counts[loop_counts.size() / 2], 4 * distinct_counts[distinct_counts.size() / 2]) << msg.str();
+  EXPECT_GT(loop_counts[loop_counts.size() / 2], 4 * distinct_counts[distinct_counts.size() / 2])
+      << msg.str();
 }
 
 // The road texture is 512 texels at 64 per metre: by default two views 8 m apart on a straight road see the
@@ -250,7 +253,8 @@ TEST(StereoRenderer, TheAperiodicGroundDoesNotRepeatEveryEightMetres) {
     cv::Mat a, b, unused;
     r.render(20, 2.0, s.route[20], &a, &unused);
     r.render(28, 2.8, s.route[28], &b, &unused);
-    const cv::Rect road(0, static_cast<int>(s.cam.cy) + 40, s.cam.width, s.cam.height - static_cast<int>(s.cam.cy) - 40);
+    const cv::Rect road(0, static_cast<int>(s.cam.cy) + 40, s.cam.width,
+                        s.cam.height - static_cast<int>(s.cam.cy) - 40);
     return cv::norm(a(road), b(road), cv::NORM_L1) / road.area();
   };
   EXPECT_LT(roadDifference(false), 0.5);

@@ -19,7 +19,8 @@ namespace {
 StereoCamera camera() { return kitti00Camera(); }
 
 // A stereo keypoint where the point appears, u, v and u_right moved by `noise_px`.
-msg::KeyPoint stereoKeypoint(const StereoCamera& cam, const Eigen::Vector3d& p, const Eigen::Vector3d& noise_px) {
+msg::KeyPoint stereoKeypoint(const StereoCamera& cam, const Eigen::Vector3d& p,
+                             const Eigen::Vector3d& noise_px) {
   const double u = cam.fx * p.x() / p.z() + cam.cx;
   msg::KeyPoint k;
   k.x = static_cast<float>(u + noise_px.x());
@@ -65,8 +66,9 @@ Scene makeScene(int n, double wrong_share, uint64_t seed) {
     }
     m.p_w = k1 * unprojectKeypoint(m.sightings[0].keypoint, cam);
     const bool wrong = U(g) < wrong_share;
-    if (wrong) m.keypoint = stereoKeypoint(cam, Eigen::Vector3d(-8 + 16 * U(g), -1.5 + 3 * U(g), 6 + 50 * U(g)),
-                                          Eigen::Vector3d::Zero());
+    if (wrong)
+      m.keypoint = stereoKeypoint(cam, Eigen::Vector3d(-8 + 16 * U(g), -1.5 + 3 * U(g), 6 + 50 * U(g)),
+                                  Eigen::Vector3d::Zero());
     sc.matches.push_back(m);
     sc.wrong.push_back(wrong);
   }
@@ -75,7 +77,8 @@ Scene makeScene(int n, double wrong_share, uint64_t seed) {
 
 Pose3 offBy(const Pose3& T, const Eigen::Vector3d& dt, double yaw_deg) {
   Pose3 out = T;
-  out.linear() = T.linear() * Eigen::AngleAxisd(yaw_deg * M_PI / 180, Eigen::Vector3d::UnitY()).toRotationMatrix();
+  out.linear() =
+      T.linear() * Eigen::AngleAxisd(yaw_deg * M_PI / 180, Eigen::Vector3d::UnitY()).toRotationMatrix();
   out.translation() += dt;
   return out;
 }
@@ -121,7 +124,8 @@ TEST(FarKeyframePose, BeatsTheOrdinaryPoseOptimisationOverTwentyScenes) {
   }
   std::sort(two_sided.begin(), two_sided.end());
   std::sort(ordinary.begin(), ordinary.end());
-  EXPECT_LT(two_sided[10], 0.6 * ordinary[10]) << "medians " << two_sided[10] << " vs " << ordinary[10] << " m";
+  EXPECT_LT(two_sided[10], 0.6 * ordinary[10])
+      << "medians " << two_sided[10] << " vs " << ordinary[10] << " m";
   EXPECT_GE(better, 13) << "better on " << better << " of 20";
 }
 

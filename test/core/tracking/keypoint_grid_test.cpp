@@ -52,7 +52,8 @@ constexpr int kW = 1241, kH = 376;  // KITTI 00
 
 std::vector<msg::KeyPoint> randomKeypoints(Rng& rng, int n, int w, int h) {
   std::vector<msg::KeyPoint> kps;
-  for (int i = 0; i < n; ++i) kps.push_back(kp(rng.uniform(0, float(w)), rng.uniform(0, float(h)), rng.below(8)));
+  for (int i = 0; i < n; ++i)
+    kps.push_back(kp(rng.uniform(0, float(w)), rng.uniform(0, float(h)), rng.below(8)));
   return kps;
 }
 
@@ -69,9 +70,9 @@ void expectSameAsBruteForce(uint32_t seed, int cell_px) {
     if (q % 3 == 0) min_level = max_level = -1;
     const auto expected = bruteForce(kps, x, y, r, min_level, max_level);
     const auto got = grid.near(x, y, r, min_level, max_level);
-    ASSERT_EQ(sorted(got), expected) << "seed " << seed << " cell " << cell_px << " query " << q << " at (" << x
-                                     << ", " << y << ") r " << r << " levels [" << min_level << ", " << max_level
-                                     << "]";
+    ASSERT_EQ(sorted(got), expected) << "seed " << seed << " cell " << cell_px << " query " << q << " at ("
+                                     << x << ", " << y << ") r " << r << " levels [" << min_level << ", "
+                                     << max_level << "]";
     found += got.size();
   }
   EXPECT_GT(found, 3000u) << "the queries should find something";
@@ -117,13 +118,15 @@ TEST(KeypointGrid, RadiusIsASquareWithInclusiveEdges) {
 
 TEST(KeypointGrid, KeypointsAtTheImageBorder) {
   const float e = 1e-3f;
-  const std::vector<msg::KeyPoint> kps = {kp(0, 0), kp(kW - e, 0), kp(0, kH - e), kp(kW - e, kH - e),
-                                          kp(kW / 2.f, 0), kp(0, kH / 2.f), kp(kW - e, kH / 2.f), kp(kW / 2.f, kH - e)};
+  const std::vector<msg::KeyPoint> kps = {
+      kp(0, 0),        kp(kW - e, 0),   kp(0, kH - e),        kp(kW - e, kH - e),
+      kp(kW / 2.f, 0), kp(0, kH / 2.f), kp(kW - e, kH / 2.f), kp(kW / 2.f, kH - e)};
   for (int cell : {16, 30, 1000}) {
     const KeypointGrid grid(kps, kW, kH, cell);
     for (size_t i = 0; i < kps.size(); ++i) {
       // At the keypoint itself, and from just outside the image (a projection falling off its border).
-      EXPECT_EQ(grid.near(kps[i].x, kps[i].y, 0), (std::vector<int>{int(i)})) << "cell " << cell << " kp " << i;
+      EXPECT_EQ(grid.near(kps[i].x, kps[i].y, 0), (std::vector<int>{int(i)}))
+          << "cell " << cell << " kp " << i;
       const float ox = kps[i].x < 1 ? -1.5f : kps[i].x > kW - 1 ? kW + 1.5f : kps[i].x;
       const float oy = kps[i].y < 1 ? -1.5f : kps[i].y > kH - 1 ? kH + 1.5f : kps[i].y;
       EXPECT_EQ(grid.near(ox, oy, 2), (std::vector<int>{int(i)})) << "cell " << cell << " kp " << i;

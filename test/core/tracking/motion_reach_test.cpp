@@ -22,7 +22,7 @@ TEST(MotionReach, TheRadiusGrowsWithTheSquareOfTheTimeAndTheNearestRefusalIsKept
   EXPECT_TRUE(reach.admits(poseAt(0, 0, 20.9)));
   EXPECT_TRUE(reach.admits(poseAt(11, 0, 10)));
   EXPECT_LT(reach.nearestRefusedM(), 0) << "nothing refused yet";
-  EXPECT_FALSE(reach.admits(poseAt(0, 0, 40)));  // 30 m off
+  EXPECT_FALSE(reach.admits(poseAt(0, 0, 40)));   // 30 m off
   EXPECT_FALSE(reach.admits(poseAt(0, 15, 10)));  // 15 m off
   EXPECT_FALSE(reach.admits(poseAt(0, 0, -20)));  // 30 m off again
   EXPECT_DOUBLE_EQ(reach.nearestRefusedM(), 15.0);

@@ -141,7 +141,8 @@ TEST(ProjectIntoFrame, ViewingAngleOverSixtyDegreesIsRejected) {
   ProjectedPoint pp;
   for (double deg : {0.0, 30.0, 59.0, 61.0, 90.0, 150.0}) {
     msg::MapPoint p = aheadPoint(0, 0, 10);
-    p.normal = Eigen::Vector3f(static_cast<float>(std::sin(deg * kDeg)), 0, static_cast<float>(std::cos(deg * kDeg)));
+    p.normal = Eigen::Vector3f(static_cast<float>(std::sin(deg * kDeg)), 0,
+                               static_cast<float>(std::cos(deg * kDeg)));
     const bool seen = projectIntoFrame(p, Pose3::Identity(), camera(), s, &pp);
     EXPECT_EQ(seen, deg < 60) << deg << " degrees";
     if (seen) {
@@ -255,9 +256,9 @@ struct Scene {
   StereoCamera cam = camera();
   ScalePyramid scales{1.2f, 8};
   Pose3 T_w_true = pose(2, 10, -1, {1, 0.2, 3});
-  std::vector<msg::MapPoint> points;      // true points, then distractor points
+  std::vector<msg::MapPoint> points;  // true points, then distractor points
   size_t true_points = 0;
-  std::vector<int> level;                 // per true point
+  std::vector<int> level;  // per true point
   std::unordered_map<MapPointId, const msg::MapPoint*> by_id;
   std::mt19937_64 g{12345};
   std::vector<Desc256> issued;
@@ -320,7 +321,8 @@ struct Scene {
     std::vector<MapPointId> expected;  // per keypoint: the point it shows, kNoId for a distractor
   };
 
-  /// The true points as seen from `T_w_c` (true keypoints and distractor keypoints), with `f.T_w_c = predicted`.
+  /// The true points as seen from `T_w_c` (true keypoints and distractor keypoints), with `f.T_w_c =
+  /// predicted`.
   Made frame(const Pose3& T_w_c, const Pose3& predicted, bool stereo = true) {
     Made m;
     std::mt19937 rng(7);
@@ -367,7 +369,8 @@ struct Scene {
 // The prediction is off by 0.2 degrees and 2 cm: up to about 5.5 px with the keypoints' noise.
 const Pose3 kOffset = pose(0.2, -0.1, 0.05, {0.02, 0.01, 0.02});
 
-void expectAllRight(const Frame& f, const std::vector<MapPointId>& expected, int matches, int expected_matches) {
+void expectAllRight(const Frame& f, const std::vector<MapPointId>& expected, int matches,
+                    int expected_matches) {
   int right = 0;
   for (size_t i = 0; i < f.size(); ++i) {
     if (f.points[i] == kNoId) continue;
@@ -558,9 +561,9 @@ TEST(MatchFromLastFrame, Monocular) {
 
 TEST(MatchFromLastFrame, SkipsUnmatchedOutlierAndUnknownPoints) {
   TwoFrames t;
-  t.last.f.points[0] = kNoId;                              // point 0: not matched in the last frame
-  t.last.f.outlier[2] = 1;                                 // point 1: an outlier there
-  t.last.f.points[4] = (uint64_t{3} << 56) | 99;           // point 2: a point the map no longer has
+  t.last.f.points[0] = kNoId;                     // point 0: not matched in the last frame
+  t.last.f.outlier[2] = 1;                        // point 1: an outlier there
+  t.last.f.points[4] = (uint64_t{3} << 56) | 99;  // point 2: a point the map no longer has
   // Distractor keypoints of the last frame matched to distractor points: their descriptors are far.
   t.last.f.points[7] = t.sc.points[t.sc.true_points].id;
   const int n = t.match();
@@ -626,7 +629,8 @@ int matchAfterMotion(double forward_m, int octave) {
   cur.outlier = {0};
   cur.grid = KeypointGrid(cur.keypoints, cam.width, cam.height);
   cur.T_w_c = pose(0, 0, 0, {0, 0, forward_m});
-  return matchFromLastFrame(cur, last, [&](MapPointId) { return &p; }, cam, s, 7);
+  return matchFromLastFrame(
+      cur, last, [&](MapPointId) { return &p; }, cam, s, 7);
 }
 
 TEST(MatchFromLastFrame, LevelsFollowTheDirectionOfMotion) {
@@ -635,7 +639,8 @@ TEST(MatchFromLastFrame, LevelsFollowTheDirectionOfMotion) {
   // Backward: same or finer.
   for (int o = 0; o < 8; ++o) EXPECT_EQ(matchAfterMotion(-2, o), o <= 3 ? 1 : 0) << "backward, octave " << o;
   // Less than a baseline either way: one level around.
-  for (int o = 0; o < 8; ++o) EXPECT_EQ(matchAfterMotion(0.2, o), (o >= 2 && o <= 4) ? 1 : 0) << "octave " << o;
+  for (int o = 0; o < 8; ++o)
+    EXPECT_EQ(matchAfterMotion(0.2, o), (o >= 2 && o <= 4) ? 1 : 0) << "octave " << o;
 }
 
 // ---------------------------------------------------------------------------------------------------------
@@ -670,8 +675,8 @@ TEST(MatchByDescriptor, StrictThresholdRatioAndSkips) {
   // Point 2: its keypoint and the distractor beside it both close (20 and 25 bits): 20 > 0.7 * 25.
   t.cur.f.descriptors[4] = flipBits(t.last.f.descriptors[4], 20);
   t.cur.f.descriptors[5] = flipBits(t.last.f.descriptors[4], 25, 100);
-  t.last.f.outlier[6] = 1;                          // point 3: outlier in the last frame
-  t.last.f.points[8] = (uint64_t{3} << 56) | 99;    // point 4: unknown to the map
+  t.last.f.outlier[6] = 1;                        // point 3: outlier in the last frame
+  t.last.f.points[8] = (uint64_t{3} << 56) | 99;  // point 4: unknown to the map
   const int n = matchByDescriptor(t.cur.f, t.last.f, t.lookup);
   for (int k : {0, 4, 5, 6, 8}) {
     EXPECT_EQ(t.cur.f.points[k], kNoId) << k;

@@ -97,7 +97,8 @@ double angleDeg(const Eigen::Matrix3d& A, const Eigen::Matrix3d& B) {
 
 TEST(RotationBetweenBearings, RecoversARotationFromTwoBearings) {
   const Eigen::Matrix3d R = turn(5, -2, 1);
-  const Eigen::Vector3d a = Eigen::Vector3d(0.2, 0.1, 1).normalized(), b = Eigen::Vector3d(-0.4, 0, 1).normalized();
+  const Eigen::Vector3d a = Eigen::Vector3d(0.2, 0.1, 1).normalized(),
+                        b = Eigen::Vector3d(-0.4, 0, 1).normalized();
   EXPECT_LT(angleDeg(rotationBetweenBearings({R * a, R * b}, {a, b}), R), 1e-9);
   EXPECT_TRUE(rotationBetweenBearings({R * a}, {a}).isIdentity());
 }
@@ -107,12 +108,15 @@ TEST(RotationSearch, FindsTheRotationAmongWrongMatchesAndClutter) {
   const Eigen::Matrix3d R = turn(5, 1, 0.3);
   // 40 % of the points at random places, 600 keypoints of nothing, the position 0.5 m off.
   const Scene sc = makeScene(R, 0.5, 150, 0.4, 600, 3);
-  const RotationSearchResult r = searchRotation(sc.frame, Pose3::Identity(), pointers(sc), camera(), s, {}, 7);
+  const RotationSearchResult r =
+      searchRotation(sc.frame, Pose3::Identity(), pointers(sc), camera(), s, {}, 7);
   ASSERT_TRUE(r.ok) << r.inliers << " of " << r.candidates;
-  EXPECT_LT(angleDeg(r.R_pred_c, R), 0.15) << "the prediction was " << angleDeg(Eigen::Matrix3d::Identity(), R);
+  EXPECT_LT(angleDeg(r.R_pred_c, R), 0.15)
+      << "the prediction was " << angleDeg(Eigen::Matrix3d::Identity(), R);
   EXPECT_GE(r.inliers, 60);
   // Same seed, same answer.
-  const RotationSearchResult again = searchRotation(sc.frame, Pose3::Identity(), pointers(sc), camera(), s, {}, 7);
+  const RotationSearchResult again =
+      searchRotation(sc.frame, Pose3::Identity(), pointers(sc), camera(), s, {}, 7);
   EXPECT_EQ(again.inliers, r.inliers);
   EXPECT_TRUE(again.R_pred_c == r.R_pred_c);
 }
@@ -131,7 +135,8 @@ TEST(RotationSearch, ATurnBeyondTheWindowIsNotFound) {
   const ScalePyramid s(1.2f, 8);
   // 15 degrees of yaw; the window allows 8: what is found must not be passed off as the rotation.
   const Scene sc = makeScene(turn(15, 0, 0), 0.0, 150, 0, 0, 5);
-  const RotationSearchResult r = searchRotation(sc.frame, Pose3::Identity(), pointers(sc), camera(), s, {}, 7);
+  const RotationSearchResult r =
+      searchRotation(sc.frame, Pose3::Identity(), pointers(sc), camera(), s, {}, 7);
   EXPECT_FALSE(r.ok) << r.inliers << " inliers";
 }
 
