@@ -118,6 +118,20 @@ class LoopCloser {
   };
   Output verify(SlamKeyframeId query, SlamKeyframeId match, const std::string& model,
                 const std::vector<uint32_t>& query_words = {}, const std::vector<uint32_t>& match_words = {});
+  /// The geometric verification of a proposed pair (a culled match stood in for by its parent, a far
+  /// match re-anchored): the verification when it holds, else none with `c`'s status and detail saying why.
+  /// Fills `c`'s match, frames and numbers either way.
+  std::optional<LoopVerification> verifyPair(SlamKeyframeId query, SlamKeyframeId match,
+                                             const std::vector<uint32_t>& query_words,
+                                             const std::vector<uint32_t>& match_words,
+                                             msg::LoopClosure* c) const;
+  /// The drift bound on a verified loop: true when the correction it asks for is one odometry's drift can
+  /// explain, or when it confirms the held loop (`confirmed`: the held loop's edge); false when it is held
+  /// (alone or beside the held loop it agrees with) or rejected, `c` and `out` saying so. `numbers`: the
+  /// detail so far.
+  bool withinDriftBound(SlamKeyframeId query, SlamKeyframeId match, const LoopVerification& v,
+                        msg::LoopClosure* c, std::string* numbers, std::optional<LoopEdge>* confirmed,
+                        Output* out);
   /// A verified loop between keyframes far apart is re-verified against the match's covisible keyframes
   /// nearest to the query; returns the keyframe the loop is anchored at, with *v its verification (its ms
   /// and detail count both searches).

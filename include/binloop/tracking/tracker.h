@@ -152,6 +152,25 @@ class Tracker {
   static StereoCamera savedCamera(const std::string& path);
 
  private:
+  /// Where the frame is expected: the motion model's prediction (or a pose hint while lost) and how far from
+  /// it the camera could have got (`reach`).
+  struct Prediction {
+    Pose3 last_pose, T_w_c;
+    double dt = 0;             // since the last tracked frame
+    bool from_motion = false;  // the motion model predicts (else the last pose stands in)
+    bool hinted = false;       // a pose hint stands in
+    MotionReach reach;
+  };
+  Prediction predict(const Frame& f) const;
+  /// A frame after initialisation: tracked from the last frame, else recovered (recover()); on success the
+  /// covariance, the motion model and maybe a keyframe. False: lost (out->frame says why).
+  bool trackInMap(Frame& f, int mapping_queue, Output* out);
+  /// Tracking as usual: the motion model, and matching without a prediction when it is missing or weak.
+  bool trackFromLastFrame(Frame& f, Prediction& pred);
+  /// After a failure: the reference's local map searched wide, the rotation from far points, relocalisation.
+  bool recover(Frame& f, Prediction& pred, bool* relocalized);
+  /// Localisation only, tracked on little of the map: relocalised too; true when that pose won.
+  bool relocalizeAsWell(Frame& f);
   bool initialize(Frame& f, msg::KeyFramePtr* kf);
   bool trackLastFrame(Frame& f);
   bool trackWithoutPrediction(Frame& f);

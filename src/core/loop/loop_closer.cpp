@@ -5,6 +5,7 @@
 #include <cmath>
 #include <functional>
 #include <limits>
+#include <optional>
 #include <queue>
 #include <stdexcept>
 
@@ -200,14 +201,10 @@ SlamKeyframeId LoopCloser::reanchor(SlamKeyframeId query, SlamKeyframeId match, 
   return match;
 }
 
-LoopCloser::Output LoopCloser::verify(SlamKeyframeId query, SlamKeyframeId match, const std::string& model,
-                                      const std::vector<uint32_t>& query_words,
-                                      const std::vector<uint32_t>& match_words) {
-  Output out;
-  auto c = std::make_shared<msg::LoopClosure>();
-  c->query = query;
-  c->model = model;
-  out.closures.push_back(c);
+std::optional<LoopVerification> LoopCloser::verifyPair(SlamKeyframeId query, SlamKeyframeId match,
+                                                       const std::vector<uint32_t>& query_words,
+                                                       const std::vector<uint32_t>& match_words,
+                                                       msg::LoopClosure* c) const {
   // The detector still knows keyframes mapping has culled since; the place is the culled one's parent's.
   std::string culled_note;
   const SlamKeyframeId proposed = match;
@@ -225,7 +222,7 @@ LoopCloser::Output LoopCloser::verify(SlamKeyframeId query, SlamKeyframeId match
                     ? "a keyframe cannot close a loop with itself"
                     : std::string("loop closing does not hold keyframe ") +
                           std::to_string(fq == frames_.end() ? query : match) + " (never sent, or culled)";
-    return out;
+    return std::nullopt;
   }
   c->query_frame = fq->second->frame_index;
   c->match_frame = fm->second->frame_index;
@@ -235,9 +232,8 @@ LoopCloser::Output LoopCloser::verify(SlamKeyframeId query, SlamKeyframeId match
   v.detail += culled_note;
   if (v.accepted) {
     if (const SlamKeyframeId nearer = reanchor(query, match, &v); nearer != match) {
-      match = nearer;
-      c->match = match;
-      c->match_frame = frames_.at(match)->frame_index;
+      c->match = nearer;
+      c->match_frame = frames_.at(nearer)->frame_index;
     }
   }
   c->verify_ms = v.ms;
@@ -247,66 +243,87 @@ LoopCloser::Output LoopCloser::verify(SlamKeyframeId query, SlamKeyframeId match
   if (!v.accepted) {
     c->status = loopStatusOf(v.rejection);
     c->detail = v.detail;
-    return out;
+    return std::nullopt;
   }
+  return v;
+}
 
-  // 2. The drift bound.
+bool LoopCloser::withinDriftBound(SlamKeyframeId query, SlamKeyframeId match, const LoopVerification& v,
+                                  msg::LoopClosure* c, std::string* numbers,
+                                  std::optional<LoopEdge>* confirmed, Output* out) {
   const Pose3& T_w_q = states_.at(query).T_w_c;
   const Pose3 T_w_q_loop = states_.at(match).T_w_c * v.T_query_candidate.inverse();
   const Pose3 delta = T_w_q_loop * T_w_q.inverse();  // the world-frame change the loop asks for
   c->correction_m = (T_w_q_loop.translation() - T_w_q.translation()).norm();
   const double travel = travelBetween(match, query);
   c->drift_bound_m = p_.drift_base_m + p_.drift_per_m * travel;
-  std::string numbers = v.detail + "; moves the query " + fixedDecimals(c->correction_m, 2) +
-                        " m, drift bound " + fixedDecimals(c->drift_bound_m, 2) + " m over " +
-                        fixedDecimals(travel, 2) + " m";
-  std::vector<LoopEdge> edges{{query, match, v.T_query_candidate}};
-  LoopEdge confirmed_edge;
-  bool confirming = false;
+  *numbers = v.detail + "; moves the query " + fixedDecimals(c->correction_m, 2) + " m, drift bound " +
+             fixedDecimals(c->drift_bound_m, 2) + " m over " + fixedDecimals(travel, 2) + " m";
   if (c->correction_m > p_.hold_factor * c->drift_bound_m) {
     c->status = msg::LoopStatus::kBeyondDriftBound;
-    c->detail = numbers + "; more than " + fixedDecimals(p_.hold_factor, 2) +
+    c->detail = *numbers + "; more than " + fixedDecimals(p_.hold_factor, 2) +
                 "x the bound: not a loop drift can explain";
-    return out;
+    return false;
   }
-  if (c->correction_m > c->drift_bound_m) {
-    // A second loop that asks for the same change confirms a held one.
-    if (held_) {
-      const Eigen::Vector3d here = T_w_q.translation();
-      const double disagree = (delta * here - held_->delta * here).norm();
-      const double apart = travelBetween(held_->edge.query, query);
-      const double tol = p_.confirm_tolerance_m + p_.confirm_tolerance_per_m * apart;
-      const std::string agreement = " the loop held at keyframe " +
-                                    std::to_string(counterOf(held_->edge.query)) + " (" +
-                                    fixedDecimals(disagree, 2) + " m apart in what they ask, " +
-                                    fixedDecimals(apart, 2) + " m along the path";
-      if (disagree <= tol && apart >= p_.confirm_min_travel_m) {
-        confirming = true;
-        confirmed_edge = held_->edge;
-        numbers += "; confirms" + agreement + ")";
-      } else if (disagree <= tol) {
-        // Too near the held one to count as a second, independent sighting, but it agrees: the held loop
-        // stays, so that a loop verified at every keyframe of a revisit (3-4 m apart) reaches the travel a
-        // confirmation needs. Replacing it instead dropped every true loop of a revisit whose drift was over
-        // the bound (rendered 06 run flat out: 10 m against 5.65 m, verified at 17 keyframes, none closed).
-        c->status = msg::LoopStatus::kHeld;
-        c->detail = numbers + "; agrees with" + agreement + ", " + fixedDecimals(p_.confirm_min_travel_m, 2) +
-                    " m needed): waits with it";
-        held_->agreeing.push_back(*c);
-        return out;
-      }
+  if (c->correction_m <= c->drift_bound_m) return true;
+  // A second loop that asks for the same change confirms a held one.
+  if (held_) {
+    const Eigen::Vector3d here = T_w_q.translation();
+    const double disagree = (delta * here - held_->delta * here).norm();
+    const double apart = travelBetween(held_->edge.query, query);
+    const double tol = p_.confirm_tolerance_m + p_.confirm_tolerance_per_m * apart;
+    const std::string agreement = " the loop held at keyframe " +
+                                  std::to_string(counterOf(held_->edge.query)) + " (" +
+                                  fixedDecimals(disagree, 2) + " m apart in what they ask, " +
+                                  fixedDecimals(apart, 2) + " m along the path";
+    if (disagree <= tol && apart >= p_.confirm_min_travel_m) {
+      *confirmed = held_->edge;
+      *numbers += "; confirms" + agreement + ")";
+      return true;
     }
-    if (!confirming) {
+    if (disagree <= tol) {
+      // Too near the held one to count as a second, independent sighting, but it agrees: the held loop
+      // stays, so that a loop verified at every keyframe of a revisit (3-4 m apart) reaches the travel a
+      // confirmation needs. Replacing it instead dropped every true loop of a revisit whose drift was over
+      // the bound (rendered 06 run flat out: 10 m against 5.65 m, verified at 17 keyframes, none closed).
       c->status = msg::LoopStatus::kHeld;
-      c->detail = numbers + "; held until a second loop confirms it";
-      if (held_) rejectHeld("replaced by a newer held loop that does not agree with it", &out);
-      held_ = Held{edges.front(), *c, delta, order_.size(), {}};
-      return out;
+      c->detail = *numbers + "; agrees with" + agreement + ", " + fixedDecimals(p_.confirm_min_travel_m, 2) +
+                  " m needed): waits with it";
+      held_->agreeing.push_back(*c);
+      return false;
     }
   }
+  c->status = msg::LoopStatus::kHeld;
+  c->detail = *numbers + "; held until a second loop confirms it";
+  if (held_) rejectHeld("replaced by a newer held loop that does not agree with it", out);
+  held_ = Held{{query, match, v.T_query_candidate}, *c, delta, order_.size(), {}};
+  return false;
+}
+
+LoopCloser::Output LoopCloser::verify(SlamKeyframeId query, SlamKeyframeId match, const std::string& model,
+                                      const std::vector<uint32_t>& query_words,
+                                      const std::vector<uint32_t>& match_words) {
+  Output out;
+  auto c = std::make_shared<msg::LoopClosure>();
+  c->query = query;
+  c->model = model;
+  out.closures.push_back(c);
+  // 1. Geometry: the two keyframes' points agree on a rigid transform.
+  const std::optional<LoopVerification> verified =
+      verifyPair(query, match, query_words, match_words, c.get());
+  if (!verified) return out;
+  const LoopVerification& v = *verified;
+  match = c->match;
+
+  // 2. The drift bound.
+  std::string numbers;
+  std::optional<LoopEdge> confirmed;
+  if (!withinDriftBound(query, match, v, c.get(), &numbers, &confirmed, &out)) return out;
+  const bool confirming = confirmed.has_value();
+  std::vector<LoopEdge> edges{{query, match, v.T_query_candidate}};
   std::vector<msg::LoopClosure> waited;  // the held loop first, then those that agreed with it
   if (confirming) {
-    edges.push_back(confirmed_edge);
+    edges.push_back(*confirmed);
     waited = takeHeld();
   }
   c->detail = numbers;

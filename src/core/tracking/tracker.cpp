@@ -102,127 +102,9 @@ Tracker::Output Tracker::track(const StereoFrame& in, int mapping_queue) {
       return out;
     }
     tf.state = state_;
-  } else {
-    const Pose3 last_pose = lastPose();
-    // The motion model over the time since the last tracked frame, so that frames lost in between (a dropped
-    // message, a skipped bad image) do not leave the prediction behind.
-    const double dt = f.stamp_s - last_->stamp_s;
-    const bool predict = have_velocity_ && dt <= p_.predict_through_loss_s;
-    // A pose hint while lost stands in for the prediction: the frame is searched for there and must be found
-    // within its radius.
-    const bool hinted = hint_ && state_ == msg::TrackingState::kLost;
-    const Pose3 predicted = hinted ? hint_->T_w_c
-                            : predict
-                                ? orthonormalized(last_pose * scaledMotion(velocity_, dt / velocity_dt_))
-                                : last_pose;
-    f.T_w_c = predicted;
-    MotionReach reach;
-    if (hinted)
-      reach = MotionReach(predicted.translation(), hint_->radius_m, 0, 0);
-    else if (predict)
-      reach = MotionReach(predicted.translation(), p_.recovery_min_gate_m, p_.recovery_max_accel_mps2, dt);
-    bool ok = false;
-    bool relocalized = false;  // found from scratch, not near the prediction
-    if (state_ == msg::TrackingState::kOk) {
-      // The motion model when there is one; without it (right after the first keyframe), when it fails, or
-      // when it holds on to only a few points (in a sharp turn a wrong prediction can still collect a dozen
-      // chance matches), descriptor matching against the last frame, which needs no prediction; the
-      // attempt that tracks more of the local map wins.
-      Frame by_model = f;
-      bool model_ok = have_velocity_ && trackLastFrame(by_model);
-      const bool model_strong = model_ok && inliers_ >= p_.motion_model_min_inliers;
-      model_ok = model_ok && trackLocalMap(by_model, p_.local_map_radius, p_.min_inliers);
-      const int model_inliers = model_ok ? inliers_ : 0;
-      model_ok = model_ok && reach.admits(by_model.T_w_c);
-      if (model_ok && model_strong) {
-        f = std::move(by_model);
-        ok = true;
-      } else {
-        f.T_w_c = predicted;  // matching ignores it; the pose optimisation starts there
-        ok = trackWithoutPrediction(f) && trackLocalMap(f, p_.local_map_radius, p_.min_inliers) &&
-             reach.admits(f.T_w_c);
-        if (model_ok && (!ok || model_inliers >= inliers_)) {
-          f = std::move(by_model);
-          inliers_ = model_inliers;
-          ok = true;
-          updateLocalKeyframes(f);  // the reference keyframe of the attempt that won
-        }
-      }
-    }
-    if (!ok) {
-      // Recovery: first the local map of the reference keyframe, searched wide around the prediction; then,
-      // while the prediction holds, its rotation mended from far points (recoverRotationFirst()); then
-      // relocalisation against recent keyframes (relocalize()).
-      f.T_w_c = predicted;
-      f.clearMatches();
-      local_keyframes_.clear();
-      if (const msg::KeyframeState* ref = map_.keyframe(reference_)) {
-        local_keyframes_.push_back(ref->id);
-        for (const auto& e : ref->covisible) {
-          if (static_cast<int>(local_keyframes_.size()) >= p_.covisible_per_keyframe) break;
-          local_keyframes_.push_back(e.id);
-        }
-      }
-      // Each step's pose must be one the camera could have reached (MotionReach): a road whose texture
-      // repeats lets a wrong pose gather dozens of inliers.
-      const SlamKeyframeId reference_before = reference_;
-      ok = trackLocalMap(f, p_.lost_radius, p_.min_inliers_after_loss) && reach.admits(f.T_w_c);
-      if (!ok && predict && p_.recover_rotation_first)
-        ok = recoverRotationFirst(f, predicted) && reach.admits(f.T_w_c);
-      // Still nothing: the pose is unknown; find it from scratch against recent keyframes.
-      // Localisation only: the map is as loaded, and two parts of it may show one place a metre apart (a
-      // revisit never closed); a pose found in the other part is no less right, so no gate.
-      MotionReach anywhere;
-      if (!ok) ok = relocalized = relocalize(f, p_.localize_only && !hinted ? anywhere : reach, hinted);
-      if (!ok) reference_ = reference_before;
-      if (ok && (relocalized || state_ != msg::TrackingState::kOk)) {
-        state_ = msg::TrackingState::kRelocalized;
-      }
-    }
-    if (ok && p_.localize_only && !relocalized && inliers_ < p_.localize_relocalize_below) {
-      // Tracked, but on little of the map: relocalised as well, and the pose that explains more of it wins
-      // (ORB-SLAM2's localisation mode does the same once it is down to visual odometry).
-      const int tracked = inliers_;
-      const std::vector<SlamKeyframeId> local = local_keyframes_;
-      const SlamKeyframeId reference = reference_;
-      Frame other = f;
-      MotionReach anywhere;
-      if (relocalize(other, anywhere, false) && inliers_ > tracked) {
-        f = std::move(other);
-        relocalized = true;
-        state_ = msg::TrackingState::kRelocalized;
-      } else {
-        inliers_ = tracked;
-        local_keyframes_ = local;
-        reference_ = reference;
-      }
-    }
-    if (hinted && (ok || --hint_->frames_left <= 0)) hint_.reset();
-    if (!ok) {
-      state_ = msg::TrackingState::kLost;
-      tf.state = state_;
-      tf.problem = "lost: " + std::to_string(inliers_) + " inliers";
-      if (reach.nearestRefusedM() >= 0)
-        tf.problem += "; a pose " + fixedDecimals(reach.nearestRefusedM(), 1) + " m from the " +
-                      (hinted ? std::string("pose hint")
-                              : "motion model's prediction after " + fixedDecimals(reach.dtS(), 1) + " s") +
-                      " was rejected (at most " + fixedDecimals(reach.radiusM(), 1) + " m)";
-      tf.T_w_c = predicted;  // not what a failed attempt left in f
-      tf.track_ms = msSinceT(t0);
-      return out;
-    }
-    tf.state = state_ == msg::TrackingState::kRelocalized ? state_ : msg::TrackingState::kOk;
-    state_ = msg::TrackingState::kOk;
-    // Every match left after the last pose optimisation is one of its inliers.
-    const PoseCovariance cov = poseCovariance(cam_, f.T_w_c, observationsOf(f, nullptr));
-    if (cov.valid) tf.pose_covariance = p_.pose_covariance_scale * cov.covariance;
-    // The motion from the last tracked frame is the velocity, unless the frame was found from scratch: then
-    // that "motion" is wherever the camera was carried, and the next frame is matched without a prediction
-    // (as ORB-SLAM2 drops its velocity after relocalising).
-    velocity_ = last_pose.inverse() * f.T_w_c;
-    velocity_dt_ = dt > 0 ? dt : 1;
-    have_velocity_ = !relocalized;
-    if (!p_.localize_only && needKeyframe(f, mapping_queue)) out.keyframe = makeKeyframe(f);
+  } else if (!trackInMap(f, mapping_queue, &out)) {
+    tf.track_ms = msSinceT(t0);
+    return out;
   }
 
   tf.T_w_c = f.T_w_c;
@@ -235,6 +117,143 @@ Tracker::Output Tracker::track(const StereoFrame& in, int mapping_queue) {
   last_ = std::make_unique<Frame>(std::move(f));
   tf.track_ms = msSinceT(t0);
   return out;
+}
+
+Tracker::Prediction Tracker::predict(const Frame& f) const {
+  Prediction p;
+  p.last_pose = lastPose();
+  // The motion model over the time since the last tracked frame, so that frames lost in between (a dropped
+  // message, a skipped bad image) do not leave the prediction behind.
+  p.dt = f.stamp_s - last_->stamp_s;
+  p.from_motion = have_velocity_ && p.dt <= p_.predict_through_loss_s;
+  // A pose hint while lost stands in for the prediction: the frame is searched for there and must be found
+  // within its radius.
+  p.hinted = hint_ && state_ == msg::TrackingState::kLost;
+  p.T_w_c = p.hinted        ? hint_->T_w_c
+            : p.from_motion ? orthonormalized(p.last_pose * scaledMotion(velocity_, p.dt / velocity_dt_))
+                            : p.last_pose;
+  if (p.hinted)
+    p.reach = MotionReach(p.T_w_c.translation(), hint_->radius_m, 0, 0);
+  else if (p.from_motion)
+    p.reach = MotionReach(p.T_w_c.translation(), p_.recovery_min_gate_m, p_.recovery_max_accel_mps2, p.dt);
+  return p;
+}
+
+bool Tracker::trackInMap(Frame& f, int mapping_queue, Output* out) {
+  msg::TrackedFrame& tf = out->frame;
+  Prediction pred = predict(f);
+  f.T_w_c = pred.T_w_c;
+  bool ok = state_ == msg::TrackingState::kOk && trackFromLastFrame(f, pred);
+  bool relocalized = false;  // found from scratch, not near the prediction
+  if (!ok) ok = recover(f, pred, &relocalized);
+  if (ok && p_.localize_only && !relocalized && inliers_ < p_.localize_relocalize_below)
+    relocalized = relocalizeAsWell(f);
+  if (pred.hinted && (ok || --hint_->frames_left <= 0)) hint_.reset();
+  if (!ok) {
+    state_ = msg::TrackingState::kLost;
+    tf.state = state_;
+    tf.problem = "lost: " + std::to_string(inliers_) + " inliers";
+    const MotionReach& reach = pred.reach;
+    if (reach.nearestRefusedM() >= 0)
+      tf.problem +=
+          "; a pose " + fixedDecimals(reach.nearestRefusedM(), 1) + " m from the " +
+          (pred.hinted ? std::string("pose hint")
+                       : "motion model's prediction after " + fixedDecimals(reach.dtS(), 1) + " s") +
+          " was rejected (at most " + fixedDecimals(reach.radiusM(), 1) + " m)";
+    tf.T_w_c = pred.T_w_c;  // not what a failed attempt left in f
+    return false;
+  }
+  tf.state = state_ == msg::TrackingState::kRelocalized ? state_ : msg::TrackingState::kOk;
+  state_ = msg::TrackingState::kOk;
+  // Every match left after the last pose optimisation is one of its inliers.
+  const PoseCovariance cov = poseCovariance(cam_, f.T_w_c, observationsOf(f, nullptr));
+  if (cov.valid) tf.pose_covariance = p_.pose_covariance_scale * cov.covariance;
+  // The motion from the last tracked frame is the velocity, unless the frame was found from scratch: then
+  // that "motion" is wherever the camera was carried, and the next frame is matched without a prediction
+  // (as ORB-SLAM2 drops its velocity after relocalising).
+  velocity_ = pred.last_pose.inverse() * f.T_w_c;
+  velocity_dt_ = pred.dt > 0 ? pred.dt : 1;
+  have_velocity_ = !relocalized;
+  if (!p_.localize_only && needKeyframe(f, mapping_queue)) out->keyframe = makeKeyframe(f);
+  return true;
+}
+
+bool Tracker::trackFromLastFrame(Frame& f, Prediction& pred) {
+  // The motion model when there is one; without it (right after the first keyframe), when it fails, or
+  // when it holds on to only a few points (in a sharp turn a wrong prediction can still collect a dozen
+  // chance matches), descriptor matching against the last frame, which needs no prediction; the
+  // attempt that tracks more of the local map wins.
+  Frame by_model = f;
+  bool model_ok = have_velocity_ && trackLastFrame(by_model);
+  const bool model_strong = model_ok && inliers_ >= p_.motion_model_min_inliers;
+  model_ok = model_ok && trackLocalMap(by_model, p_.local_map_radius, p_.min_inliers);
+  const int model_inliers = model_ok ? inliers_ : 0;
+  model_ok = model_ok && pred.reach.admits(by_model.T_w_c);
+  if (model_ok && model_strong) {
+    f = std::move(by_model);
+    return true;
+  }
+  f.T_w_c = pred.T_w_c;  // matching ignores it; the pose optimisation starts there
+  bool ok = trackWithoutPrediction(f) && trackLocalMap(f, p_.local_map_radius, p_.min_inliers) &&
+            pred.reach.admits(f.T_w_c);
+  if (model_ok && (!ok || model_inliers >= inliers_)) {
+    f = std::move(by_model);
+    inliers_ = model_inliers;
+    ok = true;
+    updateLocalKeyframes(f);  // the reference keyframe of the attempt that won
+  }
+  return ok;
+}
+
+bool Tracker::recover(Frame& f, Prediction& pred, bool* relocalized) {
+  // Recovery: first the local map of the reference keyframe, searched wide around the prediction; then,
+  // while the prediction holds, its rotation mended from far points (recoverRotationFirst()); then
+  // relocalisation against recent keyframes (relocalize()).
+  f.T_w_c = pred.T_w_c;
+  f.clearMatches();
+  local_keyframes_.clear();
+  if (const msg::KeyframeState* ref = map_.keyframe(reference_)) {
+    local_keyframes_.push_back(ref->id);
+    for (const auto& e : ref->covisible) {
+      if (static_cast<int>(local_keyframes_.size()) >= p_.covisible_per_keyframe) break;
+      local_keyframes_.push_back(e.id);
+    }
+  }
+  // Each step's pose must be one the camera could have reached (MotionReach): a road whose texture
+  // repeats lets a wrong pose gather dozens of inliers.
+  MotionReach& reach = pred.reach;
+  const SlamKeyframeId reference_before = reference_;
+  bool ok = trackLocalMap(f, p_.lost_radius, p_.min_inliers_after_loss) && reach.admits(f.T_w_c);
+  if (!ok && pred.from_motion && p_.recover_rotation_first)
+    ok = recoverRotationFirst(f, pred.T_w_c) && reach.admits(f.T_w_c);
+  // Still nothing: the pose is unknown; find it from scratch against recent keyframes.
+  // Localisation only: the map is as loaded, and two parts of it may show one place a metre apart (a
+  // revisit never closed); a pose found in the other part is no less right, so no gate.
+  MotionReach anywhere;
+  if (!ok)
+    ok = *relocalized = relocalize(f, p_.localize_only && !pred.hinted ? anywhere : reach, pred.hinted);
+  if (!ok) reference_ = reference_before;
+  if (ok && (*relocalized || state_ != msg::TrackingState::kOk)) state_ = msg::TrackingState::kRelocalized;
+  return ok;
+}
+
+bool Tracker::relocalizeAsWell(Frame& f) {
+  // Tracked, but on little of the map: relocalised as well, and the pose that explains more of it wins
+  // (ORB-SLAM2's localisation mode does the same once it is down to visual odometry).
+  const int tracked = inliers_;
+  const std::vector<SlamKeyframeId> local = local_keyframes_;
+  const SlamKeyframeId reference = reference_;
+  Frame other = f;
+  MotionReach anywhere;
+  if (relocalize(other, anywhere, false) && inliers_ > tracked) {
+    f = std::move(other);
+    state_ = msg::TrackingState::kRelocalized;
+    return true;
+  }
+  inliers_ = tracked;
+  local_keyframes_ = local;
+  reference_ = reference;
+  return false;
 }
 
 bool Tracker::initialize(Frame& f, msg::KeyFramePtr* kf) {
