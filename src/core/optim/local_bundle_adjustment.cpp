@@ -163,17 +163,11 @@ Stage solveStage(const BaProblem& pb, const std::vector<Term>& terms, const std:
   return stage;
 }
 
-}  // namespace
-
-LocalBaResult localBundleAdjustment(const StereoCamera& camera, const BaProblem& pb,
-                                    const LocalBaParams& params, std::atomic<bool>* abort) {
-  const auto t0 = std::chrono::steady_clock::now();
-  checkInput(camera, pb, params);
-  const ProjectionConstants k(camera);
-  const size_t n = pb.observations.size();
-
-  std::vector<Term> terms(n);
-  for (size_t i = 0; i < n; ++i) {
+// One reprojection term per observation, stereo or monocular, about its keyframe's initial pose, with its
+// outlier threshold.
+std::vector<Term> makeTerms(const ProjectionConstants& k, const BaProblem& pb, const LocalBaParams& params) {
+  std::vector<Term> terms(pb.observations.size());
+  for (size_t i = 0; i < pb.observations.size(); ++i) {
     const BaObservation& o = pb.observations[i];
     const Pose3& T0 = pb.keyframes[o.keyframe].T_c_w;
     if (o.u_right >= 0) {
@@ -184,6 +178,19 @@ LocalBaResult localBundleAdjustment(const StereoCamera& camera, const BaProblem&
       terms[i].chi2_max = params.chi2_mono;
     }
   }
+  return terms;
+}
+
+}  // namespace
+
+LocalBaResult localBundleAdjustment(const StereoCamera& camera, const BaProblem& pb,
+                                    const LocalBaParams& params, std::atomic<bool>* abort) {
+  const auto t0 = std::chrono::steady_clock::now();
+  checkInput(camera, pb, params);
+  const ProjectionConstants k(camera);
+  const size_t n = pb.observations.size();
+
+  std::vector<Term> terms = makeTerms(k, pb, params);
   ceres::HuberLoss huber_stereo(params.huber_delta_stereo), huber_mono(params.huber_delta_mono);
 
   Variables v;

@@ -44,17 +44,12 @@ void checkInput(const StereoCamera& camera, const Pose3& T_c_w, const std::vecto
   checkPose(kWho, T_c_w, "initial pose T_c_w");
 }
 
-}  // namespace
-
-PoseOptimizationResult optimizePose(const StereoCamera& camera, const Pose3& T_c_w,
-                                    const std::vector<PoseObservation>& observations,
-                                    const PoseOptimizerParams& params) {
-  checkInput(camera, T_c_w, observations, params);
-  const ProjectionConstants k(camera);
-  const size_t n = observations.size();
-
-  std::vector<Term> terms(n);
-  for (size_t i = 0; i < n; ++i) {
+// One reprojection term per observation, stereo or monocular, with its outlier threshold.
+std::vector<Term> makeTerms(const ProjectionConstants& k, const Pose3& T_c_w,
+                            const std::vector<PoseObservation>& observations,
+                            const PoseOptimizerParams& params) {
+  std::vector<Term> terms(observations.size());
+  for (size_t i = 0; i < observations.size(); ++i) {
     const PoseObservation& o = observations[i];
     if (o.u_right >= 0) {
       terms[i].stereo.reset(StereoPoseOnlyCost::create(k, T_c_w, o.p_w, o.uv, o.u_right, o.inv_sigma2));
@@ -64,6 +59,31 @@ PoseOptimizationResult optimizePose(const StereoCamera& camera, const Pose3& T_c
       terms[i].chi2_max = params.chi2_mono;
     }
   }
+  return terms;
+}
+
+ceres::Solver::Options solverOptions(const PoseOptimizerParams& params) {
+  ceres::Solver::Options options;
+  options.minimizer_type = ceres::TRUST_REGION;
+  options.trust_region_strategy_type = ceres::LEVENBERG_MARQUARDT;
+  options.linear_solver_type = ceres::DENSE_QR;
+  options.max_num_iterations = params.iterations_per_round;
+  options.num_threads = 1;  // determinism: the same input gives bit-identical output
+  options.logging_type = ceres::SILENT;
+  options.minimizer_progress_to_stdout = false;
+  return options;
+}
+
+}  // namespace
+
+PoseOptimizationResult optimizePose(const StereoCamera& camera, const Pose3& T_c_w,
+                                    const std::vector<PoseObservation>& observations,
+                                    const PoseOptimizerParams& params) {
+  checkInput(camera, T_c_w, observations, params);
+  const ProjectionConstants k(camera);
+  const size_t n = observations.size();
+
+  std::vector<Term> terms = makeTerms(k, T_c_w, observations, params);
   ceres::HuberLoss huber_stereo(params.huber_delta_stereo), huber_mono(params.huber_delta_mono);
 
   // The increment about the initial pose (reprojection_costs.h); zero is the initial pose.
@@ -78,15 +98,7 @@ PoseOptimizationResult optimizePose(const StereoCamera& camera, const Pose3& T_c
     excluded[i] = !in_front;
   }
 
-  ceres::Solver::Options options;
-  options.minimizer_type = ceres::TRUST_REGION;
-  options.trust_region_strategy_type = ceres::LEVENBERG_MARQUARDT;
-  options.linear_solver_type = ceres::DENSE_QR;
-  options.max_num_iterations = params.iterations_per_round;
-  options.num_threads = 1;  // determinism: the same input gives bit-identical output
-  options.logging_type = ceres::SILENT;
-  options.minimizer_progress_to_stdout = false;
-
+  const ceres::Solver::Options options = solverOptions(params);
   PoseOptimizationResult result;
   for (int round = 0; round < params.rounds; ++round) {
     size_t active = 0;

@@ -27,6 +27,36 @@ void saveHbowModel(const VocabularyTree& t, ModelHeader h, const std::string& ou
   w.save(out);
 }
 
+namespace {
+
+// FAB-MAP: a flat vocabulary, the Chow-Liu tree of its words' presence and the sampled places.
+void saveFabmapModel(const std::vector<Descriptors>& images, const TrainOptions& o,
+                     const ProgressFn& progress, ModelHeader* h, const std::string& out) {
+  FlatVocabParams fp;
+  fp.words = o.words;
+  fp.seed = o.seed;
+  fp.max_training_descriptors = o.max_descriptors;
+  FabmapModel m;
+  m.vocabulary = std::make_shared<FlatVocabulary>(FlatVocabulary::train(images, fp, progress));
+  std::vector<std::vector<uint32_t>> presence;
+  for (const auto& im : images) presence.push_back(m.vocabulary->presence(im));
+  m.tree = std::make_shared<ChowLiuTree>(
+      ChowLiuTree::learn(presence, static_cast<uint32_t>(m.vocabulary->size()), 0.5, progress));
+  // Evenly spaced training places stand for "somewhere new" in the sampled evidence (eq. 3.19).
+  const size_t step = std::max<size_t>(1, presence.size() / std::max<size_t>(1, o.fabmap_samples));
+  for (size_t i = 0; i < presence.size() && m.samples.size() < o.fabmap_samples; i += step)
+    m.samples.push_back(presence[i]);
+  h->k = static_cast<uint32_t>(m.vocabulary->size());
+  h->levels = 1;
+  h->words = m.vocabulary->size();
+  h->weighting = Weighting::kBinary;
+  ModelWriter w(*h);
+  m.write(w);
+  w.save(out);
+}
+
+}  // namespace
+
 ModelHeader trainModel(ModelType type, const std::vector<Descriptors>& images, const TrainOptions& o,
                        const std::string& out, const ProgressFn& progress) {
   ModelHeader h;
@@ -86,30 +116,9 @@ ModelHeader trainModel(ModelType type, const std::vector<Descriptors>& images, c
       w.save(out);
       return h;
     }
-    case ModelType::kFabmap: {
-      FlatVocabParams fp;
-      fp.words = o.words;
-      fp.seed = o.seed;
-      fp.max_training_descriptors = o.max_descriptors;
-      FabmapModel m;
-      m.vocabulary = std::make_shared<FlatVocabulary>(FlatVocabulary::train(images, fp, progress));
-      std::vector<std::vector<uint32_t>> presence;
-      for (const auto& im : images) presence.push_back(m.vocabulary->presence(im));
-      m.tree = std::make_shared<ChowLiuTree>(
-          ChowLiuTree::learn(presence, static_cast<uint32_t>(m.vocabulary->size()), 0.5, progress));
-      // Evenly spaced training places stand for "somewhere new" in the sampled evidence (eq. 3.19).
-      const size_t step = std::max<size_t>(1, presence.size() / std::max<size_t>(1, o.fabmap_samples));
-      for (size_t i = 0; i < presence.size() && m.samples.size() < o.fabmap_samples; i += step)
-        m.samples.push_back(presence[i]);
-      h.k = static_cast<uint32_t>(m.vocabulary->size());
-      h.levels = 1;
-      h.words = m.vocabulary->size();
-      h.weighting = Weighting::kBinary;
-      ModelWriter w(h);
-      m.write(w);
-      w.save(out);
+    case ModelType::kFabmap:
+      saveFabmapModel(images, o, progress, &h, out);
       return h;
-    }
   }
   throw PlaceError("unknown model type");
 }

@@ -4,6 +4,7 @@
 #include <algorithm>
 #include <cmath>
 #include <limits>
+#include <utility>
 
 namespace binloop::sim {
 
@@ -88,6 +89,28 @@ void ViewRenderer::drawGround(const World& world, const StereoCamera& cam, const
   }
 }
 
+namespace {
+
+// The span [left, right] of a convex polygon on image row y: between its extreme edge crossings.
+std::pair<float, float> rowSpan(const Eigen::Vector2f* poly, int np, int y) {
+  float xl = 1e9f, xr = -1e9f;
+  for (int i = 0; i < np; ++i) {
+    const Eigen::Vector2f& p = poly[i];
+    const Eigen::Vector2f& r = poly[(i + 1) % np];
+    if ((p.y() <= y && r.y() >= y) || (r.y() <= y && p.y() >= y)) {
+      const float x = std::abs(r.y() - p.y()) < 1e-6f
+                          ? std::min(p.x(), r.x())
+                          : p.x() + (y - p.y()) * (r.x() - p.x()) / (r.y() - p.y());
+      const float x2 = std::abs(r.y() - p.y()) < 1e-6f ? std::max(p.x(), r.x()) : x;
+      xl = std::min(xl, x);
+      xr = std::max(xr, x2);
+    }
+  }
+  return {xl, xr};
+}
+
+}  // namespace
+
 void ViewRenderer::drawQuad(const World& world, const Quad& q, const StereoCamera& cam, const Pose3& T_w_c,
                             cv::Mat& gray, cv::Mat& depth) {
   const Eigen::Matrix3f R_cw = T_w_c.rotation().transpose().cast<float>();
@@ -145,20 +168,7 @@ void ViewRenderer::drawQuad(const World& world, const Quad& q, const StereoCamer
   const int y0 = std::max(0, static_cast<int>(std::ceil(ymin))),
             y1 = std::min(cam.height - 1, static_cast<int>(std::floor(ymax)));
   for (int y = y0; y <= y1; ++y) {
-    // The polygon is convex: its span on this row is between the extreme edge crossings.
-    float xl = 1e9f, xr = -1e9f;
-    for (int i = 0; i < np; ++i) {
-      const Eigen::Vector2f& p = poly[i];
-      const Eigen::Vector2f& r = poly[(i + 1) % np];
-      if ((p.y() <= y && r.y() >= y) || (r.y() <= y && p.y() >= y)) {
-        const float x = std::abs(r.y() - p.y()) < 1e-6f
-                            ? std::min(p.x(), r.x())
-                            : p.x() + (y - p.y()) * (r.x() - p.x()) / (r.y() - p.y());
-        const float x2 = std::abs(r.y() - p.y()) < 1e-6f ? std::max(p.x(), r.x()) : x;
-        xl = std::min(xl, x);
-        xr = std::max(xr, x2);
-      }
-    }
+    const auto [xl, xr] = rowSpan(poly, np, y);
     const int xa = std::max(0, static_cast<int>(std::ceil(xl))),
               xb = std::min(cam.width - 1, static_cast<int>(std::floor(xr)));
     if (xa > xb) continue;

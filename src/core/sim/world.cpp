@@ -189,6 +189,18 @@ struct Builder {
   }
 };
 
+// The route resampled every kStep metres of travel (at least three samples).
+std::vector<Eigen::Vector3d> resampledRoute(const std::vector<Pose3>& route_T_w_c) {
+  std::vector<Eigen::Vector3d> route{route_T_w_c.front().translation()};
+  for (const auto& T : route_T_w_c) {
+    const Eigen::Vector3d p = T.translation();
+    while ((p - route.back()).norm() >= kStep)
+      route.push_back(route.back() + (p - route.back()).normalized() * kStep);
+  }
+  if (route.size() < 3) route.push_back(route_T_w_c.back().translation() + Eigen::Vector3d(0, 0, kStep));
+  return route;
+}
+
 }  // namespace
 
 World World::build(const std::vector<Pose3>& route_T_w_c, TextureBank bank, const WorldParams& params,
@@ -199,15 +211,7 @@ World World::build(const std::vector<Pose3>& route_T_w_c, TextureBank bank, cons
   w.bank_ = std::move(bank);
   w.params_ = params;
 
-  // Resample the route every kStep metres of travel.
-  w.route_.push_back(route_T_w_c.front().translation());
-  for (const auto& T : route_T_w_c) {
-    const Eigen::Vector3d p = T.translation();
-    while ((p - w.route_.back()).norm() >= kStep)
-      w.route_.push_back(w.route_.back() + (p - w.route_.back()).normalized() * kStep);
-  }
-  if (w.route_.size() < 3)
-    w.route_.push_back(route_T_w_c.back().translation() + Eigen::Vector3d(0, 0, kStep));
+  w.route_ = resampledRoute(route_T_w_c);
   const size_t n = w.route_.size();
   for (size_t i = 0; i < n; ++i) {
     const size_t i0 = i >= 3 ? i - 3 : 0, i1 = std::min(n - 1, i + 3);
