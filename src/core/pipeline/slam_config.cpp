@@ -22,12 +22,10 @@ struct Setting {
   double min;
 };
 
-std::map<std::string, std::map<std::string, Setting>> settingsOf(SlamConfig& c) {
-  TrackerParams& t = c.tracker;
-  LocalMapperParams& m = c.mapper;
-  LoopDetectorParams& d = c.detector;
-  LoopCloserParams& l = c.closer;
-  RecognizerOptions& r = c.models;
+using Sections = std::map<std::string, std::map<std::string, Setting>>;
+
+// Tracking's sections: the extractor, stereo matching, tracking and recovery.
+Sections trackingSettings(TrackerParams& t) {
   using S = Setting;
   return {
       {"orb",
@@ -84,6 +82,17 @@ std::map<std::string, std::map<std::string, Setting>> settingsOf(SlamConfig& c) 
         {"pose_max_turn_deg", {S::kDouble, &t.far_pose.max_turn_deg, 0}},
         {"reloc_keyframes", {S::kInt, &t.reloc_keyframes, 1}},
         {"reloc_min_matches", {S::kInt, &t.reloc_min_matches, 4}}}},
+  };
+}
+
+// The back end's sections: local mapping, loop detection and loop closing.
+Sections backEndSettings(SlamConfig& c) {
+  LocalMapperParams& m = c.mapper;
+  LoopDetectorParams& d = c.detector;
+  LoopCloserParams& l = c.closer;
+  RecognizerOptions& r = c.models;
+  using S = Setting;
+  return {
       {"mapping",
        {{"covisibility_min", {S::kInt, &m.covisibility_min, 1}},
         {"cull_after_keyframes", {S::kInt, &m.cull_after_keyframes, 1}},
@@ -127,6 +136,13 @@ std::map<std::string, std::map<std::string, Setting>> settingsOf(SlamConfig& c) 
         {"reanchor_min_m", {S::kDouble, &l.reanchor_min_m, 0}},
         {"fuse", {S::kBool, &l.fuse, 0}}}},
   };
+}
+
+// Every section and key of a settings file, with where each value goes in `c`.
+Sections settingsOf(SlamConfig& c) {
+  Sections all = trackingSettings(c.tracker);
+  all.merge(backEndSettings(c));
+  return all;
 }
 
 double valueOf(const Setting& s) {
