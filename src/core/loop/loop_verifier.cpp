@@ -91,6 +91,41 @@ void guidedSearch(const msg::KeyFrame& q, const msg::KeyFrame& c, const ScalePyr
   }
 }
 
+// Descriptor matches (query keypoint, candidate keypoint) between stereo keypoints, each candidate keypoint
+// used once: brute force, or within the same word when `words` (the query's) is given with the candidate's.
+std::vector<std::pair<int, int>> descriptorPairs(const msg::KeyFrame& q, const msg::KeyFrame& c,
+                                                 const LoopVerifierParams& p,
+                                                 const std::vector<uint32_t>* words,
+                                                 const std::vector<uint32_t>* candidate_words) {
+  std::vector<int> best_of_c(c.keypoints.size(), -1),
+      dist_of_c(c.keypoints.size(), std::numeric_limits<int>::max());
+  // One block of the candidate's stereo descriptors per word (a single block when brute force).
+  struct Cell {
+    DescriptorBlock desc;
+    std::vector<int> index;
+  };
+  std::unordered_map<uint32_t, Cell> cells;
+  for (size_t j = 0; j < c.keypoints.size(); ++j) {
+    if (!stereo(c.keypoints[j])) continue;
+    Cell& cell = cells[words ? (*candidate_words)[j] : 0];
+    cell.index.push_back(static_cast<int>(j));
+    cell.desc.add(c.descriptors[j]);
+  }
+  for (size_t i = 0; i < q.keypoints.size(); ++i) {
+    if (!stereo(q.keypoints[i])) continue;
+    auto cell = cells.find(words ? (*words)[i] : 0);
+    if (cell == cells.end()) continue;
+    const DescriptorBlock::Nearest n = cell->second.desc.nearest(q.descriptors[i]);
+    if (n.index < 0 || n.best > p.max_hamming || n.best > p.ratio * n.second) continue;
+    const int best_j = cell->second.index[n.index];
+    if (n.best < dist_of_c[best_j]) dist_of_c[best_j] = n.best, best_of_c[best_j] = static_cast<int>(i);
+  }
+  std::vector<std::pair<int, int>> pairs;
+  for (size_t j = 0; j < c.keypoints.size(); ++j)
+    if (best_of_c[j] >= 0) pairs.emplace_back(best_of_c[j], static_cast<int>(j));
+  return pairs;
+}
+
 }  // namespace
 
 LoopVerification verifyLoop(const msg::KeyFrame& q, const msg::KeyFrame& c, const LoopVerifierParams& p,
@@ -116,32 +151,8 @@ LoopVerification verifyLoop(const msg::KeyFrame& q, const msg::KeyFrame& c, cons
     words_note = " (words not used: " + std::to_string(query_words.size()) + " and " +
                  std::to_string(candidate_words.size()) + " for " + std::to_string(q.keypoints.size()) +
                  " and " + std::to_string(c.keypoints.size()) + " keypoints)";
-  std::vector<int> best_of_c(c.keypoints.size(), -1),
-      dist_of_c(c.keypoints.size(), std::numeric_limits<int>::max());
-  // One block of the candidate's stereo descriptors per word (a single block when brute force).
-  struct Cell {
-    DescriptorBlock desc;
-    std::vector<int> index;
-  };
-  std::unordered_map<uint32_t, Cell> cells;
-  for (size_t j = 0; j < c.keypoints.size(); ++j) {
-    if (!stereo(c.keypoints[j])) continue;
-    Cell& cell = cells[v.by_words ? candidate_words[j] : 0];
-    cell.index.push_back(static_cast<int>(j));
-    cell.desc.add(c.descriptors[j]);
-  }
-  for (size_t i = 0; i < q.keypoints.size(); ++i) {
-    if (!stereo(q.keypoints[i])) continue;
-    auto cell = cells.find(v.by_words ? query_words[i] : 0);
-    if (cell == cells.end()) continue;
-    const DescriptorBlock::Nearest n = cell->second.desc.nearest(q.descriptors[i]);
-    if (n.index < 0 || n.best > p.max_hamming || n.best > p.ratio * n.second) continue;
-    const int best_j = cell->second.index[n.index];
-    if (n.best < dist_of_c[best_j]) dist_of_c[best_j] = n.best, best_of_c[best_j] = static_cast<int>(i);
-  }
-  std::vector<std::pair<int, int>> pairs;
-  for (size_t j = 0; j < c.keypoints.size(); ++j)
-    if (best_of_c[j] >= 0) pairs.emplace_back(best_of_c[j], static_cast<int>(j));
+  const std::vector<std::pair<int, int>> pairs =
+      descriptorPairs(q, c, p, v.by_words ? &query_words : nullptr, &candidate_words);
   v.matches = static_cast<int>(pairs.size());
   auto lap = [t = std::chrono::steady_clock::now()]() mutable {
     const auto now = std::chrono::steady_clock::now();
