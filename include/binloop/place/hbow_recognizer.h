@@ -32,6 +32,10 @@ class HbowRecognizer : public PlaceRecognizer {
   QueryResult querySignature(const SlotScope& scope) const override;
 
  private:
+  std::vector<Slot> scoreAll(const BowVector& q, std::vector<uint32_t>* common,
+                             std::vector<double>* score) const;
+  void accumulateGroups(const std::vector<Slot>& scored, const std::vector<double>& passed, double min_score,
+                        QueryResult* r) const;
   std::shared_ptr<const VocabularyTree> voc_;
   double min_bar_;
   /// One inverted-index entry: a keyframe that has the word, with the word's weight in its BoW vector,

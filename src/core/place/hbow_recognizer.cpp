@@ -44,24 +44,31 @@ size_t HbowRecognizer::indexBytesPerKeyframe() const {
   return entries * (sizeof(BowEntry) + sizeof(Posting)) / bows_.size();
 }
 
-QueryResult HbowRecognizer::querySignature(const SlotScope& scope) const {
-  QueryResult r;
-  const BowVector& q = bows_[scope.query];
-  auto t = std::chrono::steady_clock::now();
-  // One pass over the query's inverted lists gives every keyframe's common-word count and its L1 score:
-  // DBoW2's score 1 - |a - b|_1 / 2 of L1-normalised vectors is sum over common words of
-  // (|a_w| + |b_w| - |a_w - b_w|) / 2, and words that only one vector has add nothing.
-  std::vector<uint32_t> common(bows_.size(), 0);
-  std::vector<double> score(bows_.size(), 0);
+// One pass over the query's inverted lists gives every keyframe's common-word count and its L1 score:
+// DBoW2's score 1 - |a - b|_1 / 2 of L1-normalised vectors is sum over common words of
+// (|a_w| + |b_w| - |a_w - b_w|) / 2, and words that only one vector has add nothing. Returns the keyframes
+// that share a word, in slot order.
+std::vector<HbowRecognizer::Slot> HbowRecognizer::scoreAll(const BowVector& q, std::vector<uint32_t>* common,
+                                                           std::vector<double>* score) const {
   std::vector<Slot> touched;
   for (const auto& e : q) {
     const double a = e.value;
     for (const Posting& p : inverted_[e.word]) {
-      if (common[p.slot]++ == 0) touched.push_back(p.slot);
-      score[p.slot] += 0.5 * (std::fabs(a) + std::fabs(p.weight) - std::fabs(a - p.weight));
+      if ((*common)[p.slot]++ == 0) touched.push_back(p.slot);
+      (*score)[p.slot] += 0.5 * (std::fabs(a) + std::fabs(p.weight) - std::fabs(a - p.weight));
     }
   }
   std::sort(touched.begin(), touched.end());  // results never depend on the order lists came in
+  return touched;
+}
+
+QueryResult HbowRecognizer::querySignature(const SlotScope& scope) const {
+  QueryResult r;
+  const BowVector& q = bows_[scope.query];
+  auto t = std::chrono::steady_clock::now();
+  std::vector<uint32_t> common(bows_.size(), 0);
+  std::vector<double> score(bows_.size(), 0);
+  const std::vector<Slot> touched = scoreAll(q, &common, &score);
   r.timings.push_back({"inverted_index", msSince(t)});
 
   t = std::chrono::steady_clock::now();
@@ -122,7 +129,16 @@ QueryResult HbowRecognizer::querySignature(const SlotScope& scope) const {
     return r;
   }
 
-  t = std::chrono::steady_clock::now();
+  accumulateGroups(scored, passed, min_score, &r);
+  r.status = QueryStatus::kFound;
+  return r;
+}
+
+// Groups of covisible keyframes that reached the bar (DBoW2's islands): each scored keyframe with its group's
+// passed scores summed; groups within 75 % of the best give their best keyframe as a candidate.
+void HbowRecognizer::accumulateGroups(const std::vector<Slot>& scored, const std::vector<double>& passed,
+                                      double min_score, QueryResult* r) const {
+  const auto t = std::chrono::steady_clock::now();
   struct Group {
     double acc, best;
     Slot best_slot;
@@ -148,12 +164,10 @@ QueryResult HbowRecognizer::querySignature(const SlotScope& scope) const {
     if (g.acc < retain) break;
     if (std::find(seen.begin(), seen.end(), g.best_slot) != seen.end()) continue;
     seen.push_back(g.best_slot);
-    r.candidates.push_back(
+    r->candidates.push_back(
         {idAt(g.best_slot), g.acc, scoreConfidence(g.best, min_score, ranking().score_floor)});
   }
-  r.timings.push_back({"group", msSince(t)});
-  r.status = QueryStatus::kFound;
-  return r;
+  r->timings.push_back({"group", msSince(t)});
 }
 
 }  // namespace binloop
