@@ -1,6 +1,7 @@
 #include "binloop/eval/trajectory_plot.h"
 
 #include <algorithm>
+#include <array>
 #include <cmath>
 #include <opencv2/imgcodecs.hpp>
 #include <opencv2/imgproc.hpp>
@@ -38,29 +39,81 @@ struct PlotPath {
   int thickness;
 };
 
+// A legend entry: its key is a line (a path), a filled disc (start) or a ring (end).
+struct LegendEntry {
+  enum class Key { line, start, end };
+  std::string label;
+  Key kind;
+  cv::Scalar colour;
+  int thickness;
+  cv::Point at;  // left end of the symbol, on the text's baseline
+};
+
+void drawLegendEntry(cv::Mat& img, const LegendEntry& e) {
+  using Key = LegendEntry::Key;
+  const cv::Scalar black(0, 0, 0);
+  const cv::Point c = e.at + cv::Point(8, -5);
+  if (e.kind == Key::line) {
+    cv::line(img, e.at + cv::Point(0, -5), e.at + cv::Point(30, -5), e.colour, e.thickness, cv::LINE_AA);
+  } else if (e.kind == Key::start) {
+    cv::circle(img, c, 8, e.colour, cv::FILLED, cv::LINE_AA);
+    cv::circle(img, c, 8, black, 1, cv::LINE_AA);
+  } else {
+    cv::circle(img, c, 6, e.colour, e.thickness, cv::LINE_AA);
+  }
+  cv::putText(img, e.label, e.at + cv::Point(e.kind == Key::line ? 38 : 22, 0), cv::FONT_HERSHEY_SIMPLEX, 0.5,
+              black, 1, cv::LINE_AA);
+}
+
+// A bar of `bar_px` pixels ending at `right`, labelled with the `step_m` it stands for.
+void drawScaleBar(cv::Mat& img, const cv::Point& right, double step_m, int bar_px) {
+  const cv::Scalar black(0, 0, 0);
+  const cv::Point b1 = right, b0 = b1 - cv::Point(bar_px, 0);
+  cv::line(img, b0, b1, black, 3);
+  cv::line(img, b0 + cv::Point(0, -6), b0 + cv::Point(0, 6), black, 2);
+  cv::line(img, b1 + cv::Point(0, -6), b1 + cv::Point(0, 6), black, 2);
+  cv::putText(img, metres(step_m) + " m", b1 + cv::Point(8, 5), cv::FONT_HERSHEY_SIMPLEX, 0.5, black, 1,
+              cv::LINE_AA);
+}
+
+// Grid lines every `step` metres over the world box `box` (x0, x1, z0, z1) and their labels: x's centred
+// on the row `bottom_y`, z's right-aligned at `left_x`. `px` maps (x, z) to pixels.
+template <class ToPixel>
+void drawGrid(cv::Mat& img, ToPixel px, const std::array<double, 4>& box, double step, int left_x,
+              int bottom_y) {
+  const cv::Scalar grey(120, 120, 120), grid(232, 232, 232);
+  const auto font = cv::FONT_HERSHEY_SIMPLEX;
+  auto textWidth = [&](const std::string& s) { return cv::getTextSize(s, font, 0.4, 1, nullptr).width; };
+  const auto [gx0, gx1, gz0, gz1] = box;
+  for (double x = std::ceil(gx0 / step) * step; x <= gx1; x += step) {
+    cv::line(img, px(x, gz0), px(x, gz1), grid);
+    const std::string s_x = metres(x);
+    cv::putText(img, s_x, cv::Point(px(x, gz0).x - textWidth(s_x) / 2, bottom_y), font, 0.4, grey, 1,
+                cv::LINE_AA);
+  }
+  for (double z = std::ceil(gz0 / step) * step; z <= gz1; z += step) {
+    cv::line(img, px(gx0, z), px(gx1, z), grid);
+    const std::string s_z = metres(z);
+    cv::putText(img, s_z, cv::Point(left_x - textWidth(s_z), px(gx0, z).y + 4), font, 0.4, grey, 1,
+                cv::LINE_AA);
+  }
+}
+
 // The top view both plots share: `paths` (the first is the ground truth: drawn under the rest, its first
 // pose marked as the start) with equal axis scales, a grid, a scale bar, and a header of the title, the
 // `notes` lines and a legend that wraps onto more rows when the labels do not fit one.
 void writeTopView(const std::string& path, const std::string& title, const std::vector<std::string>& notes,
                   const std::vector<PlotPath>& paths) {
   const int w = 900, l = 75, r = 25, b = 75, ph_px = 800;  // margins round an 800-px-high plot area
-  const cv::Scalar black(0, 0, 0), grey(120, 120, 120), grid(232, 232, 232), c_start(44, 160, 44);  // green
+  const cv::Scalar black(0, 0, 0), grey(120, 120, 120), c_start(44, 160, 44);  // green
   const auto font = cv::FONT_HERSHEY_SIMPLEX;
   auto textWidth = [&](const std::string& s, double size) {
     return cv::getTextSize(s, font, size, 1, nullptr).width;
   };
 
-  // Header layout first: its height sets where the plot area starts. A key is a line (a path), a filled
-  // disc (start) or a ring (end).
-  enum class Key { line, start, end };
-  struct Entry {
-    std::string label;
-    Key kind;
-    cv::Scalar colour;
-    int thickness;
-    cv::Point at;  // left end of the symbol, on the text's baseline
-  };
-  std::vector<Entry> legend;
+  // Header layout first: its height sets where the plot area starts.
+  std::vector<LegendEntry> legend;
+  using Key = LegendEntry::Key;
   for (const auto& p : paths) legend.push_back({p.label, Key::line, p.colour, p.thickness, {}});
   legend.push_back({"start", Key::start, c_start, 0, {}});
   legend.push_back({"end", Key::end, grey, 2, {}});
@@ -95,18 +148,7 @@ void writeTopView(const std::string& path, const std::string& title, const std::
 
   // Grid every `step` metres with labels on the left and bottom edges.
   const double step = niceStep(std::max(gx1 - gx0, gz1 - gz0) / 8);
-  for (double x = std::ceil(gx0 / step) * step; x <= gx1; x += step) {
-    cv::line(img, px(x, gz0), px(x, gz1), grid);
-    const std::string s_x = metres(x);
-    cv::putText(img, s_x, cv::Point(px(x, gz0).x - textWidth(s_x, 0.4) / 2, h - b + 16), font, 0.4, grey, 1,
-                cv::LINE_AA);
-  }
-  for (double z = std::ceil(gz0 / step) * step; z <= gz1; z += step) {
-    cv::line(img, px(gx0, z), px(gx1, z), grid);
-    const std::string s_z = metres(z);
-    cv::putText(img, s_z, cv::Point(l - 6 - textWidth(s_z, 0.4), px(gx0, z).y + 4), font, 0.4, grey, 1,
-                cv::LINE_AA);
-  }
+  drawGrid(img, px, {gx0, gx1, gz0, gz1}, step, l - 6, h - b + 16);
   cv::rectangle(img, cv::Point(l, t), cv::Point(w - r, h - b), grey);
   cv::putText(img, "x [m] (right)", cv::Point(l + static_cast<int>(pw) / 2 - 45, h - b + 36), font, 0.45,
               black, 1, cv::LINE_AA);
@@ -133,27 +175,9 @@ void writeTopView(const std::string& path, const std::string& title, const std::
   for (size_t i = 0; i < notes.size(); ++i)
     cv::putText(img, notes[i], cv::Point(l - 60, 58 + 30 * static_cast<int>(i)), font, 0.6, black, 1,
                 cv::LINE_AA);
-  for (const auto& e : legend) {
-    const cv::Point c = e.at + cv::Point(8, -5);
-    if (e.kind == Key::line) {
-      cv::line(img, e.at + cv::Point(0, -5), e.at + cv::Point(30, -5), e.colour, e.thickness, cv::LINE_AA);
-    } else if (e.kind == Key::start) {
-      cv::circle(img, c, 8, e.colour, cv::FILLED, cv::LINE_AA);
-      cv::circle(img, c, 8, black, 1, cv::LINE_AA);
-    } else {
-      cv::circle(img, c, 6, e.colour, e.thickness, cv::LINE_AA);
-    }
-    cv::putText(img, e.label, e.at + cv::Point(e.kind == Key::line ? 38 : 22, 0), font, 0.5, black, 1,
-                cv::LINE_AA);
-  }
-
+  for (const auto& e : legend) drawLegendEntry(img, e);
   // Scale bar, bottom right below the plot: one grid step.
-  const int bar = static_cast<int>(std::lround(step * s));
-  const cv::Point b1(w - r - 70, h - 22), b0 = b1 - cv::Point(bar, 0);
-  cv::line(img, b0, b1, black, 3);
-  cv::line(img, b0 + cv::Point(0, -6), b0 + cv::Point(0, 6), black, 2);
-  cv::line(img, b1 + cv::Point(0, -6), b1 + cv::Point(0, 6), black, 2);
-  cv::putText(img, metres(step) + " m", b1 + cv::Point(8, 5), font, 0.5, black, 1, cv::LINE_AA);
+  drawScaleBar(img, cv::Point(w - r - 70, h - 22), step, static_cast<int>(std::lround(step * s)));
 
   if (!cv::imwrite(path, img)) throw dataError(path, 0, "cannot write the plot");
 }
