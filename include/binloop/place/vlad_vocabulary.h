@@ -61,6 +61,8 @@ class VladVocabulary {
   const VladParams& params() const { return params_; }
 
  private:
+  /// LCS-PCA for every node of the trained tree from the training rows `data` (kD floats each).
+  void trainPca(const std::vector<float>& data);
   VladParams params_;
   int dims_ = Desc256::kBits;
   std::vector<float> centres_;                       // node × 256 (nodes breadth first, root excluded)

@@ -102,6 +102,47 @@ std::vector<std::vector<float>> VladVocabulary::aggregate(const Descriptors& d) 
   return v;
 }
 
+void VladVocabulary::trainPca(const std::vector<float>& data) {
+  // LCS-PCA: per node, principal directions of its normalised residuals, scaled by 1/sqrt(eigenvalue).
+  const size_t nodes = centres_.size() / kD;
+  std::vector<std::vector<uint32_t>> members(nodes);
+  for (size_t row = 0; row < data.size() / kD; ++row) {
+    uint32_t parent = 0;
+    for (int l = 0; l < params_.levels && child_count_[parent]; ++l) {
+      const uint32_t first = first_child_[parent];
+      const uint32_t node =
+          first + nearestFloatCentre(&data[row * kD], &centres_[static_cast<size_t>(first) * kD],
+                                     static_cast<int>(child_count_[parent]), kD);
+      members[node].push_back(static_cast<uint32_t>(row));
+      parent = node + 1;
+    }
+  }
+  pca_.assign(nodes * params_.pca_dims * kD, 0.f);
+  pca_mean_.assign(nodes * kD, 0.f);
+  for (size_t node = 0; node < nodes; ++node) {
+    Eigen::MatrixXd r(members[node].size(), kD);
+    for (size_t i = 0; i < members[node].size(); ++i) {
+      const float* x = &data[static_cast<size_t>(members[node][i]) * kD];
+      const float* c = &centres_[node * kD];
+      double n2 = 0;
+      for (int j = 0; j < kD; ++j) n2 += (x[j] - c[j]) * (x[j] - c[j]);
+      const double inv = n2 > 0 ? 1.0 / std::sqrt(n2) : 0.0;
+      for (int j = 0; j < kD; ++j) r(i, j) = (x[j] - c[j]) * inv;
+    }
+    const Eigen::RowVectorXd mean = r.colwise().mean();
+    r.rowwise() -= mean;
+    const Eigen::MatrixXd cov = r.transpose() * r / std::max<double>(1, r.rows() - 1);
+    Eigen::SelfAdjointEigenSolver<Eigen::MatrixXd> es(cov);
+    for (int i = 0; i < params_.pca_dims; ++i) {
+      const int col = kD - 1 - i;  // eigenvalues ascend
+      const double scale = 1.0 / std::sqrt(std::max(es.eigenvalues()(col), 1e-6));
+      for (int j = 0; j < kD; ++j)
+        pca_[(node * params_.pca_dims + i) * kD + j] = static_cast<float>(es.eigenvectors()(j, col) * scale);
+    }
+    for (int j = 0; j < kD; ++j) pca_mean_[node * kD + j] = static_cast<float>(mean(j));
+  }
+}
+
 VladVocabulary VladVocabulary::train(const std::vector<Descriptors>& images, const VladParams& p,
                                      const ProgressFn& progress) {
   if (p.k < 1 || p.levels < 1) throw PlaceError("VLAD vocabulary needs k >= 1 and levels >= 1");
@@ -168,44 +209,7 @@ VladVocabulary VladVocabulary::train(const std::vector<Descriptors>& images, con
     level = std::move(next);
   }
   if (p.pca_dims > 0) {
-    // LCS-PCA: per node, principal directions of its normalised residuals, scaled by 1/sqrt(eigenvalue).
-    const size_t nodes = v.centres_.size() / kD;
-    std::vector<std::vector<uint32_t>> members(nodes);
-    for (size_t row = 0; row < data.size() / kD; ++row) {
-      uint32_t parent = 0;
-      for (int l = 0; l < p.levels && v.child_count_[parent]; ++l) {
-        const uint32_t first = v.first_child_[parent];
-        const uint32_t node =
-            first + nearestFloatCentre(&data[row * kD], &v.centres_[static_cast<size_t>(first) * kD],
-                                       static_cast<int>(v.child_count_[parent]), kD);
-        members[node].push_back(static_cast<uint32_t>(row));
-        parent = node + 1;
-      }
-    }
-    v.pca_.assign(nodes * p.pca_dims * kD, 0.f);
-    v.pca_mean_.assign(nodes * kD, 0.f);
-    for (size_t node = 0; node < nodes; ++node) {
-      Eigen::MatrixXd r(members[node].size(), kD);
-      for (size_t i = 0; i < members[node].size(); ++i) {
-        const float* x = &data[static_cast<size_t>(members[node][i]) * kD];
-        const float* c = &v.centres_[node * kD];
-        double n2 = 0;
-        for (int j = 0; j < kD; ++j) n2 += (x[j] - c[j]) * (x[j] - c[j]);
-        const double inv = n2 > 0 ? 1.0 / std::sqrt(n2) : 0.0;
-        for (int j = 0; j < kD; ++j) r(i, j) = (x[j] - c[j]) * inv;
-      }
-      const Eigen::RowVectorXd mean = r.colwise().mean();
-      r.rowwise() -= mean;
-      const Eigen::MatrixXd cov = r.transpose() * r / std::max<double>(1, r.rows() - 1);
-      Eigen::SelfAdjointEigenSolver<Eigen::MatrixXd> es(cov);
-      for (int i = 0; i < p.pca_dims; ++i) {
-        const int col = kD - 1 - i;  // eigenvalues ascend
-        const double scale = 1.0 / std::sqrt(std::max(es.eigenvalues()(col), 1e-6));
-        for (int j = 0; j < kD; ++j)
-          v.pca_[(node * p.pca_dims + i) * kD + j] = static_cast<float>(es.eigenvectors()(j, col) * scale);
-      }
-      for (int j = 0; j < kD; ++j) v.pca_mean_[node * kD + j] = static_cast<float>(mean(j));
-    }
+    v.trainPca(data);
     v.dims_ = p.pca_dims;
     if (progress) progress(p.levels + 1, p.levels + 1);
   }
