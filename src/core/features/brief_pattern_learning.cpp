@@ -110,17 +110,23 @@ std::vector<uint8_t> testBits(const PatchSamples& s, const BriefTest& t) {
   return bits;
 }
 
-LearnedPattern learnBriefPattern(const PatchSamples& s, const PatternLearningOptions& o) {
-  const auto& disc = briefDisc();
-  const size_t n = s.keypoints();
-  if (n == 0 || s.values.size() != disc.size()) throw PlaceError("no patch samples to learn a pattern from");
+namespace {
+
+void checkInput(const PatchSamples& s, const PatternLearningOptions& o) {
+  if (s.keypoints() == 0 || s.values.size() != briefDisc().size())
+    throw PlaceError("no patch samples to learn a pattern from");
   if (o.bits < 1 || o.min_separation < 0 || o.start_threshold <= 0 || o.threshold_step <= 0 ||
       o.pool < size_t(o.bits) || o.tie_margin < 0 || o.max_tie_share <= 0)
     throw PlaceError(
         "pattern learning options out of range (bits >= 1, min_separation >= 0, thresholds > 0, "
         "pool >= bits, tie_margin >= 0, max_tie_share > 0)");
+}
 
-  // 1-2. Every candidate's counts of a < b and b < a (ties count for neither).
+// 1-3. Every test between disc points at least o.min_separation apart: its share of a < b and b < a (ties
+// count for neither), oriented so that its mean is the nearer to 0.5, and its share of near-ties.
+std::vector<Candidate> scoreCandidates(const PatchSamples& s, const PatternLearningOptions& o) {
+  const auto& disc = briefDisc();
+  const size_t n = s.keypoints();
   std::vector<std::pair<uint16_t, uint16_t>> pairs;
   for (size_t a = 0; a < disc.size(); ++a)
     for (size_t b = a + 1; b < disc.size(); ++b)
@@ -146,6 +152,16 @@ LearnedPattern learnBriefPattern(const PatchSamples& s, const PatternLearningOpt
                     : Candidate{pairs[i].second, pairs[i].first, m_gt, ties};
     }
   });
+  return cand;
+}
+
+}  // namespace
+
+LearnedPattern learnBriefPattern(const PatchSamples& s, const PatternLearningOptions& o) {
+  const auto& disc = briefDisc();
+  const size_t n = s.keypoints();
+  checkInput(s, o);
+  const std::vector<Candidate> cand = scoreCandidates(s, o);
   std::vector<size_t> order;
   for (size_t i = 0; i < cand.size(); ++i)
     if (cand[i].ties <= o.max_tie_share) order.push_back(i);
