@@ -167,8 +167,7 @@ core::KeyFrame fromRos(const binloop::KeyFrame& m) {
   const size_t n = m.keypoints.size();
   checkSize(m.descriptors.size(), n * binloop::Desc256::kBytes,
             "KeyFrame.descriptors (bytes, 32 per keypoint)");
-  if (!m.state.point_ids.empty()) checkSize(m.state.point_ids.size(), n, "KeyFrame.state.point_ids");
-  if (m.state.id != m.id) throw ConversionError("KeyFrame.state.id differs from KeyFrame.id");
+  checkSize(m.state.point_ids.size(), n, "KeyFrame.state.point_ids");
   requireFinite({m.camera.fx, m.camera.fy, m.camera.cx, m.camera.cy, m.camera.baseline_m, m.scale_factor},
                 "KeyFrame.camera or scale_factor");
   if (m.camera.fx <= 0 || m.camera.fy <= 0 || m.camera.baseline_m <= 0)
@@ -210,6 +209,9 @@ core::KeyFrame fromRos(const binloop::KeyFrame& m) {
   convertAllBack(m.new_points, &kf.new_points);
   kf.corrections_seen = m.corrections_seen;
   kf.resent = m.resent;
+  // What every stage needs of a keyframe (ids, counts), checked as the stages check it.
+  if (const std::string bad = binloop::msg::keyframeShapeProblem(kf); !bad.empty())
+    throw ConversionError("KeyFrame: " + bad);
   return kf;
 }
 

@@ -4,6 +4,7 @@
 // std::shared_ptr<const KeyFrame>, so inside one process no copy is made, and across processes it is
 // one ROS message (binloop/KeyFrame).
 #include <memory>
+#include <string>
 #include <vector>
 
 #include "binloop/messages/map_state.h"
@@ -40,5 +41,11 @@ struct KeyFrame {
 };
 
 using KeyFramePtr = std::shared_ptr<const KeyFrame>;
+
+/// What makes `k` unusable as a keyframe in any stage, "" if nothing: a zero id, a state naming another
+/// keyframe, or keypoints, descriptors and point ids that differ in number. Every stage that takes keyframes
+/// (local mapping, loop closing, a state file, the ROS conversion) checks with this, and adds what only it
+/// can know (ids it already holds, a message's byte counts).
+std::string keyframeShapeProblem(const KeyFrame& k);
 
 }  // namespace binloop::msg

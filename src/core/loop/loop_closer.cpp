@@ -28,12 +28,9 @@ std::vector<LoopCloser::KeyframePose> LoopCloser::keyframePoses() const {
 }
 
 void LoopCloser::addKeyframe(const msg::KeyFramePtr& kf) {
-  if (!kf || kf->id == kNoId) throw std::invalid_argument("loop closing: keyframe without id");
-  if (kf->descriptors.size() != kf->keypoints.size() || kf->state.point_ids.size() != kf->keypoints.size())
-    throw std::invalid_argument("loop closing: keyframe " + std::to_string(kf->id) + " has " +
-                                std::to_string(kf->keypoints.size()) + " keypoints, " +
-                                std::to_string(kf->descriptors.size()) + " descriptors, " +
-                                std::to_string(kf->state.point_ids.size()) + " point ids");
+  if (!kf) throw std::invalid_argument("loop closing: no keyframe");
+  if (const std::string bad = msg::keyframeShapeProblem(*kf); !bad.empty())
+    throw std::invalid_argument("loop closing: " + bad);
   const bool known = states_.count(kf->id) > 0;
   frames_[kf->id] = kf;
   // The map has applied corrections this stage never made: it (re)started after them. Its next correction
@@ -157,8 +154,7 @@ SlamKeyframeId LoopCloser::standIn(SlamKeyframeId id) const {
     auto cu = culled_.find(k);
     return cu == culled_.end() ? kNoId : cu->second;
   };
-  return firstAncestor(
-      id, culledParent, [this](SlamKeyframeId k) { return frames_.count(k) > 0; }, 100);
+  return firstAncestor(id, culledParent, [this](SlamKeyframeId k) { return frames_.count(k) > 0; });
 }
 
 SlamKeyframeId LoopCloser::reanchor(SlamKeyframeId query, SlamKeyframeId match, LoopVerification* v) const {

@@ -4,6 +4,7 @@
 #include <unordered_set>
 
 #include "binloop/map/ancestors.h"
+#include "binloop/map/fused_points.h"
 
 namespace binloop {
 
@@ -74,11 +75,7 @@ void MapReplica::removeKeyframe(SlamKeyframeId id) {
 
 void MapReplica::fuse(MapPointId removed, MapPointId kept) {
   // Another stage may name a point that was itself fused meanwhile: merge what it has become.
-  for (int hops = 0; hops < 64; ++hops) {
-    auto r = replaced_.find(removed);
-    if (r == replaced_.end()) break;
-    removed = r->second;
-  }
+  removed = followFusions(replaced_, removed);
   kept = resolve(kept);
   if (removed == kept || kept == kNoId) return;
   replaced_[removed] = kept;
@@ -154,11 +151,7 @@ std::unordered_map<SlamKeyframeId, Pose3> MapReplica::unsentMoves(const msg::Loc
 }
 
 MapPointId MapReplica::resolve(MapPointId id) const {
-  for (int hops = 0; hops < 64; ++hops) {  // fusion chains are short; the bound guards a cycle
-    auto it = replaced_.find(id);
-    if (it == replaced_.end()) break;
-    id = it->second;
-  }
+  id = followFusions(replaced_, id);
   return points_.count(id) ? id : kNoId;
 }
 

@@ -8,6 +8,8 @@
 #include <thread>
 #include <unordered_set>
 
+#include "binloop/map/ancestors.h"
+#include "binloop/map/fused_points.h"
 #include "binloop/map/keypoint_geometry.h"
 #include "binloop/tracking/projection_search.h"
 
@@ -24,11 +26,7 @@ double msSinceT(std::chrono::steady_clock::time_point t0) {
 LocalMapper::LocalMapper(const LocalMapperParams& p) : p_(p) {}
 
 MapPointId LocalMapper::resolve(MapPointId id) const {
-  for (int hops = 0; hops < 64; ++hops) {
-    auto it = replaced_.find(id);
-    if (it == replaced_.end()) break;
-    id = it->second;
-  }
+  id = followFusions(replaced_, id);
   return pts_.count(id) ? id : kNoId;
 }
 
@@ -78,14 +76,7 @@ void LocalMapper::updatePointShape(MP& mp) {
 }
 
 void LocalMapper::insert(const msg::KeyFrame& in) {
-  if (in.descriptors.size() != in.keypoints.size() || in.state.point_ids.size() != in.keypoints.size())
-    throw std::invalid_argument("keyframe " + std::to_string(in.id) + ": " +
-                                std::to_string(in.keypoints.size()) + " keypoints but " +
-                                std::to_string(in.descriptors.size()) + " descriptors and " +
-                                std::to_string(in.state.point_ids.size()) + " point ids");
-  if (in.id == kNoId || in.state.id != in.id)
-    throw std::invalid_argument("keyframe " + std::to_string(in.id) + ": its state names keyframe " +
-                                std::to_string(in.state.id));
+  if (const std::string bad = msg::keyframeShapeProblem(in); !bad.empty()) throw std::invalid_argument(bad);
   // Ids are never reused: one the map holds (or culled) comes from another tracking session (a tracker
   // restarted while mapping kept its map), and taking it would overwrite a keyframe or point others refer to.
   if (kfs_.count(in.id) || culled_.count(in.id))
@@ -535,19 +526,19 @@ std::vector<Eigen::Vector3d> LocalMapper::pointPositions() const {
 }
 
 bool LocalMapper::keyframePose(SlamKeyframeId id, Pose3* T_w_c) const {
-  Pose3 T = Pose3::Identity();
-  for (int hops = 0; hops < 10000; ++hops) {
-    auto it = kfs_.find(id);
-    if (it != kfs_.end()) {
-      *T_w_c = it->second.state.T_w_c * T;
-      return true;
-    }
-    auto c = culled_.find(id);
-    if (c == culled_.end()) return false;
-    T = c->second.second * T;
-    id = c->second.first;
-  }
-  return false;
+  Pose3 T = Pose3::Identity();  // the culled keyframes' poses relative to the held ancestor, composed
+  const SlamKeyframeId held = firstAncestor(
+      id,
+      [&](SlamKeyframeId k) {
+        auto c = culled_.find(k);
+        if (c == culled_.end()) return kNoId;
+        T = c->second.second * T;
+        return c->second.first;
+      },
+      [&](SlamKeyframeId k) { return kfs_.count(k) > 0; });
+  if (held == kNoId) return false;
+  *T_w_c = kfs_.at(held).state.T_w_c * T;
+  return true;
 }
 
 std::shared_ptr<msg::KeyFrame> LocalMapper::messageOf(const KF& kf) const {
@@ -674,26 +665,22 @@ std::vector<std::pair<SlamKeyframeId, Pose3>> LocalMapper::moveMap(
   // in the spanning tree; a culled keyframe's children went to its parent, and a point whose reference
   // keyframe was culled moves with that keyframe's parent. A point in `placed` goes where it says.
   std::unordered_map<SlamKeyframeId, Pose3> resolved;
+  auto parentOf = [&](SlamKeyframeId k) {
+    if (auto kf = kfs_.find(k); kf != kfs_.end()) return kf->second.state.parent;
+    if (auto cu = culled_.find(k); cu != culled_.end()) return cu->second.first;
+    return kNoId;
+  };
   auto deltaOf = [&](SlamKeyframeId id) {
-    std::vector<SlamKeyframeId> path;
+    std::vector<SlamKeyframeId> path;  // climbed without a delta: they move with the ancestor that has one
+    const SlamKeyframeId known = firstAncestor(id, parentOf, [&](SlamKeyframeId k) {
+      if (resolved.count(k) || delta.count(k)) return true;
+      path.push_back(k);
+      return false;
+    });
     Pose3 d = Pose3::Identity();
-    for (int hops = 0; hops < 100000 && id != kNoId; ++hops) {
-      if (auto r = resolved.find(id); r != resolved.end()) {
-        d = r->second;
-        break;
-      }
-      if (auto g = delta.find(id); g != delta.end()) {
-        d = g->second;
-        resolved[id] = d;
-        break;
-      }
-      path.push_back(id);
-      if (auto k = kfs_.find(id); k != kfs_.end())
-        id = k->second.state.parent;
-      else if (auto cu = culled_.find(id); cu != culled_.end())
-        id = cu->second.first;
-      else
-        break;
+    if (known != kNoId) {
+      auto r = resolved.find(known);
+      d = r != resolved.end() ? r->second : (resolved[known] = delta.at(known));
     }
     for (SlamKeyframeId p : path) resolved[p] = d;
     return d;

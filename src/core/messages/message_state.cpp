@@ -131,8 +131,7 @@ msg::KeyFrame readKeyFrame(StateReader& r) {
   kf.new_points.resize(r.getCount("keyframe new points", 100));
   for (auto& p : kf.new_points) p = readMapPoint(r);
   kf.corrections_seen = r.get<uint64_t>("keyframe corrections seen");
-  if (kf.descriptors.size() != kf.keypoints.size() || kf.state.point_ids.size() != kf.keypoints.size())
-    r.fail("keyframe " + std::to_string(kf.id) + ": keypoints, descriptors and point ids differ in number");
+  if (const std::string bad = msg::keyframeShapeProblem(kf); !bad.empty()) r.fail(bad);
   return kf;
 }
 
