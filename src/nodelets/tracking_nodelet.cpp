@@ -156,8 +156,10 @@ void TrackingNodelet::onInitialPose(const geometry_msgs::PoseWithCovarianceStamp
   if (!tracker) return;
   try {
     const PoseHint hint = out_->frames().hint(*m);
-    if (tracker->state() != binloop::msg::TrackingState::kLost)
-      return NODELET_INFO("binloop/Tracking: pose hint ignored: tracking is not lost");
+    if (tracker->state() != binloop::msg::TrackingState::kLost) {
+      NODELET_INFO("binloop/Tracking: pose hint ignored: tracking is not lost");
+      return;
+    }
     tracker->hintPose(hint.T_slam_cam, hint.radius_m);
     NODELET_INFO("binloop/Tracking: relocalising within %.1f m of the pose hint", hint.radius_m);
   } catch (const std::exception& e) {
