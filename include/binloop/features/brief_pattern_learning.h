@@ -36,7 +36,7 @@ struct PatchSamples {
 
 /// Extracts `gray` with `extractor` (keypoints, octaves and angles as the SLAM gets them) and samples up to
 /// `max_keypoints` of them, chosen at random by HashRng(seed) (all of them when there are fewer).
-/// Keypoint order: as extracted. Throws PlaceError for an image the extractor refuses.
+/// Keypoint order: as extracted. Throws FeatureError for an image the extractor refuses.
 PatchSamples samplePatches(const cv::Mat& gray, const OrbSlamExtractor& extractor, size_t max_keypoints,
                            uint64_t seed);
 
@@ -65,7 +65,7 @@ struct LearnedPattern {
   double tie_share = 0;  // mean near-tie share of the kept tests
 };
 
-/// Throws PlaceError when there are no samples or options are out of range, or when the pool cannot give
+/// Throws FeatureError when there are no samples or options are out of range, or when the pool cannot give
 /// `bits` tests below |r| = 1.
 LearnedPattern learnBriefPattern(const PatchSamples& s, const PatternLearningOptions& o);
 

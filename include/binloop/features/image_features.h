@@ -29,7 +29,7 @@ struct ExtractOptions {
 /// What a model trained on (or fed with) these descriptors records: extractorSettings(o.orb, o.max_side).
 ExtractorSettings extractorSettings(const ExtractOptions& o);
 
-/// Throws DataError naming the first unreadable image, PlaceError for extractor settings out of range.
+/// Throws DataError naming the first unreadable image, FeatureError for extractor settings out of range.
 std::vector<Descriptors> extractDescriptors(const std::vector<std::string>& paths, const ExtractOptions& o,
                                             const ProgressFn& progress = {});
 

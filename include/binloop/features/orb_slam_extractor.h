@@ -60,7 +60,7 @@ inline void briefRotation(float angle_deg, float* cs, float* sn) {
 /// trained on one pattern's bits is refused for the other's.
 enum class BriefPatternKind { kOrbLearned, kGaussian };
 
-/// "orb" or "gaussian"; briefPatternFromName throws PlaceError for another name.
+/// "orb" or "gaussian"; briefPatternFromName throws FeatureError for another name.
 const char* briefPatternName(BriefPatternKind k);
 BriefPatternKind briefPatternFromName(const std::string& name);
 
@@ -95,7 +95,7 @@ struct ImagePyramid {
   std::vector<float> scale;  // scale_factor^i: level-0 pixels per level-i pixel
 };
 
-/// Throws PlaceError for an empty or non-8-bit single-channel image, or levels < 1, scale_factor <= 1.
+/// Throws FeatureError for an empty or non-8-bit single-channel image, or levels < 1, scale_factor <= 1.
 ImagePyramid buildPyramid(const cv::Mat& gray, int levels, float scale_factor);
 
 /// Keypoints come out level by level. pt is in level-0 pixels, octave is the level, angle in degrees
@@ -103,14 +103,14 @@ ImagePyramid buildPyramid(const cv::Mat& gray, int levels, float scale_factor);
 /// threads on one instance.
 class OrbSlamExtractor {
  public:
-  /// Throws PlaceError for parameters out of range (features < 1, levels < 1, scale_factor <= 1,
+  /// Throws FeatureError for parameters out of range (features < 1, levels < 1, scale_factor <= 1,
   /// thresholds < 1 or min_fast > ini_fast, cell_px < 8).
   explicit OrbSlamExtractor(const OrbSlamParams& p = {});
 
-  /// Throws PlaceError for an empty or non-8-bit single-channel image.
+  /// Throws FeatureError for an empty or non-8-bit single-channel image.
   OrbFeatures extract(const cv::Mat& gray) const;
   /// From a pyramid made by pyramid() (or buildPyramid with the same levels and factor), so that the
-  /// caller keeps it for stereo. Throws PlaceError when its level count or scales differ.
+  /// caller keeps it for stereo. Throws FeatureError when its level count or scales differ.
   OrbFeatures extract(const ImagePyramid& pyramid) const;
   ImagePyramid pyramid(const cv::Mat& gray) const { return buildPyramid(gray, p_.levels, p_.scale_factor); }
 

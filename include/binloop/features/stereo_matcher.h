@@ -47,7 +47,7 @@ struct StereoMatches {
 };
 
 /// Pyramids must have the levels the keypoints' octaves name (OrbSlamExtractor::pyramid of each image)
-/// and equal sizes left and right. Throws PlaceError for keypoints and descriptors of different counts, an
+/// and equal sizes left and right. Throws FeatureError for keypoints and descriptors of different counts, an
 /// octave without a pyramid level, differing pyramids, a camera without a positive fx·b, or parameters out
 /// of range.
 StereoMatches matchStereo(const OrbFeatures& left, const ImagePyramid& left_pyramid, const OrbFeatures& right,

@@ -7,8 +7,8 @@
 #include <utility>
 #include <vector>
 
+#include "binloop/map/scale_pyramid.h"
 #include "binloop/messages/keyframe.h"
-#include "binloop/tracking/scale_pyramid.h"
 #include "binloop/types/pose.h"
 
 namespace binloop {

@@ -17,14 +17,14 @@
 
 #include "binloop/map/correction_history.h"
 #include "binloop/map/ids.h"
+#include "binloop/map/keypoint_grid.h"
+#include "binloop/map/scale_pyramid.h"
 #include "binloop/mapping/epipolar_matcher.h"
 #include "binloop/mapping/triangulation.h"
 #include "binloop/messages/correction.h"
 #include "binloop/messages/keyframe.h"
 #include "binloop/messages/local_map_update.h"
 #include "binloop/optim/local_bundle_adjustment.h"
-#include "binloop/tracking/keypoint_grid.h"
-#include "binloop/tracking/scale_pyramid.h"
 
 namespace binloop {
 

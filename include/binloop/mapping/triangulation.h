@@ -5,8 +5,8 @@
 #include <Eigen/Core>
 #include <optional>
 
+#include "binloop/map/scale_pyramid.h"
 #include "binloop/messages/keyframe.h"
-#include "binloop/tracking/scale_pyramid.h"
 #include "binloop/types/pose.h"
 
 namespace binloop {

@@ -9,8 +9,8 @@
 #include "binloop/features/stereo_matcher.h"
 #include "binloop/io/kitti_sequence.h"
 #include "binloop/messages/keyframe.h"
-#include "binloop/tracking/keypoint_grid.h"
-#include "binloop/tracking/scale_pyramid.h"
+#include "binloop/map/keypoint_grid.h"
+#include "binloop/map/scale_pyramid.h"
 
 namespace binloop {
 

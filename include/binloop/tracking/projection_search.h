@@ -6,6 +6,7 @@
 #include <functional>
 #include <vector>
 
+#include "binloop/map/point_projection.h"
 #include "binloop/messages/map_state.h"
 #include "binloop/tracking/frame.h"
 
@@ -16,19 +17,6 @@ struct ProjectionParams {
   float ratio = 0.8f;          // best vs second best when both are at the same level (local map search)
   bool check_rotation = true;  // last-frame search: keep matches whose angle change is among the 3 commonest
 };
-
-/// A map point predicted to be visible in a frame: where, and at which pyramid level.
-struct ProjectedPoint {
-  const msg::MapPoint* point = nullptr;
-  float u = 0, v = 0, u_right = 0;
-  int level = 0;
-  float view_cos = 1;  // between the viewing ray and the point's mean viewing direction
-};
-
-/// ORB-SLAM2's isInFrustum: in front of the camera, inside the image, within the point's distance range
-/// (with 20 % slack) and seen less than 60 degrees off its mean direction.
-bool projectIntoFrame(const msg::MapPoint& p, const Pose3& T_c_w, const StereoCamera& cam,
-                      const ScalePyramid& s, ProjectedPoint* out);
 
 /// Matches points to the frame's unmatched keypoints within th * (2.5 or 4 by viewing angle) * level scale
 /// of their projection; returns the number of new matches.
@@ -49,9 +37,5 @@ int matchFromLastFrame(Frame& cur, const Frame& last,
 int matchByDescriptor(Frame& cur, const Frame& last,
                       const std::function<const msg::MapPoint*(MapPointId)>& lookup,
                       int max_hamming_strict = 50, float ratio = 0.7f);
-
-/// Indices of the matches to keep: those whose angle difference falls in the three most populated of 30
-/// bins (a bin below 10 % of the largest is dropped), as ORB-SLAM2 does.
-std::vector<uint8_t> rotationConsistent(const std::vector<float>& angle_diff_deg);
 
 }  // namespace binloop

@@ -7,7 +7,7 @@
 #include <string>
 #include <thread>
 
-#include "binloop/place/place_error.h"
+#include "binloop/features/feature_error.h"
 #include "binloop/util/hash_random.h"
 
 namespace binloop {
@@ -39,8 +39,8 @@ size_t discIndex(int x, int y) {
   const auto& d = briefDisc();
   const auto it = std::find(d.begin(), d.end(), cv::Point(x, y));
   if (it == d.end())
-    throw PlaceError("test point (" + std::to_string(x) + ", " + std::to_string(y) +
-                     ") is outside the radius-15 disc");
+    throw FeatureError("test point (" + std::to_string(x) + ", " + std::to_string(y) +
+                       ") is outside the radius-15 disc");
   return static_cast<size_t>(it - d.begin());
 }
 
@@ -114,10 +114,10 @@ namespace {
 
 void checkInput(const PatchSamples& s, const PatternLearningOptions& o) {
   if (s.keypoints() == 0 || s.values.size() != briefDisc().size())
-    throw PlaceError("no patch samples to learn a pattern from");
+    throw FeatureError("no patch samples to learn a pattern from");
   if (o.bits < 1 || o.min_separation < 0 || o.start_threshold <= 0 || o.threshold_step <= 0 ||
       o.pool < size_t(o.bits) || o.tie_margin < 0 || o.max_tie_share <= 0)
-    throw PlaceError(
+    throw FeatureError(
         "pattern learning options out of range (bits >= 1, min_separation >= 0, thresholds > 0, "
         "pool >= bits, tie_margin >= 0, max_tie_share > 0)");
 }
@@ -232,9 +232,9 @@ LearnedPattern learnBriefPattern(const PatchSamples& s, const PatternLearningOpt
     out.max_abs_correlation = max;
     return out;
   }
-  throw PlaceError("the " + std::to_string(pool) + " best-balanced candidates do not give " +
-                   std::to_string(o.bits) +
-                   " tests at any correlation bound (too few samples or too small a pool)");
+  throw FeatureError("the " + std::to_string(pool) + " best-balanced candidates do not give " +
+                     std::to_string(o.bits) +
+                     " tests at any correlation bound (too few samples or too small a pool)");
 }
 
 }  // namespace binloop

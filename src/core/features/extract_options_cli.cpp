@@ -3,7 +3,7 @@
 #include <sstream>
 #include <string>
 
-#include "binloop/place/place_error.h"
+#include "binloop/features/feature_error.h"
 
 namespace binloop {
 
@@ -42,14 +42,14 @@ ExtractOptions extractOptionsFrom(const CliArgs& args) {
   eo.max_side = static_cast<int>(args.integer("max-side"));
   try {
     eo.orb.pattern = briefPatternFromName(args.str("pattern"));
-  } catch (const PlaceError& e) {
+  } catch (const FeatureError& e) {
     throw CliError(std::string("--pattern: ") + e.what());
   }
   eo.threads = static_cast<int>(args.integer("threads"));
   if (eo.max_side < 0) throw CliError("--max-side must be >= 0, got " + std::to_string(eo.max_side));
   try {
     OrbSlamExtractor check(eo.orb);  // refuses out-of-range settings now, not after reading images
-  } catch (const PlaceError& e) {
+  } catch (const FeatureError& e) {
     throw CliError(std::string("extractor options: ") + e.what());
   }
   return eo;

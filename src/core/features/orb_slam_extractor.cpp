@@ -9,7 +9,7 @@
 #include <opencv2/imgproc.hpp>
 #include <string>
 
-#include "binloop/place/place_error.h"
+#include "binloop/features/feature_error.h"
 #include "binloop/util/hash_random.h"
 
 namespace binloop {
@@ -250,9 +250,10 @@ class QuadTree {
 };
 
 void checkImage(const cv::Mat& gray) {
-  if (gray.empty()) throw PlaceError("cannot extract ORB features from an empty image");
+  if (gray.empty()) throw FeatureError("cannot extract ORB features from an empty image");
   if (gray.type() != CV_8UC1)
-    throw PlaceError("ORB needs an 8-bit single-channel (grey) image, got " + cv::typeToString(gray.type()));
+    throw FeatureError("ORB needs an 8-bit single-channel (grey) image, got " +
+                       cv::typeToString(gray.type()));
 }
 
 // OpenCV's ORB describes keypoints it is handed without moving them: on a single level (octave 0) it pads
@@ -271,8 +272,8 @@ void describeWithOrb(const cv::Mat& level, std::vector<cv::KeyPoint>& kps, Descr
   orb->compute(level, level_kps, desc);
   if (level_kps.size() != kps.size() || desc.rows != static_cast<int>(kps.size()) || desc.cols != 32 ||
       desc.type() != CV_8UC1)
-    throw PlaceError("ORB-SLAM extractor: OpenCV's ORB described " + std::to_string(desc.rows) + " of " +
-                     std::to_string(kps.size()) + " keypoints");
+    throw FeatureError("ORB-SLAM extractor: OpenCV's ORB described " + std::to_string(desc.rows) + " of " +
+                       std::to_string(kps.size()) + " keypoints");
   for (int r = 0; r < desc.rows; ++r) {
     Desc256 d;
     std::memcpy(d.w.data(), desc.ptr<uint8_t>(r), 32);  // test 8j+i is bit i of byte j, as OpenCV matches it
@@ -280,7 +281,7 @@ void describeWithOrb(const cv::Mat& level, std::vector<cv::KeyPoint>& kps, Descr
   }
 }
 
-[[noreturn]] void fail(const std::string& what) { throw PlaceError("ORB-SLAM extractor: " + what); }
+[[noreturn]] void fail(const std::string& what) { throw FeatureError("ORB-SLAM extractor: " + what); }
 
 // Messages are built only on failure: extract() checks its pyramid on every frame.
 void require(bool ok, const std::string& what) {
@@ -322,7 +323,7 @@ const char* briefPatternName(BriefPatternKind k) {
 BriefPatternKind briefPatternFromName(const std::string& name) {
   if (name == "orb") return BriefPatternKind::kOrbLearned;
   if (name == "gaussian") return BriefPatternKind::kGaussian;
-  throw PlaceError("unknown BRIEF pattern '" + name + "' (known: orb, gaussian)");
+  throw FeatureError("unknown BRIEF pattern '" + name + "' (known: orb, gaussian)");
 }
 
 bool OrbSlamParams::operator==(const OrbSlamParams& o) const {

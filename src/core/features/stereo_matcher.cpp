@@ -6,14 +6,14 @@
 #include <string>
 #include <utility>
 
-#include "binloop/place/place_error.h"
+#include "binloop/features/feature_error.h"
 
 namespace binloop {
 
 namespace {
 
 void check(bool ok, const std::string& what) {
-  if (!ok) throw PlaceError("stereo matching: " + what);
+  if (!ok) throw FeatureError("stereo matching: " + what);
 }
 
 void checkSide(const OrbFeatures& f, const ImagePyramid& pyr, const char* side) {

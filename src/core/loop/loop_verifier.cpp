@@ -6,10 +6,10 @@
 #include <limits>
 #include <unordered_map>
 
+#include "binloop/map/keypoint_grid.h"
+#include "binloop/map/scale_pyramid.h"
 #include "binloop/optim/pose_optimizer.h"
 #include "binloop/place/descriptor_block.h"
-#include "binloop/tracking/keypoint_grid.h"
-#include "binloop/tracking/scale_pyramid.h"
 #include "binloop/util/hash_random.h"
 
 namespace binloop {

@@ -2,7 +2,7 @@
 
 #include <limits>
 
-#include "binloop/tracking/projection_search.h"
+#include "binloop/map/point_projection.h"
 
 namespace binloop {
 

@@ -11,7 +11,7 @@
 #include "binloop/map/ancestors.h"
 #include "binloop/map/fused_points.h"
 #include "binloop/map/keypoint_geometry.h"
-#include "binloop/tracking/projection_search.h"
+#include "binloop/map/point_projection.h"
 
 namespace binloop {
 

@@ -6,8 +6,8 @@
 #include <set>
 #include <tuple>
 
+#include "binloop/features/feature_error.h"
 #include "binloop/io/kitti_sequence.h"
-#include "binloop/place/place_error.h"
 #include "binloop/util/hash_random.h"
 #include "support/test_support.h"
 
@@ -120,5 +120,5 @@ TEST(BriefPatternLearning, DeterministicBalancedAndDecorrelatedOnATinyInput) {
   o.threads = 1;
   const LearnedPattern c = learnBriefPattern(s, o);
   for (size_t i = 0; i < a.tests.size(); ++i) EXPECT_EQ(a.tests[i].bx, c.tests[i].bx);
-  EXPECT_THROW(learnBriefPattern(PatchSamples{}, o), PlaceError);
+  EXPECT_THROW(learnBriefPattern(PatchSamples{}, o), FeatureError);
 }

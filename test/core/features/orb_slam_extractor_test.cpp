@@ -9,8 +9,8 @@
 #include <opencv2/imgproc.hpp>
 
 #include "binloop/features/descriptor_statistics.h"
+#include "binloop/features/feature_error.h"
 #include "binloop/io/kitti_sequence.h"
-#include "binloop/place/place_error.h"
 #include "binloop/util/hash_random.h"
 #include "support/test_support.h"
 
@@ -278,22 +278,22 @@ TEST(OrbSlamExtractor, PyramidShrinksByTheScaleFactor) {
 
 TEST(OrbSlamExtractor, RefusesBadImagesParametersAndPyramids) {
   const OrbSlamExtractor ex;
-  EXPECT_THROW_WITH(ex.extract(cv::Mat()), PlaceError, "empty image");
-  EXPECT_THROW_WITH(ex.extract(cv::Mat(64, 64, CV_8UC3)), PlaceError,
+  EXPECT_THROW_WITH(ex.extract(cv::Mat()), FeatureError, "empty image");
+  EXPECT_THROW_WITH(ex.extract(cv::Mat(64, 64, CV_8UC3)), FeatureError,
                     "8-bit single-channel (grey) image, got CV_8UC3");
-  EXPECT_THROW_WITH(ex.extract(cv::Mat(64, 64, CV_16UC1)), PlaceError, "got CV_16UC1");
+  EXPECT_THROW_WITH(ex.extract(cv::Mat(64, 64, CV_16UC1)), FeatureError, "got CV_16UC1");
   OrbSlamParams p;
   p.levels = 0;
-  EXPECT_THROW_WITH(OrbSlamExtractor{p}, PlaceError, "levels must be >= 1, got 0");
+  EXPECT_THROW_WITH(OrbSlamExtractor{p}, FeatureError, "levels must be >= 1, got 0");
   p = {};
   p.scale_factor = 1.f;
-  EXPECT_THROW_WITH(OrbSlamExtractor{p}, PlaceError, "scale_factor must be > 1");
+  EXPECT_THROW_WITH(OrbSlamExtractor{p}, FeatureError, "scale_factor must be > 1");
   p = {};
   p.min_fast = 30;
-  EXPECT_THROW_WITH(OrbSlamExtractor{p}, PlaceError, "min_fast <= ini_fast, got 30 and 20");
+  EXPECT_THROW_WITH(OrbSlamExtractor{p}, FeatureError, "min_fast <= ini_fast, got 30 and 20");
   const cv::Mat img(100, 100, CV_8UC1, cv::Scalar(0));
-  EXPECT_THROW_WITH(ex.extract(buildPyramid(img, 4, 1.2f)), PlaceError, "pyramid has 4 levels, expected 8");
-  EXPECT_THROW_WITH(ex.extract(buildPyramid(img, 8, 1.5f)), PlaceError, "pyramid level 1 has scale 1.5");
+  EXPECT_THROW_WITH(ex.extract(buildPyramid(img, 4, 1.2f)), FeatureError, "pyramid has 4 levels, expected 8");
+  EXPECT_THROW_WITH(ex.extract(buildPyramid(img, 8, 1.5f)), FeatureError, "pyramid level 1 has scale 1.5");
 }
 
 TEST(OrbSlamExtractor, TinyAndFlatImagesGiveNoKeypoints) {
@@ -357,5 +357,5 @@ TEST(OrbSlamExtractor, ModelHeaderRecordsThePattern) {
   EXPECT_NE(a, b);
   EXPECT_NE(a.differences(b).find("learned"), std::string::npos) << a.differences(b);
   EXPECT_EQ(briefPatternFromName("gaussian"), BriefPatternKind::kGaussian);
-  EXPECT_THROW(briefPatternFromName("brisk"), PlaceError);
+  EXPECT_THROW(briefPatternFromName("brisk"), FeatureError);
 }

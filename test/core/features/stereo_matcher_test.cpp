@@ -6,9 +6,9 @@
 #include <cmath>
 #include <opencv2/imgproc.hpp>
 
+#include "binloop/features/feature_error.h"
 #include "binloop/io/kitti_calib.h"
 #include "binloop/io/kitti_sequence.h"
-#include "binloop/place/place_error.h"
 #include "binloop/util/hash_random.h"
 #include "support/test_support.h"
 
@@ -246,21 +246,21 @@ TEST(StereoMatcher, RefusesInconsistentInput) {
   const StereoCamera cam = kitti00Camera();
   OrbFeatures f;
   f.keypoints.emplace_back(cv::Point2f(50, 50), 31.f, 0.f, 1.f, 0);
-  EXPECT_THROW_WITH(matchStereo(f, s.pyramid, s.features, s.pyramid, cam), PlaceError,
+  EXPECT_THROW_WITH(matchStereo(f, s.pyramid, s.features, s.pyramid, cam), FeatureError,
                     "left side has 1 keypoints but 0 descriptors");
   f.descriptors.emplace_back();
   f.keypoints[0].octave = 9;
-  EXPECT_THROW_WITH(matchStereo(s.features, s.pyramid, f, s.pyramid, cam), PlaceError,
+  EXPECT_THROW_WITH(matchStereo(s.features, s.pyramid, f, s.pyramid, cam), FeatureError,
                     "right keypoint of octave 9 but the pyramid has 8 levels");
   StereoCamera mono = cam;
   mono.baseline_m = 0;
-  EXPECT_THROW_WITH(matchStereo(s.features, s.pyramid, s.features, s.pyramid, mono), PlaceError,
+  EXPECT_THROW_WITH(matchStereo(s.features, s.pyramid, s.features, s.pyramid, mono), FeatureError,
                     "positive baseline");
   StereoMatchParams no_slide;
   no_slide.sad_search_px = 0;
-  EXPECT_THROW_WITH(matchStereo(s.features, s.pyramid, s.features, s.pyramid, cam, no_slide), PlaceError,
+  EXPECT_THROW_WITH(matchStereo(s.features, s.pyramid, s.features, s.pyramid, cam, no_slide), FeatureError,
                     "parameters out of range");
   const Side other = extract(cv::Mat(100, 190, CV_8UC1, cv::Scalar(50)));
-  EXPECT_THROW_WITH(matchStereo(s.features, s.pyramid, other.features, other.pyramid, cam), PlaceError,
+  EXPECT_THROW_WITH(matchStereo(s.features, s.pyramid, other.features, other.pyramid, cam), FeatureError,
                     "pyramid level 0 differs between left and right");
 }

@@ -1,4 +1,4 @@
-#include "binloop/tracking/keypoint_grid.h"
+#include "binloop/map/keypoint_grid.h"
 
 #include <algorithm>
 #include <cmath>

@@ -1,6 +1,6 @@
 // KeypointGrid::near must give exactly what a scan over every keypoint gives
-// (include/binloop/tracking/keypoint_grid.h).
-#include "binloop/tracking/keypoint_grid.h"
+// (include/binloop/map/keypoint_grid.h).
+#include "binloop/map/keypoint_grid.h"
 
 #include <gtest/gtest.h>
 
