@@ -8,9 +8,9 @@
 #include "binloop/features/orb_slam_extractor.h"
 #include "binloop/features/stereo_matcher.h"
 #include "binloop/io/kitti_sequence.h"
-#include "binloop/messages/keyframe.h"
 #include "binloop/map/keypoint_grid.h"
 #include "binloop/map/scale_pyramid.h"
+#include "binloop/messages/keyframe.h"
 
 namespace binloop {
 
