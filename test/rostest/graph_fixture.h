@@ -110,9 +110,16 @@ class GraphTest : public ::testing::Test {
     right_.publish(r);
   }
 
+  // No callback may run once the fixture is going: the spinner's threads would write into members already
+  // destroyed (a derived fixture's are destroyed first, then seen_). Shutting a subscriber down waits for
+  // its callback in progress. (A second test once crashed with SIGSEGV at its start without this.)
+  void TearDown() override {
+    for (ros::Subscriber& s : subs_) s.shutdown();
+  }
+
   ros::Publisher left_, right_, left_info_, right_info_;
-  std::vector<ros::Subscriber> subs_;
   Observed seen_;
+  std::vector<ros::Subscriber> subs_;  // after seen_: destroyed before it
 };
 
 /// /binloop/statistics as key -> value; empty when the service does not answer.
