@@ -28,6 +28,8 @@ class LocalMappingNodelet : public nodelet::Nodelet {
   void onCorrection(const binloop::CorrectionConstPtr& m);
   void mergeGlobalBa();
   void resendMap(const ros::SingleSubscriberPublisher& to);
+  void resendWholeMap(const ros::SingleSubscriberPublisher& to);
+  StageServiceHandlers serviceHandlers();
   void publishMap(const ros::Time& stamp);
   void problem(const std::string& what);
   void diagnose(diagnostic_updater::DiagnosticStatusWrapper& s);
@@ -55,15 +57,13 @@ void LocalMappingNodelet::onInit() {
   try {
     requireKnownParams(pnh, {"config", "slam_frame", "cloud_every"});
     params_ = slamConfigFrom(pnh).mapper;
-    params_.global_ba_in_background =
-        true;  // mapping goes on while it runs (when global_ba_after_loop is on)
+    params_.global_ba_in_background = true;  // mapping goes on while it runs (with global_ba_after_loop)
     mapper_ = std::make_unique<binloop::LocalMapper>(params_);
   } catch (const std::exception& e) {
     NODELET_FATAL("binloop/LocalMapping: %s", e.what());
     throw;
   }
-  slam_frame_ =
-      stringParam(pnh, "slam_frame", "slam");  // the SLAM's own frame (tracking publishes map -> slam)
+  slam_frame_ = stringParam(pnh, "slam_frame", "slam");  // tracking publishes map -> slam
   cloud_every_ = std::max(1, static_cast<int>(numberParam(pnh, "cloud_every", 5)));
   // A loop stage that subscribes after keyframes were made (a restarted process of the split graph) gets the
   // whole map from here, to it alone; a deep queue, since all of them go at once.
@@ -73,13 +73,8 @@ void LocalMappingNodelet::onInit() {
   // A tracking that subscribes after keyframes were made (restarted) gets the whole map, to it alone.
   update_pub_ = nh.advertise<binloop::LocalMapUpdate>(
       "local_map_update", 100,
-      guard_.wrap("resending the map", [this](const ros::SingleSubscriberPublisher& to) {
-        if (mapper_->keyframeCount() == 0) return;
-        std_msgs::Header header;
-        header.stamp = ros::Time::now();
-        header.frame_id = slam_frame_;
-        to.publish(toRos(*mapper_->wholeMap(), header));
-      }));
+      guard_.wrap("resending the map",
+                  [this](const ros::SingleSubscriberPublisher& to) { resendWholeMap(to); }));
   cloud_pub_ = nh.advertise<sensor_msgs::PointCloud2>("map_points", 1, true);
   keyframes_pub_ = nh.advertise<geometry_msgs::PoseArray>("keyframes", 1, true);
   // Deep queues: a keyframe or a correction dropped here would be lost for good.
@@ -93,6 +88,11 @@ void LocalMappingNodelet::onInit() {
       guard_.wrap("global BA merge", [this](const ros::WallTimerEvent&) { mergeGlobalBa(); }));
   diag_ = std::make_unique<StageDiagnostics>(
       nh, pnh, "local mapping", [this](diagnostic_updater::DiagnosticStatusWrapper& s) { diagnose(s); });
+  services_ = std::make_unique<StageServices>(pnh, "local_mapping", serviceHandlers());
+}
+
+// The stage's part in the graph-wide map services (stage_services.h).
+StageServiceHandlers LocalMappingNodelet::serviceHandlers() {
   StageServiceHandlers h;
   h.save = [this](const std::string& path, uint64_t map_id) {
     binloop::saveStateFile(*mapper_, path, "local_mapping", map_id);
@@ -117,7 +117,16 @@ void LocalMappingNodelet::onInit() {
                            {"corrections", std::to_string(mapper_->correctionsApplied())},
                            {"global_ba_merged", std::to_string(mapper_->globalBaStats().merged)}};
   };
-  services_ = std::make_unique<StageServices>(pnh, "local_mapping", h);
+  return h;
+}
+
+// A tracking that subscribes after keyframes were made (restarted) gets the whole map, to it alone.
+void LocalMappingNodelet::resendWholeMap(const ros::SingleSubscriberPublisher& to) {
+  if (mapper_->keyframeCount() == 0) return;
+  std_msgs::Header header;
+  header.stamp = ros::Time::now();
+  header.frame_id = slam_frame_;
+  to.publish(toRos(*mapper_->wholeMap(), header));
 }
 
 std::string LocalMappingNodelet::counts() const {

@@ -41,6 +41,7 @@ class LoopClosingNodelet : public nodelet::Nodelet {
   void diagnose(diagnostic_updater::DiagnosticStatusWrapper& s);
 
   void startOver(std::unique_ptr<binloop::LoopCloser> c);
+  StageServiceHandlers serviceHandlers();
   std::string counts() const;
 
   binloop::LoopCloserParams params_;
@@ -78,8 +79,7 @@ void LoopClosingNodelet::onInit() {
     NODELET_FATAL("binloop/LoopClosing: %s", e.what());
     throw;
   }
-  slam_frame_ =
-      stringParam(pnh, "slam_frame", "slam");  // the SLAM's own frame (tracking publishes map -> slam)
+  slam_frame_ = stringParam(pnh, "slam_frame", "slam");  // tracking publishes map -> slam
   correction_pub_ = nh.advertise<binloop::Correction>("correction", 10);
   closure_pub_ = nh.advertise<binloop::LoopClosure>("loop_closure", 100);
   path_pub_ = nh.advertise<nav_msgs::Path>("corrected_path", 1, true);
@@ -95,6 +95,11 @@ void LoopClosingNodelet::onInit() {
       });
   diag_ = std::make_unique<StageDiagnostics>(
       nh, pnh, "loop closing", [this](diagnostic_updater::DiagnosticStatusWrapper& s) { diagnose(s); });
+  services_ = std::make_unique<StageServices>(pnh, "loop_closing", serviceHandlers());
+}
+
+// The stage's part in the graph-wide map services (stage_services.h).
+StageServiceHandlers LoopClosingNodelet::serviceHandlers() {
   StageServiceHandlers h;
   h.save = [this](const std::string& path, uint64_t map_id) {
     binloop::saveStateFile(*closer_, path, "loop_closing", map_id);
@@ -115,7 +120,7 @@ void LoopClosingNodelet::onInit() {
                            {"corrections", std::to_string(closer_->correctionsMade())},
                            {"loops_verified", std::to_string(verified_)}};
   };
-  services_ = std::make_unique<StageServices>(pnh, "loop_closing", h);
+  return h;
 }
 
 // A loaded map or a reset: what the nodelet kept of the old closer's input goes; a loaded map's loops show.

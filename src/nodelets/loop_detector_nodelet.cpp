@@ -35,6 +35,8 @@ class LoopDetectorNodelet : public nodelet::Nodelet {
   ros::Publisher& shadowPublisher(const std::string& model);
   /// A detector with the rules, models and shadow models of the last reconfiguration.
   std::unique_ptr<binloop::LoopDetector> makeDetector() const;
+  void defaultRulesFromConfig(ros::NodeHandle& pnh) const;
+  StageServiceHandlers serviceHandlers();
   std::string counts() const;
 
   binloop::LoopDetectorParams params_;
@@ -73,14 +75,7 @@ void LoopDetectorNodelet::onInit() {
   }
   vocab_dir_ = stringParam(pnh, "vocab_dir", binloop::packagePath(binloop::kShippedModelDir));
   force_ = boolParam(pnh, "force_extractor", false);
-  // The file's loop_detection section gives the starting rules unless the parameters say otherwise.
-  if (!pnh.hasParam("consistency")) pnh.setParam("consistency", config_.detector.consistency);
-  if (!pnh.hasParam("max_reference")) pnh.setParam("max_reference", config_.detector.max_reference);
-  if (!pnh.hasParam("ignore_recent")) pnh.setParam("ignore_recent", config_.detector.ignore_recent);
-  if (!pnh.hasParam("hbow_min_bar")) pnh.setParam("hbow_min_bar", config_.models.hbow_min_bar);
-  if (!pnh.hasParam("fabmap_l2_offset")) pnh.setParam("fabmap_l2_offset", config_.models.fabmap_l2_offset);
-  if (!pnh.hasParam("vladpq_shared_slack"))
-    pnh.setParam("vladpq_shared_slack", config_.models.vladpq_shared_slack);
+  defaultRulesFromConfig(pnh);
   candidates_pub_ = nh.advertise<binloop::LoopCandidates>("loop_candidates", 100);
   markers_pub_ = nh.advertise<visualization_msgs::MarkerArray>("loop_candidate_markers", 10);
   diag_ = std::make_unique<StageDiagnostics>(
@@ -90,6 +85,23 @@ void LoopDetectorNodelet::onInit() {
     guard_.run("dynamic_reconfigure", [&] { onReconfigure(c, level); });
   });
   keyframe_sub_ = guard_.subscribe(nh, "refined_keyframe", 1000, &LoopDetectorNodelet::onKeyframe, this);
+  services_ = std::make_unique<StageServices>(pnh, "loop_detector", serviceHandlers());
+}
+
+// The file's loop_detection section gives the starting rules unless the parameters say otherwise
+// (dynamic_reconfigure starts from the parameters).
+void LoopDetectorNodelet::defaultRulesFromConfig(ros::NodeHandle& pnh) const {
+  if (!pnh.hasParam("consistency")) pnh.setParam("consistency", config_.detector.consistency);
+  if (!pnh.hasParam("max_reference")) pnh.setParam("max_reference", config_.detector.max_reference);
+  if (!pnh.hasParam("ignore_recent")) pnh.setParam("ignore_recent", config_.detector.ignore_recent);
+  if (!pnh.hasParam("hbow_min_bar")) pnh.setParam("hbow_min_bar", config_.models.hbow_min_bar);
+  if (!pnh.hasParam("fabmap_l2_offset")) pnh.setParam("fabmap_l2_offset", config_.models.fabmap_l2_offset);
+  if (!pnh.hasParam("vladpq_shared_slack"))
+    pnh.setParam("vladpq_shared_slack", config_.models.vladpq_shared_slack);
+}
+
+// The stage's part in the graph-wide map services (stage_services.h).
+StageServiceHandlers LoopDetectorNodelet::serviceHandlers() {
   StageServiceHandlers h;
   auto need = [this] {
     if (!detector_) throw std::runtime_error("no usable loop model: " + last_problem_);
@@ -122,7 +134,7 @@ void LoopDetectorNodelet::onInit() {
     }
     return s;
   };
-  services_ = std::make_unique<StageServices>(pnh, "loop_detector", h);
+  return h;
 }
 
 std::unique_ptr<binloop::LoopDetector> LoopDetectorNodelet::makeDetector() const {
