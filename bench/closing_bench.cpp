@@ -26,6 +26,7 @@
 
 #include "../test/support/random_descriptors.h"
 #include "../test/support/stereo_keypoint.h"
+#include "bench_record.h"
 #include "binloop/loop/essential_graph.h"
 #include "binloop/loop/loop_verifier.h"
 #include "binloop/optim/pose_graph.h"
@@ -178,13 +179,6 @@ Row essentialGraph(int n, int runs) {
   return r;
 }
 
-std::string cpuModel() {
-  std::ifstream in("/proc/cpuinfo");
-  for (std::string line; std::getline(in, line);)
-    if (line.rfind("model name", 0) == 0) return line.substr(line.find(':') + 2);
-  return "unknown";
-}
-
 }  // namespace
 
 int main(int argc, char** argv) {
@@ -208,7 +202,7 @@ int main(int argc, char** argv) {
   std::printf(
       "\nCPU: %s\n\n| measure | median ms | min | max | goal | ORB-SLAM2 (i7) | runs "
       "|\n|---|---|---|---|---|---|---|\n",
-      cpuModel().c_str());
+      bench::cpuModel().c_str());
   for (const Row& r : rows) {
     if (r.runs.empty()) {
       std::printf("| %s | in the SLAM: summary.json global_ba_ms | | | %s | %s | |\n", r.name.c_str(),
@@ -220,11 +214,11 @@ int main(int argc, char** argv) {
                 *std::max_element(r.runs.begin(), r.runs.end()), r.goal.c_str(), r.orbslam2.c_str(),
                 r.runs.size());
   }
-  const char* json = std::getenv("BINLOOP_BENCH_JSON");
-  std::ofstream out(json ? json : ".build/bench/closing.json");
-  out << "{\n  \"cpu\": \"" << cpuModel() << "\",\n  \"verification_ms\": " << median(rows[0].runs)
-      << ",\n  \"verification_by_words_ms\": " << median(rows[1].runs)
-      << ",\n  \"essential_graph_250_ms\": " << median(rows[4].runs)
-      << ",\n  \"essential_graph_1400_ms\": " << median(rows[5].runs) << "\n}\n";
+  JsonObject record;
+  record.add("cpu", bench::cpuModel()).add("verification_ms", median(rows[0].runs));
+  record.add("verification_by_words_ms", median(rows[1].runs))
+      .add("essential_graph_250_ms", median(rows[4].runs));
+  record.add("essential_graph_1400_ms", median(rows[5].runs));
+  bench::writeRecord(record, ".build/bench/closing.json");
   return 0;
 }

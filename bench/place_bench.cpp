@@ -17,6 +17,7 @@
 #include <opencv2/core/utility.hpp>
 #include <thread>
 
+#include "bench_record.h"
 #include "binloop/features/image_features.h"
 #include "binloop/place/hbow_recognizer.h"
 #include "binloop/place/model_training.h"
@@ -59,26 +60,6 @@ VocabularyTree fullTree(int k, int levels) {
 
 // Headline numbers for the JSON file, by key.
 std::map<std::string, double> g_results;
-
-std::string cpuModel() {
-  std::ifstream in("/proc/cpuinfo");
-  for (std::string line; std::getline(in, line);)
-    if (line.rfind("model name", 0) == 0) return line.substr(line.find(':') + 2);
-  return "unknown";
-}
-
-void writeJson(const std::string& path) {
-  fs::create_directories(fs::path(path).parent_path());
-  std::ofstream out(path);
-  char date[32];
-  const std::time_t now = std::time(nullptr);
-  std::strftime(date, sizeof date, "%Y-%m-%dT%H:%M:%SZ", std::gmtime(&now));
-  out << "{\n  \"date\": \"" << date << "\",\n  \"cpu\": \"" << cpuModel()
-      << "\",\n  \"cores\": " << std::thread::hardware_concurrency() << ",\n  \"runs\": " << 9;
-  for (const auto& [k, v] : g_results) out << ",\n  \"" << k << "\": " << v;
-  out << "\n}\n";
-  std::printf("\nwrote %s\n", path.c_str());
-}
 
 std::vector<Descriptors> keyframes(int n) {
   std::vector<std::string> paths;
@@ -238,7 +219,9 @@ int main(int argc, char** argv) {
   const std::string only = argc > 1 ? argv[1] : "";
   if (only.empty() || only == "vocab") vocabularyBench();
   if (only.empty() || only == "query") queryBench(argc > 2 ? argv[2] : "");
-  const char* json = std::getenv("BINLOOP_BENCH_JSON");
-  writeJson(json ? json : ".build/bench/place.json");
+  JsonObject record = bench::machineRecord();
+  record.add("runs", 9);
+  for (const auto& [k, v] : g_results) record.add(k, v);
+  std::printf("\nwrote %s\n", bench::writeRecord(record, ".build/bench/place.json").c_str());
   return 0;
 }

@@ -35,6 +35,7 @@
 #include <opencv2/features2d.hpp>
 #include <thread>
 
+#include "bench_record.h"
 #include "binloop/features/orb_slam_extractor.h"
 #include "binloop/features/stereo_matcher.h"
 #include "binloop/io/kitti_sequence.h"
@@ -68,20 +69,7 @@ double mean(const std::vector<double>& v) {
   return v.empty() ? 0 : s / static_cast<double>(v.size());
 }
 
-std::string cpuModel() {
-  std::ifstream in("/proc/cpuinfo");
-  for (std::string line; std::getline(in, line);)
-    if (line.rfind("model name", 0) == 0) return line.substr(line.find(':') + 2);
-  return "unknown";
-}
-
-std::string jsonString(const std::string& s) {
-  std::string o = "\"";
-  for (char c : s) {
-    if (c == '"' || c == '\\') o += '\\';
-    o += c;
-  }
-  return o + "\"";
+return o + "\"";
 }
 
 // One row of the table: per-run values (each run's mean over its frames or keyframes, as ORB-SLAM2 reports
@@ -589,19 +577,11 @@ int main(int argc, char** argv) {
 
   if (compare && !real.empty()) compareExtractors(real, real_cam);
 
-  const char* env_json = std::getenv("BINLOOP_BENCH_JSON");
-  const std::string path = env_json ? env_json : ".build/bench/slam.json";
-  if (fs::path(path).has_parent_path()) fs::create_directories(fs::path(path).parent_path());
-  std::ofstream out(path);
-  char date[32];
-  const std::time_t now = std::time(nullptr);
-  std::strftime(date, sizeof date, "%Y-%m-%dT%H:%M:%SZ", std::gmtime(&now));
-  out << "{\n  \"date\": \"" << date << "\",\n  \"cpu\": " << jsonString(cpuModel())
-      << ",\n  \"cores\": " << std::thread::hardware_concurrency() << ",\n  \"runs_real\": " << kRealRuns
-      << ",\n  \"runs_stretch\": " << stretch_runs << ",\n  \"stretch\": "
-      << jsonString(stretch.frames.empty() ? "skipped: " + stretch.skipped : stretch.source);
-  for (const auto& [k, v] : json) out << ",\n  \"" << k << "\": " << v;
-  out << "\n}\n";
+  JsonObject record = bench::machineRecord();
+  record.add("runs_real", kRealRuns).add("runs_stretch", stretch_runs);
+  record.add("stretch", stretch.frames.empty() ? "skipped: " + stretch.skipped : stretch.source);
+  for (const auto& [k, v] : json) record.add(k, v);
+  const std::string path = bench::writeRecord(record, ".build/bench/slam.json");
   std::printf("\nwrote %s\n", path.c_str());
   return 0;
 }

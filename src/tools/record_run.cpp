@@ -18,6 +18,7 @@
 #include "binloop/io/trajectory_io.h"
 #include "binloop/pipeline/loop_log.h"
 #include "binloop/util/cli_args.h"
+#include "binloop/util/json_object.h"
 #include "binloop/util/percentile.h"
 #include "binloop_ros/stage_msg_conversion.h"
 
@@ -28,14 +29,6 @@ namespace {
 
 volatile std::sig_atomic_t g_stop = 0;
 
-std::string quoted(const std::string& text) {
-  std::string out = "\"";
-  for (char c : text) {
-    if (c == '"' || c == '\\') out += '\\';
-    if (static_cast<unsigned char>(c) >= 0x20) out += c;
-  }
-  return out + "\"";
-}
 void onSignal(int) { g_stop = 1; }
 
 struct Recorder {
@@ -134,30 +127,22 @@ struct Recorder {
     std::map<std::string, int> by_status;
     for (const auto& e : loops)
       for (const auto& c : e.closures) ++by_status[msg::loopStatusName(c->status)];
-    std::ofstream js(out / "summary.json");
-    js << "{\n  \"source\": \"ros graph (record-run)\",\n  \"frames\": " << frames.size()
-       << ",\n  \"lost_frames\": " << lost << ",\n  \"keyframes\": " << live << ",\n  \"loops_by_status\": {";
-    bool first = true;
-    for (const auto& [s, n] : by_status) {
-      js << (first ? "" : ", ") << "\"" << s << "\": " << n;
-      first = false;
-    }
-    js << "},\n  \"latency_ms_median\": " << percentile(latency_ms, 0.5)
-       << ",\n  \"latency_ms_p95\": " << percentile(latency_ms, 0.95)
-       << ",\n  \"tracking_ms_median\": " << percentile(track_ms, 0.5)
-       << ",\n  \"tracking_ms_p95\": " << percentile(track_ms, 0.95) << ",\n  \"diagnostics\": {";
-    bool first_status = true;
+    JsonObject statuses, diagnostic_values(true);
+    for (const auto& [status, n] : by_status) statuses.add(status, n);
     for (const auto& [name, values] : diagnostics) {
-      js << (first_status ? "\n" : ",\n") << "    " << quoted(name) << ": {";
-      bool first_value = true;
-      for (const auto& [k, v] : values) {
-        js << (first_value ? "" : ", ") << quoted(k) << ": " << quoted(v);
-        first_value = false;
-      }
-      js << "}";
-      first_status = false;
+      JsonObject d;
+      for (const auto& [k, v] : values) d.add(k, v);
+      diagnostic_values.add(name, d);
     }
-    js << "\n  }\n}\n";
+    JsonObject js;
+    js.add("source", "ros graph (record-run)").add("frames", frames.size()).add("lost_frames", lost);
+    js.add("keyframes", live).add("loops_by_status", statuses);
+    js.add("latency_ms_median", percentile(latency_ms, 0.5))
+        .add("latency_ms_p95", percentile(latency_ms, 0.95));
+    js.add("tracking_ms_median", percentile(track_ms, 0.5))
+        .add("tracking_ms_p95", percentile(track_ms, 0.95));
+    js.add("diagnostics", diagnostic_values);
+    std::ofstream(out / "summary.json") << js.str();
   }
 };
 

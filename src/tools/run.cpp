@@ -19,29 +19,13 @@
 #include "binloop/pipeline/slam_pipeline.h"
 #include "binloop/place/hbow_recognizer.h"
 #include "binloop/util/cli_args.h"
+#include "binloop/util/json_object.h"
 #include "binloop/util/package_paths.h"
 #include "binloop/util/percentile.h"
 #include "binloop/util/progress_bar.h"
 
 namespace fs = std::filesystem;
 using namespace binloop;
-
-namespace {
-
-std::string jsonEscape(const std::string& s) {
-  std::string o;
-  for (char c : s) {
-    if (c == '"' || c == '\\') o += '\\';
-    if (c == '\n') {
-      o += "\\n";
-      continue;
-    }
-    o += c;
-  }
-  return o;
-}
-
-}  // namespace
 
 int main(int argc, char** argv) {
   CliArgs args(
@@ -266,28 +250,25 @@ int main(int argc, char** argv) {
       ba.push_back(m.ba_ms);
       tri.push_back(m.triangulation_ms);
     }
-    std::ofstream js(out / "summary.json");
-    js << std::setprecision(6) << "{\n  \"sequence\": \"" << jsonEscape(seq.directory()) << "\",\n"
-       << "  \"frames\": " << frames.size() << ",\n  \"start\": " << start << ",\n  \"end\": " << end << ",\n"
-       << "  \"keyframes\": " << mapper.keyframeCount()
-       << ",\n  \"keyframes_made\": " << slam.mappingTimes().size()
-       << ",\n  \"map_points\": " << mapper.pointCount() << ",\n  \"lost_frames\": " << lost
-       << ",\n  \"relocalizations\": " << relocalized << ",\n  \"problems\": " << problems
-       << ",\n  \"wall_s\": " << wall_s << ",\n  \"frames_per_s\": " << frames.size() / std::max(wall_s, 1e-9)
-       << ",\n  \"mode\": \"" << (lockstep ? "lockstep" : "threaded") << "\",\n  \"rate\": " << rate
-       << ",\n  \"max_lag_s\": " << max_lag_s << ",\n  \"seed\": " << args.integer("seed")
-       << ",\n  \"detector\": \"" << detector << "\",\n  \"reloc_vocab\": \""
-       << (config.tracker.vocabulary ? reloc_vocab : std::string("none")) << "\",\n";
-    auto stat = [&](const char* name, const std::vector<double>& v, bool last) {
-      js << "  \"" << name << "_ms_median\": " << percentile(v, 0.5) << ",\n  \"" << name
-         << "_ms_p95\": " << percentile(v, 0.95) << (last ? "\n" : ",\n");
+    JsonObject js;
+    js.add("sequence", seq.directory()).add("frames", frames.size()).add("start", start).add("end", end);
+    js.add("keyframes", mapper.keyframeCount()).add("keyframes_made", slam.mappingTimes().size());
+    js.add("map_points", mapper.pointCount()).add("lost_frames", lost).add("relocalizations", relocalized);
+    js.add("problems", problems)
+        .add("wall_s", wall_s)
+        .add("frames_per_s", frames.size() / std::max(wall_s, 1e-9));
+    js.add("mode", lockstep ? "lockstep" : "threaded").add("rate", rate).add("max_lag_s", max_lag_s);
+    js.add("seed", args.integer("seed")).add("detector", detector);
+    js.add("reloc_vocab", config.tracker.vocabulary ? reloc_vocab : std::string("none"));
+    auto stat = [&](const std::string& name, const std::vector<double>& v) {
+      js.add(name + "_ms_median", percentile(v, 0.5)).add(name + "_ms_p95", percentile(v, 0.95));
     };
-    stat("extract", ex, false);
-    stat("stereo", stt, false);
-    stat("tracking_total", tr, false);
-    stat("local_mapping", mp, false);
-    stat("local_ba", ba, false);
-    stat("triangulation", tri, false);
+    stat("extract", ex);
+    stat("stereo", stt);
+    stat("tracking_total", tr);
+    stat("local_mapping", mp);
+    stat("local_ba", ba);
+    stat("triangulation", tri);
     if (slam.closesLoops()) {
       writeLoopLog((out / "loops.csv").string(), slam.loopLog(), seq.hasPoses() ? &seq.poses() : nullptr);
       std::map<std::string, int> by_status;
@@ -323,43 +304,40 @@ int main(int argc, char** argv) {
         if (e.global_ba_ms > 0) global_ba_ms.push_back(e.global_ba_ms);
         if (e.switch_ms > 0) switch_ms.push_back(e.switch_ms);
       }
-      js << "  \"loop_queries\": " << queries << ",\n  \"loop_proposals\": " << proposals
-         << ",\n  \"loop_problems\": " << loop_problems
-         << ",\n  \"loops_accepted\": " << by_status["accepted"] << ",\n  \"loops_by_status\": {";
-      bool first_status = true;
-      for (const auto& [s, n] : by_status) {
-        js << (first_status ? "" : ", ") << "\"" << s << "\": " << n;
-        first_status = false;
-      }
-      js << "},\n";
+      js.add("loop_queries", queries).add("loop_proposals", proposals).add("loop_problems", loop_problems);
+      js.add("loops_accepted", by_status["accepted"]);
+      JsonObject statuses;
+      for (const auto& [s, n] : by_status) statuses.add(s, n);
+      js.add("loops_by_status", statuses);
       for (const auto& [m, v] : detect_ms) {
-        stat(("detect_" + m).c_str(), v, false);  // signature + query
-        stat(("detect_" + m + "_signature").c_str(), signature_ms[m], false);
-        stat(("detect_" + m + "_query").c_str(), query_ms[m], false);
+        stat("detect_" + m, v);  // signature + query
+        stat("detect_" + m + "_signature", signature_ms[m]);
+        stat("detect_" + m + "_query", query_ms[m]);
       }
-      stat("verify", verify_ms, false);
-      stat("pose_graph", optimize_ms, false);
-      stat("correction_apply", correction_ms, false);
-      if (!switch_ms.empty()) stat("switch_rebuild", switch_ms, false);
-      if (!global_ba_ms.empty()) stat("global_ba", global_ba_ms, false);
+      stat("verify", verify_ms);
+      stat("pose_graph", optimize_ms);
+      stat("correction_apply", correction_ms);
+      if (!switch_ms.empty()) stat("switch_rebuild", switch_ms);
+      if (!global_ba_ms.empty()) stat("global_ba", global_ba_ms);
       const LocalMapper::GlobalBaStats& g = slam.mapper().globalBaStats();
       if (g.started > 0)  // threaded: in the background
-        js << "  \"global_ba_background\": {\"started\": " << g.started << ", \"merged\": " << g.merged
-           << ", \"stopped_by_a_loop\": " << g.aborted << ", \"last_ms\": " << g.last_ms
-           << ", \"last_keyframes\": " << g.last_keyframes
-           << ", \"last_added_meanwhile\": " << g.last_added_meanwhile << "},\n";
+        js.add("global_ba_background", JsonObject()
+                                           .add("started", g.started)
+                                           .add("merged", g.merged)
+                                           .add("stopped_by_a_loop", g.aborted)
+                                           .add("last_ms", g.last_ms)
+                                           .add("last_keyframes", g.last_keyframes)
+                                           .add("last_added_meanwhile", g.last_added_meanwhile));
       std::cout << "loops_accepted: " << by_status["accepted"] << "\n";
     }
-    js << "  \"settings\": {";
+    JsonObject settings(true);
     std::istringstream lines(describe(config));
-    std::string line;
-    bool first = true;
-    while (std::getline(lines, line)) {
+    for (std::string line; std::getline(lines, line);) {
       const auto colon = line.find(": ");
-      js << (first ? "\n" : ",\n") << "    \"" << line.substr(0, colon) << "\": " << line.substr(colon + 2);
-      first = false;
+      settings.addRaw(line.substr(0, colon), line.substr(colon + 2));
     }
-    js << "\n  }\n}\n";
+    js.add("settings", settings);
+    std::ofstream(out / "summary.json") << js.str();
     std::cout << "frames: " << frames.size() << "\nkeyframes: " << mapper.keyframeCount()
               << "\nmap_points: " << mapper.pointCount() << "\nlost_frames: " << lost
               << "\nframes_per_s: " << std::fixed << std::setprecision(1)
