@@ -10,11 +10,10 @@
 #include <algorithm>
 #include <pluginlib/class_list_macros.hpp>
 
-#include <deque>
 #include <memory>
-#include <set>
 #include <unordered_map>
 
+#include "binloop/loop/candidate_gate.h"
 #include "binloop/loop/loop_closer.h"
 #include "binloop_ros/callback_guard.h"
 #include "binloop_ros/cpu_meter.h"
@@ -54,8 +53,7 @@ class LoopClosingNodelet : public nodelet::Nodelet {
   ros::ServiceServer external_srv_;
   std::unique_ptr<StageDiagnostics> diag_;
   CpuMeter cpu_;
-  std::set<binloop::SlamKeyframeId> keyframes_seen_, updates_seen_;
-  std::deque<binloop::LoopCandidatesConstPtr> pending_;
+  binloop::CandidateGate<binloop::LoopCandidatesConstPtr> pending_;
   struct Edge {
     binloop::SlamKeyframeId query, match;
     binloop::msg::LoopStatus status;
@@ -130,8 +128,6 @@ void LoopClosingNodelet::startOver(std::unique_ptr<binloop::LoopCloser> c) {
   handle(closer_->finish(), h);  // a loop the old map held is reported as it goes
   closer_ = std::move(c);
   pending_.clear();
-  keyframes_seen_.clear();
-  updates_seen_.clear();
   edges_.clear();
   for (const auto& e : closer_->loops())
     edges_.push_back({e.query, e.candidate, binloop::msg::LoopStatus::kAccepted});
@@ -156,7 +152,7 @@ void LoopClosingNodelet::onKeyframe(const binloop::KeyFrameConstPtr& m) {
   } catch (const std::exception& e) {
     return problem(std::string("keyframe dropped: ") + e.what());
   }
-  keyframes_seen_.insert(m->id);
+  pending_.keyframeArrived(m->id);
   runPending();
 }
 
@@ -168,7 +164,7 @@ void LoopClosingNodelet::onUpdate(const binloop::LocalMapUpdateConstPtr& m) {
     return problem(std::string("local map update dropped: ") + e.what());
   }
   if (!m->correction)
-    updates_seen_.insert(m->keyframe);
+    pending_.updateArrived(m->keyframe);
   else
     publishPathAndEdges(m->header.stamp);
   runPending();
@@ -177,27 +173,25 @@ void LoopClosingNodelet::onUpdate(const binloop::LocalMapUpdateConstPtr& m) {
 void LoopClosingNodelet::onCandidates(const binloop::LoopCandidatesConstPtr& m) {
   CpuMeter::Scope cpu(cpu_);
   if (m->shadow) return;  // shadow models are logged, never acted on
-  pending_.push_back(m);
+  pending_.push(m->query, m);
   runPending();
 }
 
 void LoopClosingNodelet::runPending() {
-  while (!pending_.empty()) {
-    const auto& m = pending_.front();
-    const bool ready = keyframes_seen_.count(m->query) && updates_seen_.count(m->query);
-    if (!ready && pending_.size() < 50) return;  // in order: later candidates wait for earlier ones
-    if (!ready)
+  while (auto r = pending_.next()) {
+    const binloop::LoopCandidatesConstPtr& m = r->candidates;
+    if (!r->ready) {
       problem("loop candidates for keyframe " + std::to_string(m->query) +
               " dropped: the keyframe never arrived");
-    else {
-      try {
-        handle(closer_->process(fromRos(*m)), m->header);
-      } catch (const std::exception& e) {
-        problem(std::string("loop candidates dropped: ") + e.what());
-      }
+      continue;
     }
-    pending_.pop_front();
+    try {
+      handle(closer_->process(fromRos(*m)), m->header);
+    } catch (const std::exception& e) {
+      problem(std::string("loop candidates dropped: ") + e.what());
+    }
   }
+}
 }
 
 void LoopClosingNodelet::handle(const binloop::LoopCloser::Output& out, const std_msgs::Header& header) {
@@ -294,7 +288,7 @@ void LoopClosingNodelet::diagnose(diagnostic_updater::DiagnosticStatusWrapper& s
   s.add("loops accepted", accepted_);
   for (const auto& [status, n] : by_status_) s.add("loops " + status, n);
   s.add("last loop", last_loop_);
-  s.add("candidates waiting", pending_.size());
+  s.add("candidates waiting", pending_.waiting());
   s.add("input dropped", rejected_input_);
   s.add("last problem", last_problem_);
   s.add("callbacks failed", guard_.failures());
