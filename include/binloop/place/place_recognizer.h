@@ -15,6 +15,7 @@
 #include "binloop/place/binary_descriptor.h"
 #include "binloop/place/model_file.h"
 #include "binloop/place/ranking.h"
+#include "binloop/util/stopwatch.h"
 
 namespace binloop {
 
@@ -154,8 +155,5 @@ struct RecognizerOptions {
 /// is set and force is not) trained on descriptors of another extractor or other settings.
 std::unique_ptr<PlaceRecognizer> makePlaceRecognizer(const std::string& name, const RecognizerOptions& opts);
 const std::vector<std::string>& placeModelNames();
-
-/// Milliseconds since `start` (steady clock), for step timings.
-double msSince(std::chrono::steady_clock::time_point start);
 
 }  // namespace binloop

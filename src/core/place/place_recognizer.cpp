@@ -24,10 +24,6 @@ std::string statusName(QueryStatus s) {
   return "?";
 }
 
-double msSince(std::chrono::steady_clock::time_point start) {
-  return std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - start).count();
-}
-
 double PlaceRecognizer::add(KeyframeId id, const Descriptors& d) {
   if (d.empty()) throw PlaceError(name() + ": keyframe " + std::to_string(id) + " has no descriptors");
   if (known(id)) throw PlaceError(name() + ": keyframe " + std::to_string(id) + " was added before");

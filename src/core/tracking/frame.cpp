@@ -7,13 +7,11 @@
 #include <stdexcept>
 
 #include "binloop/io/data_error.h"
+#include "binloop/util/stopwatch.h"
 
 namespace binloop {
 
 namespace {
-double msSinceT(std::chrono::steady_clock::time_point t0) {
-  return std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - t0).count();
-}
 std::string sizeText(const cv::Mat& m) { return std::to_string(m.cols) + "x" + std::to_string(m.rows); }
 }  // namespace
 
@@ -62,11 +60,11 @@ Frame FrameBuilder::build(const StereoFrame& in) const {
   ImagePyramid left_pyr = extractor_.pyramid(in.left);
   OrbFeatures left = extractor_.extract(left_pyr);
   auto [right_pyr, right] = right_job.get();
-  f.extract_ms = msSinceT(t0);
+  f.extract_ms = msSince(t0);
 
   t0 = std::chrono::steady_clock::now();
   StereoMatches sm = matchStereo(left, left_pyr, right, right_pyr, cam_, stereo_);
-  f.stereo_ms = msSinceT(t0);
+  f.stereo_ms = msSince(t0);
   f.stereo_matches = sm.matched;
 
   const size_t n = left.keypoints.size();

@@ -12,14 +12,11 @@
 #include "binloop/optim/pose_covariance.h"
 #include "binloop/util/fixed_decimals.h"
 #include "binloop/util/hash_random.h"
+#include "binloop/util/stopwatch.h"
 
 namespace binloop {
 
 namespace {
-
-double msSinceT(std::chrono::steady_clock::time_point t0) {
-  return std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - t0).count();
-}
 
 // The motion T repeated k times (k need not be whole): rotation angle and translation scaled by k, which is
 // exact for k = 1 and close for the small motions between frames.
@@ -92,18 +89,18 @@ Tracker::Output Tracker::track(const StereoFrame& in, int mapping_queue) {
   if (state_ == msg::TrackingState::kNotInitialized) {
     if (p_.localize_only) {
       tf.problem = "localisation only, and no map to localise in: load one";
-      tf.track_ms = msSinceT(t0);
+      tf.track_ms = msSince(t0);
       return out;
     }
     if (!initialize(f, &out.keyframe)) {
       tf.problem = "not initialised: " + std::to_string(f.stereo_matches) + " stereo matches, " +
                    std::to_string(p_.init_min_stereo) + " needed";
-      tf.track_ms = msSinceT(t0);
+      tf.track_ms = msSince(t0);
       return out;
     }
     tf.state = state_;
   } else if (!trackInMap(f, mapping_queue, &out)) {
-    tf.track_ms = msSinceT(t0);
+    tf.track_ms = msSince(t0);
     return out;
   }
 
@@ -115,7 +112,7 @@ Tracker::Output Tracker::track(const StereoFrame& in, int mapping_queue) {
   last_ref_ = reference_;
   T_ref_last_ = tf.T_ref_c;
   last_ = std::make_unique<Frame>(std::move(f));
-  tf.track_ms = msSinceT(t0);
+  tf.track_ms = msSince(t0);
   return out;
 }
 

@@ -1,0 +1,184 @@
+// Local mapping's bundle adjustment: local BA around each keyframe, and the global BA after a loop, run on
+// its own thread over a copy of the problem and merged when done.
+#include "binloop/mapping/local_mapper.h"
+
+#include <algorithm>
+#include <atomic>
+#include <chrono>
+#include <cmath>
+#include <limits>
+#include <stdexcept>
+#include <thread>
+#include <unordered_set>
+
+#include "binloop/map/ancestors.h"
+#include "binloop/map/fused_points.h"
+#include "binloop/map/keypoint_geometry.h"
+#include "binloop/map/point_projection.h"
+#include "binloop/util/stopwatch.h"
+#include "global_ba_job.h"
+
+namespace binloop {
+
+void LocalMapper::localBundleAdjustment(KF& kf, msg::LocalMapUpdate& u) {
+  // Local keyframes: the new one and its covisible neighbours; fixed: the others that see their points.
+  std::vector<SlamKeyframeId> free{kf.state.id};
+  for (SlamKeyframeId k : neighbors(kf, p_.local_ba_max_keyframes - 1)) free.push_back(k);
+  bundleAdjust(free, p_.ba, u);
+}
+
+LocalMapper::BaSetup LocalMapper::makeBaProblem(const std::vector<SlamKeyframeId>& free) const {
+  BaSetup b;
+  std::unordered_map<SlamKeyframeId, size_t> kf_index;
+  std::unordered_map<MapPointId, size_t> pt_index;
+  auto addKf = [&](SlamKeyframeId id, bool fixed) {
+    if (kf_index.count(id)) return;
+    kf_index[id] = b.problem.keyframes.size();
+    b.problem.keyframes.push_back(
+        {id, orthonormalized(kfs_.at(id).state.T_w_c.inverse()), fixed || id == first_kf_});
+  };
+  for (SlamKeyframeId k : free) addKf(k, false);
+  b.free = b.problem.keyframes.size();
+  for (size_t i = 0; i < b.free; ++i)
+    for (MapPointId id : kfs_.at(b.problem.keyframes[i].id).state.point_ids)
+      if (id != kNoId && !pt_index.count(id)) {
+        pt_index[id] = b.problem.points.size();
+        b.problem.points.push_back({id, pts_.at(id).state.p_w});
+      }
+  for (const BaPoint& bp : b.problem.points)
+    for (const auto& [k, idx] : pts_.at(bp.id).obs) {
+      addKf(k, true);
+      const KF& o = kfs_.at(k);
+      const msg::KeyPoint& kp = o.keypoints[idx];
+      b.problem.observations.push_back(
+          {kf_index.at(k), pt_index.at(bp.id), {kp.x, kp.y}, kp.right_x, scales_.inv_sigma2[kp.octave]});
+      b.obs_of.emplace_back(bp.id, k);
+    }
+  return b;
+}
+
+void LocalMapper::bundleAdjust(const std::vector<SlamKeyframeId>& free, const LocalBaParams& params,
+                               msg::LocalMapUpdate& u) {
+  const BaSetup b = makeBaProblem(free);
+  if (b.problem.points.empty()) return;
+  const auto t0 = std::chrono::steady_clock::now();
+  const LocalBaResult r = binloop::localBundleAdjustment(camera_, b.problem, params, &abort_);
+  u.ba_ms = msSince(t0);
+  u.ba_iterations = r.iterations;
+  u.ba_outliers = r.num_outliers;
+  for (const BaRefinedKeyframe& rk : r.keyframes)
+    kfs_.at(rk.id).state.T_w_c = orthonormalized(rk.T_c_w.inverse());
+  for (const BaPoint& bp : r.points) pts_.at(bp.id).state.p_w = bp.p_w;
+  removeBaOutliers(b, r, u);
+  for (size_t i = 0; i < b.free; ++i) updateConnections(kfs_.at(b.problem.keyframes[i].id));
+}
+
+void LocalMapper::removeBaOutliers(const BaSetup& b, const LocalBaResult& r, msg::LocalMapUpdate& u) {
+  // Observations that are still outliers are removed from both sides (where both are still in the map:
+  // a background BA's map may have changed meanwhile).
+  for (size_t i = 0; i < r.outlier.size(); ++i) {
+    if (!r.outlier[i]) continue;
+    const auto& [pid, k] = b.obs_of[i];
+    auto p = pts_.find(pid);
+    auto kf = kfs_.find(k);
+    if (p == pts_.end() || kf == kfs_.end()) continue;
+    auto it = p->second.obs.find(k);
+    if (it == p->second.obs.end()) continue;
+    kf->second.state.point_ids[it->second] = kNoId;
+    p->second.obs.erase(it);
+  }
+  for (const BaPoint& bp : b.problem.points) {
+    auto p = pts_.find(bp.id);
+    if (p == pts_.end()) continue;
+    if (p->second.obs.empty()) {
+      pts_.erase(p);
+      u.culled_points.push_back(bp.id);
+      continue;
+    }
+    updatePointShape(p->second);
+    touched_.push_back(bp.id);
+  }
+}
+
+LocalBaParams LocalMapper::globalBaParams() const {
+  LocalBaParams g = p_.ba;
+  g.linear_solver = BaLinearSolver::kSparseSchur;  // hundreds of free keyframes
+  return g;
+}
+
+void LocalMapper::startGlobalBa(const std::vector<SlamKeyframeId>& keyframes) {
+  stopGlobalBa();
+  auto job = std::make_unique<GlobalBaJob>();
+  job->setup = makeBaProblem(keyframes);
+  if (job->setup.problem.points.empty()) return;
+  job->seq_at_start = seq_;
+  ++global_ba_.started;
+  GlobalBaJob* j = job.get();
+  job->thread = std::thread([j, params = globalBaParams(), cam = camera_] {
+    // An exception leaving a thread's function ends the process: it is kept and reported at the merge.
+    try {
+      j->result = binloop::localBundleAdjustment(cam, j->setup.problem, params, &j->abort);
+    } catch (const std::exception& e) {
+      j->failure = e.what();
+    } catch (...) {
+      j->failure = "an unknown exception";
+    }
+    j->done = true;
+  });
+  gba_ = std::move(job);
+}
+
+void LocalMapper::stopGlobalBa() {
+  if (!gba_) return;
+  gba_->abort = true;
+  gba_->thread.join();
+  gba_.reset();
+  ++global_ba_.aborted;
+}
+
+msg::LocalMapUpdatePtr LocalMapper::mergeGlobalBa(bool wait) {
+  if (!gba_ || (!wait && !gba_->done)) return nullptr;
+  gba_->thread.join();
+  std::unique_ptr<GlobalBaJob> job = std::move(gba_);
+  if (!job->failure.empty()) {
+    ++global_ba_.failed;
+    global_ba_.last_failure = job->failure;
+    return nullptr;
+  }
+  const auto t0 = std::chrono::steady_clock::now();
+  auto u = std::make_shared<msg::LocalMapUpdate>();
+  u->sequence = ++updates_;
+  u->correction = true;  // tracking takes the whole map, as after a loop
+  touched_.clear();
+  // Keyframes move by what the BA did to them (applied to their pose now, which local BA may have refined
+  // since), those added meanwhile with their spanning-tree ancestor; points the BA held go where it put them
+  // unless local BA has moved them since, the others with their reference keyframe.
+  const BaProblem& start = job->setup.problem;
+  std::unordered_map<SlamKeyframeId, Pose3> delta;
+  for (const BaRefinedKeyframe& rk : job->result.keyframes)
+    delta[rk.id] = rk.T_c_w.inverse() * start.keyframes[rk.index].T_c_w;
+  std::unordered_map<MapPointId, Eigen::Vector3d> placed;
+  for (size_t i = 0; i < job->result.points.size(); ++i)  // in the problem's order
+    if (auto p = pts_.find(start.points[i].id); p != pts_.end() && p->second.state.p_w == start.points[i].p_w)
+      placed[start.points[i].id] = job->result.points[i].p_w;
+  size_t added = 0;
+  for (const auto& [id, kf] : kfs_) added += kf.seq > job->seq_at_start;
+  moveMap(delta, &placed);
+  removeBaOutliers(job->setup, job->result, *u);
+  for (auto& [id, kf] : kfs_) updateConnections(kf);
+  const double ms = 1000 * job->result.time_s;
+  u->ba_ms = ms;
+  u->ba_iterations = job->result.iterations;
+  u->ba_outliers = job->result.num_outliers;
+  wholeMapInto(*u);
+  u->total_ms = msSince(t0);
+  ++global_ba_.merged;
+  global_ba_.last_ms = ms;
+  global_ba_.last_keyframes = static_cast<int>(start.keyframes.size());
+  global_ba_.last_added_meanwhile = static_cast<int>(added);
+  return u;
+}
+
+LocalMapper::~LocalMapper() { stopGlobalBa(); }
+
+}  // namespace binloop

@@ -1,0 +1,78 @@
+// Local mapping culling keyframes whose points other keyframes see well enough (ORB-SLAM2's rule).
+#include "binloop/mapping/local_mapper.h"
+
+#include <algorithm>
+#include <atomic>
+#include <chrono>
+#include <cmath>
+#include <limits>
+#include <stdexcept>
+#include <thread>
+#include <unordered_set>
+
+#include "binloop/map/ancestors.h"
+#include "binloop/map/fused_points.h"
+#include "binloop/map/keypoint_geometry.h"
+#include "binloop/map/point_projection.h"
+#include "binloop/util/stopwatch.h"
+
+namespace binloop {
+
+void LocalMapper::removeKeyframe(SlamKeyframeId id) {
+  KF& kf = kfs_.at(id);
+  for (size_t i = 0; i < kf.state.point_ids.size(); ++i) {
+    const MapPointId pid = kf.state.point_ids[i];
+    if (pid == kNoId) continue;
+    MP& mp = pts_.at(pid);
+    mp.obs.erase(id);
+    if (mp.obs.empty()) pts_.erase(pid);
+  }
+  for (const auto& [k, c] : kf.weights) {
+    auto it = kfs_.find(k);
+    if (it != kfs_.end()) it->second.weights.erase(id);
+  }
+  // Children of the culled keyframe take its parent (ORB-SLAM2 picks the best covisible candidate; the
+  // parent is the simplest choice that keeps the tree connected).
+  for (auto& [k, o] : kfs_)
+    if (o.state.parent == id) o.state.parent = kf.state.parent;
+  auto parent = kfs_.find(kf.state.parent);
+  if (parent != kfs_.end())
+    culled_[id] = {kf.state.parent, parent->second.state.T_w_c.inverse() * kf.state.T_w_c};
+  kfs_.erase(id);
+}
+
+void LocalMapper::cullKeyframes(KF& kf, msg::LocalMapUpdate& u) {
+  const double close = p_.close_depth_baselines * camera_.baseline_m;
+  for (SlamKeyframeId k : neighbors(kf, std::numeric_limits<int>::max())) {
+    if (k == first_kf_) continue;
+    KF& c = kfs_.at(k);
+    int points = 0, redundant = 0;
+    for (size_t i = 0; i < c.state.point_ids.size(); ++i) {
+      const MapPointId pid = c.state.point_ids[i];
+      if (pid == kNoId) continue;
+      const float d = c.keypoints[i].depth;
+      if (d > close || d < 0) continue;  // stereo: only close points count (ORB-SLAM2)
+      ++points;
+      const MP& mp = pts_.at(pid);
+      if (mp.obs.size() <= 3) continue;
+      const int level = c.keypoints[i].octave;
+      int others = 0;
+      for (const auto& [o, idx] : mp.obs) {
+        if (o == k) continue;
+        if (kfs_.at(o).keypoints[idx].octave <= level + 1) ++others;
+        if (others >= 3) break;
+      }
+      if (others >= 3) ++redundant;
+    }
+    if (points > 0 && redundant > p_.redundant_ratio * points) {
+      std::vector<SlamKeyframeId> nb;
+      for (const auto& [o, w] : c.weights) nb.push_back(o);
+      removeKeyframe(k);
+      u.culled_keyframes.push_back(k);
+      for (SlamKeyframeId o : nb)
+        if (kfs_.count(o)) updateConnections(kfs_.at(o));
+    }
+  }
+}
+
+}  // namespace binloop
