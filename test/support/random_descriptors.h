@@ -1,7 +1,7 @@
 #pragma once
 // Random ORB-like descriptors for tests: uniform bits, and a copy with some bits flipped (a re-detection
 // of the same corner).
-#include "binloop/place/binary_descriptor.h"
+#include "binloop/types/binary_descriptor.h"
 #include "binloop/util/hash_random.h"
 
 namespace binloop::test {

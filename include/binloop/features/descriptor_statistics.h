@@ -6,7 +6,7 @@
 #include <cstddef>
 #include <cstdint>
 
-#include "binloop/place/binary_descriptor.h"
+#include "binloop/types/binary_descriptor.h"
 
 namespace binloop {
 

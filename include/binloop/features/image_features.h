@@ -8,7 +8,8 @@
 #include <vector>
 
 #include "binloop/features/orb_slam_extractor.h"
-#include "binloop/place/vocabulary_tree.h"
+#include "binloop/types/binary_descriptor.h"
+#include "binloop/util/progress_bar.h"
 
 namespace binloop {
 

@@ -25,8 +25,8 @@
 #include <string>
 #include <vector>
 
-#include "binloop/place/binary_descriptor.h"
-#include "binloop/place/model_file.h"
+#include "binloop/features/extractor_settings.h"
+#include "binloop/types/binary_descriptor.h"
 
 namespace binloop {
 

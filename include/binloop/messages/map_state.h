@@ -6,7 +6,7 @@
 #include <vector>
 
 #include "binloop/map/ids.h"
-#include "binloop/place/binary_descriptor.h"
+#include "binloop/types/binary_descriptor.h"
 #include "binloop/types/pose.h"
 
 namespace binloop::msg {

@@ -8,7 +8,7 @@
 #include <cstdint>
 #include <vector>
 
-#include "binloop/place/binary_descriptor.h"
+#include "binloop/types/binary_descriptor.h"
 
 namespace binloop {
 

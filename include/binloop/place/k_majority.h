@@ -5,7 +5,7 @@
 #include <cstdint>
 #include <vector>
 
-#include "binloop/place/binary_descriptor.h"
+#include "binloop/types/binary_descriptor.h"
 
 namespace binloop {
 

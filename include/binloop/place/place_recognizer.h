@@ -12,9 +12,9 @@
 #include <unordered_map>
 #include <vector>
 
-#include "binloop/place/binary_descriptor.h"
 #include "binloop/place/model_file.h"
 #include "binloop/place/ranking.h"
+#include "binloop/types/binary_descriptor.h"
 #include "binloop/util/stopwatch.h"
 
 namespace binloop {

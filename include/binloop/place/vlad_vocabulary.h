@@ -9,9 +9,9 @@
 #include <cstdint>
 #include <vector>
 
-#include "binloop/place/binary_descriptor.h"
 #include "binloop/place/model_file.h"
 #include "binloop/place/vocabulary_tree.h"
+#include "binloop/types/binary_descriptor.h"
 
 namespace binloop {
 

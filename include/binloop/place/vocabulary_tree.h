@@ -12,9 +12,10 @@
 #include <memory>
 #include <vector>
 
-#include "binloop/place/binary_descriptor.h"
 #include "binloop/place/bow_vector.h"
 #include "binloop/place/model_file.h"
+#include "binloop/types/binary_descriptor.h"
+#include "binloop/util/progress_bar.h"
 
 namespace binloop {
 
@@ -25,9 +26,6 @@ struct VocabTreeParams {
   uint64_t seed = 1;
   int max_iterations = 10;
 };
-
-/// Progress of a long computation: (done, total).
-using ProgressFn = std::function<void(size_t, size_t)>;
 
 class VocabularyTree {
  public:

@@ -3,9 +3,13 @@
 // so logs and CI output stay clean.
 #include <chrono>
 #include <cstdio>
+#include <functional>
 #include <string>
 
 namespace binloop {
+
+/// Progress of a long computation: (done, total). A ProgressBar's update fits it.
+using ProgressFn = std::function<void(size_t, size_t)>;
 
 class ProgressBar {
  public:

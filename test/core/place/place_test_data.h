@@ -1,6 +1,6 @@
 #pragma once
 // Synthetic descriptor sets for place-recognition tests: random "places" and noisy revisits of them.
-#include "binloop/place/binary_descriptor.h"
+#include "binloop/types/binary_descriptor.h"
 #include "binloop/util/hash_random.h"
 #include "support/random_descriptors.h"
 

@@ -1,4 +1,4 @@
-#include "binloop/place/binary_descriptor.h"
+#include "binloop/types/binary_descriptor.h"
 
 #include <cstring>
 #include <string>
