@@ -69,9 +69,6 @@ double mean(const std::vector<double>& v) {
   return v.empty() ? 0 : s / static_cast<double>(v.size());
 }
 
-return o + "\"";
-}
-
 // One row of the table: per-run values (each run's mean over its frames or keyframes, as ORB-SLAM2 reports
 // means), summarised as median / min / max of the runs.
 struct Result {

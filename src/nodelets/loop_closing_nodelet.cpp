@@ -192,7 +192,6 @@ void LoopClosingNodelet::runPending() {
     }
   }
 }
-}
 
 void LoopClosingNodelet::handle(const binloop::LoopCloser::Output& out, const std_msgs::Header& header) {
   std_msgs::Header h = header;
