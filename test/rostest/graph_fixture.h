@@ -35,6 +35,8 @@ struct Observed {
   std::vector<nav_msgs::Odometry> odometry;
   std::vector<geometry_msgs::PoseWithCovarianceStamped> poses_with_covariance;
   std::map<std::string, std::string> tracking_diag;
+  std::map<std::string, std::map<std::string, std::string>>
+      diag;  // every stage's last values, by status name
 };
 
 class GraphTest : public ::testing::Test {
@@ -75,9 +77,11 @@ class GraphTest : public ::testing::Test {
     subs_.push_back(
         nh.subscribe<diagnostic_msgs::DiagnosticArray>("/diagnostics", 100, [this](const auto& m) {
           std::lock_guard<std::mutex> lk(seen_.m);
-          for (const auto& s : m->status)
+          for (const auto& s : m->status) {
+            for (const auto& kv : s.values) seen_.diag[s.name][kv.key] = kv.value;
             if (s.name.find("tracking") != std::string::npos)
               for (const auto& kv : s.values) seen_.tracking_diag[kv.key] = kv.value;
+          }
         }));
   }
 

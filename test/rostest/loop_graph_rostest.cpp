@@ -5,7 +5,10 @@
 // Then it saves the map, resets the graph and loads the map into it (the same keyframes and index, and a
 // pair of the start tracked in it again), and sends malformed stereo pairs and checks that the graph says
 // so and keeps tracking.
+#include <binloop/Correction.h>
+#include <binloop/KeyFrame.h>
 #include <binloop/LoadMap.h>
+#include <binloop/LocalMapUpdate.h>
 #include <binloop/Reset.h>
 #include <binloop/SaveMap.h>
 #include <dynamic_reconfigure/Reconfigure.h>
@@ -13,6 +16,7 @@
 
 #include <filesystem>
 #include <fstream>
+#include <limits>
 
 #include "binloop/io/map_folder.h"
 #include "binloop/io/state_file.h"
@@ -370,6 +374,93 @@ TEST_F(LoopGraph, BadStampsAndAReplayDoNotStopTheGraph) {
   // Every stage is still there and answers.
   const auto stats = statistics();
   EXPECT_FALSE(stats.empty()) << "the graph does not answer /binloop/statistics";
+}
+
+// Run by field_faults.test after the stamps: stage messages with a NaN in them, sent straight onto the
+// graph's own topics (a buggy or hostile node, a corrupted bag). Each stage that takes them drops them,
+// counts them and says why; the graph goes on tracking.
+TEST_F(LoopGraph, NaNStageMessagesAreDroppedAndSaid) {
+  const Drive& d = drive();
+  ASSERT_TRUE(d.problem.empty()) << d.problem;
+  const std::vector<Pair> pairs = readPairs(d.bag);
+  ASSERT_TRUE(graphConnected());
+  ros::NodeHandle nh;
+  ros::Publisher keyframe = nh.advertise<binloop::KeyFrame>("/binloop/keyframe", 10);
+  ros::Publisher refined = nh.advertise<binloop::KeyFrame>("/binloop/refined_keyframe", 10);
+  ros::Publisher update = nh.advertise<binloop::LocalMapUpdate>("/binloop/local_map_update", 10);
+  ros::Publisher correction = nh.advertise<binloop::Correction>("/binloop/correction", 10);
+  ASSERT_TRUE(waitFor(10, [&] {
+    return keyframe.getNumSubscribers() > 0 && refined.getNumSubscribers() > 1 &&
+           update.getNumSubscribers() > 1 && correction.getNumSubscribers() > 0;
+  })) << "the stages do not listen on their topics";
+  const double nan = std::numeric_limits<double>::quiet_NaN();
+  binloop::KeyFrame k;
+  k.header.frame_id = "slam";
+  k.id = k.state.id = 4000000;
+  k.camera.fx = k.camera.fy = 700;
+  k.camera.cx = 600;
+  k.camera.cy = 180;
+  k.camera.baseline_m = 0.5;
+  k.camera.width = 1241;
+  k.camera.height = 376;
+  k.scale_factor = 1.2f;
+  k.levels = 8;
+  binloop::KeyPoint kp;
+  kp.x = static_cast<float>(nan);  // the bad number
+  kp.y = 100;
+  kp.right_x = kp.depth = -1;
+  k.keypoints.push_back(kp);
+  k.descriptors.assign(32, 0);
+  k.state.point_ids = {0};
+  k.state.pose.orientation.w = 1;
+  keyframe.publish(k);
+  k.revision = 1;
+  refined.publish(k);
+  binloop::LocalMapUpdate u;
+  u.sequence = 1;
+  u.keyframe = k.id;
+  binloop::MapPoint p;
+  p.id = 4000001;
+  p.position.x = nan;
+  u.points.push_back(p);
+  update.publish(u);
+  binloop::Correction c;
+  c.sequence = 1;
+  binloop::KeyframeCorrection kc;
+  kc.id = k.id;
+  kc.before.orientation.w = nan;
+  kc.after.orientation.w = 1;
+  c.keyframes.push_back(kc);
+  correction.publish(c);
+
+  auto droppedBy = [&](const std::string& stage) {
+    for (const auto& [name, values] : seen_.diag) {
+      if (name.find(stage) == std::string::npos) continue;
+      auto dropped = values.find("input dropped");
+      return dropped != values.end() && std::stoi(dropped->second) > 0;
+    }
+    return false;
+  };
+  for (const char* stage : {"local mapping", "loop detector", "loop closing", "tracking"})
+    EXPECT_TRUE(waitFor(10, [&] { return droppedBy(stage); })) << stage << " did not report the bad message";
+  {
+    std::lock_guard<std::mutex> lk(seen_.m);
+    for (const auto& [name, values] : seen_.diag) {
+      auto why = values.find("last problem");
+      if (name.find("local mapping") != std::string::npos && why != values.end()) {
+        EXPECT_NE(why->second.find("dropped"), std::string::npos) << name << ": " << why->second;
+      }
+    }
+  }
+  EXPECT_FALSE(statistics().empty()) << "the graph does not answer /binloop/statistics";
+  // Tracking goes on: the drive's next pairs are posed.
+  size_t posed = 0;
+  for (size_t i = 55; i < 65 && i < pairs.size(); ++i) {
+    publishPair(pairs[i].left, pairs[i].right, pairs[i].left_info, pairs[i].right_info);
+    const double stamp = pairs[i].left.header.stamp.toSec();
+    posed += waitFor(2.0, [&] { return seen_.poses.count(stamp) > 0; });
+  }
+  EXPECT_GE(posed, 8u) << "tracking stopped after the bad stage messages";
 }
 
 // Run alone on a fresh graph by no_camera_info.test (the other .test files leave it out): pairs that come
