@@ -27,6 +27,7 @@
 #include "../test/support/random_descriptors.h"
 #include "../test/support/stereo_keypoint.h"
 #include "bench_record.h"
+#include "bench_stats.h"
 #include "binloop/loop/essential_graph.h"
 #include "binloop/loop/loop_verifier.h"
 #include "binloop/optim/pose_graph.h"
@@ -42,10 +43,7 @@ double ms(Clock::time_point t0) {
   return std::chrono::duration<double, std::milli>(Clock::now() - t0).count();
 }
 
-double median(std::vector<double> v) {
-  std::sort(v.begin(), v.end());
-  return v.empty() ? 0 : v[v.size() / 2];
-}
+using binloop::bench::median;
 
 struct Row {
   std::string name, goal, orbslam2;

@@ -18,6 +18,7 @@
 #include <thread>
 
 #include "bench_record.h"
+#include "bench_stats.h"
 #include "binloop/features/image_features.h"
 #include "binloop/place/hbow_recognizer.h"
 #include "binloop/place/model_training.h"
@@ -30,10 +31,7 @@ using Clock = std::chrono::steady_clock;
 
 namespace {
 
-double median(std::vector<double> v) {
-  std::sort(v.begin(), v.end());
-  return v[v.size() / 2];
-}
+using binloop::bench::median;
 
 Desc256 randomDesc(HashRng& rng) {
   Desc256 d;

@@ -7,6 +7,7 @@
 #include <opencv2/core/utility.hpp>
 #include <opencv2/features2d.hpp>
 
+#include "bench_stats.h"
 #include "binloop/io/kitti_sequence.h"
 #include "binloop/io/trajectory_io.h"
 #include "binloop/sim/stereo_renderer.h"
@@ -19,10 +20,7 @@ struct OrbStats {
   double keypoints = 0, spread = 0, temporal = 0, stereo = 0;
 };
 
-double median(std::vector<double> v) {
-  std::sort(v.begin(), v.end());
-  return v[v.size() / 2];
-}
+using binloop::bench::median;
 
 // Averages over consecutive stereo frames: ORB (2000, 8 levels) count; share of 16x6 grid cells with a
 // keypoint; share of keypoints with a ratio-test match in the next left frame; share with a ratio-test

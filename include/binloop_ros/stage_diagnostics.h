@@ -7,9 +7,23 @@
 #include <diagnostic_updater/diagnostic_updater.h>
 #include <ros/node_handle.h>
 
+#include <cstdint>
 #include <string>
 
+#include "binloop_ros/callback_guard.h"
+
 namespace binloop_ros {
+
+/// The lines every stage adds after its own, under the same names in all four: input it dropped and the
+/// last problem it saw, callbacks its guard caught, and the CPU time its callbacks took.
+inline void addCommonLines(diagnostic_updater::DiagnosticStatusWrapper& s, uint64_t dropped,
+                           const std::string& last_problem, const CallbackGuard& guard, double cpu_s) {
+  s.add("input dropped", dropped);
+  s.add("last problem", last_problem);
+  s.add("callbacks failed", guard.failures());
+  s.add("last callback failure", guard.lastFailure());
+  s.add("cpu s in callbacks", cpu_s);
+}
 
 class StageDiagnostics {
  public:

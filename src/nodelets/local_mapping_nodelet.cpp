@@ -232,15 +232,11 @@ void LocalMappingNodelet::diagnose(diagnostic_updater::DiagnosticStatusWrapper& 
   s.add("map points", mapper_->pointCount());
   s.add("corrections applied", corrections_);
   s.add("map sent again to a new subscriber", resends_);
-  s.add("input dropped", rejected_);
-  s.add("last problem", last_problem_);
-  s.add("callbacks failed", guard_.failures());
-  s.add("last callback failure", guard_.lastFailure());
   s.add("global BAs failed", mapper_ ? mapper_->globalBaStats().failed : 0);
   s.add("last global BA failure", mapper_ ? mapper_->globalBaStats().last_failure : std::string());
   s.add("last keyframe ms", last_ms_);
   s.add("last local BA ms", last_ba_ms_);
-  s.add("cpu s in callbacks", cpu_.seconds());
+  addCommonLines(s, rejected_, last_problem_, guard_, cpu_.seconds());
 }
 
 }  // namespace binloop_ros

@@ -288,11 +288,7 @@ void LoopClosingNodelet::diagnose(diagnostic_updater::DiagnosticStatusWrapper& s
   for (const auto& [status, n] : by_status_) s.add("loops " + status, n);
   s.add("last loop", last_loop_);
   s.add("candidates waiting", pending_.waiting());
-  s.add("input dropped", rejected_input_);
-  s.add("last problem", last_problem_);
-  s.add("callbacks failed", guard_.failures());
-  s.add("last callback failure", guard_.lastFailure());
-  s.add("cpu s in callbacks", cpu_.seconds());
+  addCommonLines(s, rejected_input_, last_problem_, guard_, cpu_.seconds());
 }
 
 }  // namespace binloop_ros

@@ -242,10 +242,7 @@ void LoopDetectorNodelet::diagnose(diagnostic_updater::DiagnosticStatusWrapper& 
   s.add("last status", last_status_);
   s.add("last detection ms", last_ms_);
   s.add("last switch rebuild ms", last_switch_ms_);
-  s.add("input dropped", rejected_);
-  s.add("callbacks failed", guard_.failures());
-  s.add("last callback failure", guard_.lastFailure());
-  s.add("cpu s in callbacks", cpu_.seconds());
+  addCommonLines(s, rejected_, last_problem_, guard_, cpu_.seconds());
 }
 
 }  // namespace binloop_ros

@@ -29,8 +29,7 @@ bool PairIntake::hold(const Pair& p, bool has_camera, size_t in_flight, std::str
   waiting_.push_back(p);
   if (!has_camera && waiting_.size() > 10) {
     waiting_.pop_front();
-    *dropped = std::string("no camera_info received on ") + (left_info_ ? in_.right_info : in_.left_info) +
-               " (or give ~camera)";
+    *dropped = noInfo();
   } else if (waiting_.size() > max_waiting_) {
     waiting_.pop_front();
     *dropped = "lock-step: " + std::to_string(max_waiting_) +

@@ -1,5 +1,7 @@
 #include "binloop_ros/tracking_status.h"
 
+#include "binloop_ros/stage_diagnostics.h"
+
 namespace binloop_ros {
 
 void TrackingStatus::report(diagnostic_updater::DiagnosticStatusWrapper& s,
@@ -24,10 +26,6 @@ void TrackingStatus::report(diagnostic_updater::DiagnosticStatusWrapper& s,
     s.summary(DiagnosticStatus::OK, "tracking");
   s.add("frames tracked", frames);
   s.add("frames lost", lost);
-  s.add("input dropped", rejected);
-  s.add("last problem", last_problem);
-  s.add("callbacks failed", guard.failures());
-  s.add("last callback failure", guard.lastFailure());
   s.add("clock restarts", clock_restarts);
   s.add("maps taken from local mapping", stage.mapsAdopted());
   s.add("seconds since the last pair", now.quiet_s);
@@ -38,7 +36,7 @@ void TrackingStatus::report(diagnostic_updater::DiagnosticStatusWrapper& s,
   s.add("loop corrections applied", stage.corrections());
   s.add("stereo stamp difference s", now.stamp_diff_s);
   s.add("processing ms (last frame)", last_latency_ms);
-  s.add("cpu s in callbacks", now.cpu_s);
+  addCommonLines(s, rejected, last_problem, guard, now.cpu_s);
 }
 
 }  // namespace binloop_ros

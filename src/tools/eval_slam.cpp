@@ -22,6 +22,7 @@
 #include "binloop/eval/trajectory_metrics.h"
 #include "binloop/eval/trajectory_plot.h"
 #include "binloop/io/data_error.h"
+#include "binloop/io/json_fields.h"
 #include "binloop/io/trajectory_io.h"
 #include "binloop/pipeline/loop_log.h"
 #include "binloop/place/place_recognizer.h"
@@ -42,29 +43,6 @@ std::vector<std::string> split(const std::string& s, const std::string& separato
     i = e;
   }
   return out;
-}
-
-// The value of "key" in run's summary.json (a number as written, or a string without its quotes); empty
-// when absent. The file is run's own flat output, so a key lookup is enough.
-std::string jsonValue(const std::string& text, const std::string& key) {
-  const std::string k = "\"" + key + "\"";
-  for (size_t at = text.find(k); at != std::string::npos; at = text.find(k, at + 1)) {
-    size_t i = text.find_first_not_of(" \t", at + k.size());
-    if (i == std::string::npos || text[i] != ':') continue;  // a string value equal to the key
-    i = text.find_first_not_of(" \t", i + 1);
-    if (i == std::string::npos) return "";
-    if (text[i] == '"') return text.substr(i + 1, text.find('"', i + 1) - i - 1);
-    const auto words = split(text.substr(i, text.find_first_of(",}\n", i) - i), " \t");
-    return words.empty() ? "" : words[0];
-  }
-  return "";
-}
-
-double jsonNumber(const std::string& text, const std::string& key) {
-  const std::string v = jsonValue(text, key);
-  char* end = nullptr;
-  const double d = std::strtod(v.c_str(), &end);
-  return v.empty() || *end ? NAN : d;
 }
 
 std::string fixed(double v, int decimals) { return std::isfinite(v) ? fixedDecimals(v, decimals) : "n/a"; }
@@ -122,12 +100,13 @@ void score(Row& row, const fs::path& dir, const std::vector<Pose3>& gt,
   const fs::path summary = dir / "summary.json";
   std::ifstream in(summary);
   if (!in) throw DataError(summary.string() + ": missing (run did not get as far as writing it)");
-  const std::string json((std::istreambuf_iterator<char>(in)), std::istreambuf_iterator<char>());
+  const JsonFields json = readJsonFields(
+      std::string((std::istreambuf_iterator<char>(in)), std::istreambuf_iterator<char>()), summary.string());
   // A KITTI trajectory's line i is frame start + i, but scoring takes it as frame i.
   if (jsonNumber(json, "start") > 0)
-    throw DataError(summary.string() + ": the run started at frame " + jsonValue(json, "start") +
+    throw DataError(summary.string() + ": the run started at frame " + json.at("start") +
                     ", so trajectory.kitti.txt's lines are not frame numbers; run from frame 0");
-  const std::string detector = jsonValue(json, "detector");
+  const std::string detector = json.count("detector") ? json.at("detector") : "";
   if (detector != row.model)
     throw DataError(summary.string() + ": a run with detector '" + detector + "', not '" + row.model + "'");
 

@@ -16,6 +16,7 @@
 #include <map>
 
 #include "binloop/io/trajectory_io.h"
+#include "binloop/pipeline/final_trajectory.h"
 #include "binloop/pipeline/loop_log.h"
 #include "binloop/util/cli_args.h"
 #include "binloop/util/json_object.h"
@@ -102,19 +103,11 @@ struct Recorder {
 
   void write(const fs::path& out) const {
     fs::create_directories(out);
-    std::vector<Pose3> poses;
-    Trajectory tum;
+    writeTrajectoryFiles(
+        (out / "trajectory").string(),
+        finalTrajectory(frames, [this](SlamKeyframeId id, Pose3* T) { return poseOf(id, T); }));
     size_t lost = 0;
-    for (const msg::TrackedFrame& f : frames) {
-      Pose3 T = f.T_w_c, T_ref;
-      if (f.state == msg::TrackingState::kLost) ++lost;
-      if (f.state != msg::TrackingState::kLost && f.reference != kNoId && poseOf(f.reference, &T_ref))
-        T = T_ref * f.T_ref_c;
-      poses.push_back(T);
-      tum.push_back({f.stamp_s, T});
-    }
-    writeKittiPoses((out / "trajectory.kitti.txt").string(), poses);
-    writeTumTrajectory((out / "trajectory.tum.txt").string(), tum);
+    for (const msg::TrackedFrame& f : frames) lost += f.state == msg::TrackingState::kLost;
     std::vector<Pose3> kf_poses;
     size_t live = 0;
     for (const auto& [id, k] : keyframes)

@@ -49,15 +49,12 @@ class CameraBag : public binloop::test::GraphTest {
     });
     ros::WallDuration(2.0).sleep();  // the last keyframes through the loop stages
     std::lock_guard<std::mutex> lk(seen_.m);
-    for (const auto& c : seen_.candidates) keyframeAt()[c.query_frame] = c.query;
+    for (const auto& c : seen_.candidates) keyframe_at_[c.query_frame] = c.query;
   }
 
-  /// The drive's keyframes, frame -> keyframe id, from the active model's queries (one per keyframe); kept
-  /// across the tests of the program, as the graph is.
-  static std::map<uint64_t, uint64_t>& keyframeAt() {
-    static std::map<uint64_t, uint64_t> at;
-    return at;
-  }
+  /// The drive's keyframes, frame -> keyframe id, from the active model's queries (one per keyframe); a
+  /// member of the suite, kept across its tests as the graph is.
+  inline static std::map<uint64_t, uint64_t> keyframe_at_;
 
   std::vector<std::string> shadow_models_;
   std::map<std::string, std::vector<binloop::LoopCandidates>> shadow_;  // by model, under seen_.m
@@ -111,12 +108,12 @@ TEST_F(CameraBag, ABagOfRawTopicsIsTrackedItsRevisitClosedAndEveryShadowModelPub
 
 // After the drive (or after playing it, when run alone): loops handed to loop closing from outside.
 TEST_F(CameraBag, AnExternalLoopIsVerifiedLikeADetectedOne) {
-  if (keyframeAt().empty()) playDrive();  // run alone
+  if (keyframe_at_.empty()) playDrive();  // run alone
   if (HasFatalFailure()) return;
   const Drive& d = drive();
   const size_t lap = static_cast<size_t>(d.route.size() / 1.25);
   ASSERT_TRUE(ros::service::waitForService("/binloop/add_external_loop", ros::Duration(10)));
-  const std::map<uint64_t, uint64_t>& keyframe_at = keyframeAt();
+  const std::map<uint64_t, uint64_t>& keyframe_at = keyframe_at_;
   ASSERT_GT(keyframe_at.size(), 20u);
   const auto [query_frame, query] =
       *keyframe_at.rbegin();  // the last keyframe, a quarter lap into the revisit

@@ -34,9 +34,21 @@ struct Observed {
   nav_msgs::Path corrected_path;
   std::vector<nav_msgs::Odometry> odometry;
   std::vector<geometry_msgs::PoseWithCovarianceStamped> poses_with_covariance;
-  std::map<std::string, std::string> tracking_diag;
   std::map<std::string, std::map<std::string, std::string>>
       diag;  // every stage's last values, by status name
+
+  // A value of the tracking stage's diagnostics (the status whose name says "tracking"), "" before it came;
+  // the caller holds `m`.
+  std::string tracking(const std::string& key) const {
+    for (const auto& [name, values] : diag)
+      if (name.find("tracking") != std::string::npos)
+        if (auto it = values.find(key); it != values.end()) return it->second;
+    return "";
+  }
+  long trackingCount(const std::string& key) const {
+    const std::string v = tracking(key);
+    return v.empty() ? 0 : std::stol(v);
+  }
 };
 
 class GraphTest : public ::testing::Test {
@@ -77,11 +89,8 @@ class GraphTest : public ::testing::Test {
     subs_.push_back(
         nh.subscribe<diagnostic_msgs::DiagnosticArray>("/diagnostics", 100, [this](const auto& m) {
           std::lock_guard<std::mutex> lk(seen_.m);
-          for (const auto& s : m->status) {
+          for (const auto& s : m->status)
             for (const auto& kv : s.values) seen_.diag[s.name][kv.key] = kv.value;
-            if (s.name.find("tracking") != std::string::npos)
-              for (const auto& kv : s.values) seen_.tracking_diag[kv.key] = kv.value;
-          }
         }));
   }
 

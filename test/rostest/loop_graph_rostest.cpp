@@ -283,7 +283,7 @@ TEST_F(LoopGraph, MalformedPairsAreReportedAndTrackingGoesOn) {
   std::string why = "none reported";
   {
     std::lock_guard<std::mutex> lk(seen_.m);
-    if (auto it = seen_.tracking_diag.find("last problem"); it != seen_.tracking_diag.end()) why = it->second;
+    if (const std::string v = seen_.tracking("last problem"); !v.empty()) why = v;
   }
   ASSERT_TRUE(tracked) << "a good pair was not tracked in three tries; tracking's last problem: " << why;
 
@@ -310,10 +310,8 @@ TEST_F(LoopGraph, MalformedPairsAreReportedAndTrackingGoesOn) {
   publishPair(good.left, good.right, good.left_info, good.right_info);
   EXPECT_TRUE(waitFor(5, [&] { return seen_.poses.count(t2.toSec()) > 0; }))
       << "tracking stopped after bad pairs";
-  EXPECT_TRUE(waitFor(5, [&] {
-    auto it = seen_.tracking_diag.find("input dropped");
-    return it != seen_.tracking_diag.end() && std::stoi(it->second) >= 4;
-  })) << "diagnostics do not count the dropped pairs";
+  EXPECT_TRUE(waitFor(5, [&] { return seen_.trackingCount("input dropped") >= 4; }))
+      << "diagnostics do not count the dropped pairs";
 }
 
 // Run alone on a fresh graph by field_faults.test: the stamps the field sends. One pair stamped at the end of
@@ -366,10 +364,7 @@ TEST_F(LoopGraph, BadStampsAndAReplayDoNotStopTheGraph) {
   EXPECT_TRUE(waitFor(10, [&] { return seen_.pose_stamps.size() >= before + 5; }))
       << "the replayed pairs were not tracked again";
   EXPECT_TRUE(waitFor(5, [&] {
-    auto dropped = seen_.tracking_diag.find("input dropped"),
-         restarts = seen_.tracking_diag.find("clock restarts");
-    return dropped != seen_.tracking_diag.end() && std::stoi(dropped->second) >= 4 &&
-           restarts != seen_.tracking_diag.end() && restarts->second == "1";
+    return seen_.trackingCount("input dropped") >= 4 && seen_.tracking("clock restarts") == "1";
   })) << "diagnostics do not count the dropped pairs and the clock restart";
   // Every stage is still there and answers.
   const auto stats = statistics();
@@ -479,9 +474,8 @@ TEST_F(LoopGraph, PairsWithoutCameraInfoAreReportedThenTrackingStarts) {
     ros::WallDuration(0.1).sleep();
   }
   EXPECT_TRUE(waitFor(10, [&] {
-    auto dropped = seen_.tracking_diag.find("input dropped"), why = seen_.tracking_diag.find("last problem");
-    return dropped != seen_.tracking_diag.end() && std::stoi(dropped->second) >= 1 &&
-           why != seen_.tracking_diag.end() && why->second.find("no camera_info") != std::string::npos;
+    return seen_.trackingCount("input dropped") >= 1 &&
+           seen_.tracking("last problem").find("no camera_info") != std::string::npos;
   })) << "pairs without camera_info were not reported";
   {
     std::lock_guard<std::mutex> lk(seen_.m);
@@ -621,7 +615,6 @@ TEST_F(LoopGraph, TrackingGoesOnWhenLocalMappingIsGone) {
   }
   EXPECT_GE(posed_after, (until - down_at) * 9 / 10) << "tracking stopped posing pairs without local mapping";
   EXPECT_TRUE(waitFor(5, [&] {
-    auto given_up = seen_.tracking_diag.find("keyframes given up (mapping did not answer)");
-    return given_up != seen_.tracking_diag.end() && std::stoi(given_up->second) > 0;
+    return seen_.trackingCount("keyframes given up (mapping did not answer)") > 0;
   })) << "tracking's diagnostics do not say that keyframes were given up";
 }

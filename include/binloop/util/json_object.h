@@ -2,7 +2,7 @@
 // The one JSON writer of the tools and benchmarks (summary.json, the benches' .json files): an object of
 // fields in the order they were added, strings escaped, numbers as a stream writes them with 6 significant
 // digits. Top-level objects go one field a line; nested ones on one line unless made with `multiline`.
-// What reads these files back (eval-slam, the tests) looks fields up by key.
+// binloop/io/json_fields.h reads them back (eval-slam).
 #include <cstdint>
 #include <string>
 #include <utility>

@@ -1,20 +1,7 @@
 // Local mapping culling keyframes whose points other keyframes see well enough (ORB-SLAM2's rule).
 #include "binloop/mapping/local_mapper.h"
 
-#include <algorithm>
-#include <atomic>
-#include <chrono>
-#include <cmath>
 #include <limits>
-#include <stdexcept>
-#include <thread>
-#include <unordered_set>
-
-#include "binloop/map/ancestors.h"
-#include "binloop/map/fused_points.h"
-#include "binloop/map/keypoint_geometry.h"
-#include "binloop/map/point_projection.h"
-#include "binloop/util/stopwatch.h"
 
 namespace binloop {
 

@@ -1,5 +1,4 @@
 // LocalMapper's save/load (local mapping's state file: the map it owns).
-#include <algorithm>
 
 #include "binloop/io/state_file.h"
 #include "binloop/mapping/local_mapper.h"
