@@ -31,6 +31,10 @@ struct StereoMatchParams {
   float sad_outlier_factor = 1.5f * 1.4f;  // reject SAD above this times the median SAD of the frame
   double close_depth_baselines = 40;       // isCloseDepth: depth below this many baselines
   bool centre_pixel_offset = false;        // true: SAD windows offset by their centre pixel (ORB-SLAM2)
+  // Not the matcher's: whether the estimators (tracking's pose optimisation, local BA) take a far match's
+  // disparity as a measurement (true, ORB-SLAM2's way) or only its bearing (measuredRightX,
+  // map/keypoint_geometry.h; better scale on real frames, worse recovery after long gaps: docs/decisions.md).
+  bool far_disparity = true;
   enum class SubPixelFit { kParabola, kEquiangular };
   SubPixelFit fit = SubPixelFit::kParabola;  // through the best SAD and its two neighbours
 

@@ -57,6 +57,7 @@ struct LocalMapperParams {
   bool global_ba_in_background = false;
   float redundant_ratio = 0.9f;  // a keyframe whose points are this often seen by >= 3 others goes
   float close_depth_baselines = 40;
+  bool far_disparity = true;  // BA takes far keypoints' disparity as a measurement (stereo.far_disparity)
 };
 
 class LocalMapper {

@@ -2,19 +2,10 @@
 // its own thread over a copy of the problem and merged when done.
 #include "binloop/mapping/local_mapper.h"
 
-#include <algorithm>
-#include <atomic>
 #include <chrono>
-#include <cmath>
-#include <limits>
-#include <stdexcept>
 #include <thread>
-#include <unordered_set>
 
-#include "binloop/map/ancestors.h"
-#include "binloop/map/fused_points.h"
 #include "binloop/map/keypoint_geometry.h"
-#include "binloop/map/point_projection.h"
 #include "binloop/util/stopwatch.h"
 #include "global_ba_job.h"
 
@@ -51,7 +42,11 @@ LocalMapper::BaSetup LocalMapper::makeBaProblem(const std::vector<SlamKeyframeId
       const KF& o = kfs_.at(k);
       const msg::KeyPoint& kp = o.keypoints[idx];
       b.problem.observations.push_back(
-          {kf_index.at(k), pt_index.at(bp.id), {kp.x, kp.y}, kp.right_x, scales_.inv_sigma2[kp.octave]});
+          {kf_index.at(k),
+           pt_index.at(bp.id),
+           {kp.x, kp.y},
+           measuredRightX(kp, camera_, p_.close_depth_baselines, p_.far_disparity),
+           scales_.inv_sigma2[kp.octave]});
       b.obs_of.emplace_back(bp.id, k);
     }
   return b;

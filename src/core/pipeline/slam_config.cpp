@@ -42,6 +42,7 @@ Sections trackingSettings(TrackerParams& t) {
         {"sad_outlier_factor", {S::kFloat, &t.stereo.sad_outlier_factor, 0.01}},
         {"centre_pixel_offset", {S::kBool, &t.stereo.centre_pixel_offset, 0}},
         {"equiangular_fit", {S::kSubPixelFit, &t.stereo.fit, 0}},
+        {"far_disparity", {S::kBool, &t.stereo.far_disparity, 0}},
         {"close_depth_baselines", {S::kDouble, &t.stereo.close_depth_baselines, 1}}}},
       {"tracking",
        {{"init_min_stereo", {S::kInt, &t.init_min_stereo, 10}},
@@ -274,6 +275,7 @@ SlamConfig loadSlamConfig(const std::string& path) {
   if (c.tracker.orb.min_fast > c.tracker.orb.ini_fast)
     throw ConfigError(path + ": orb.min_fast must not exceed orb.ini_fast");
   c.mapper.close_depth_baselines = static_cast<float>(c.tracker.stereo.close_depth_baselines);
+  c.mapper.far_disparity = c.tracker.stereo.far_disparity;
   return c;
 }
 
