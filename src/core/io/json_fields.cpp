@@ -61,27 +61,28 @@ class Reader {
       char c = s_[i_++];
       if (c == '\\') {
         if (i_ >= s_.size()) break;
-        switch (c = s_[i_++]) {
-          case 'n': c = '\n'; break;
-          case 't': c = '\t'; break;
-          case 'r': c = '\r'; break;
-          case 'b': c = '\b'; break;
-          case 'f': c = '\f'; break;
-          case 'u': {
-            if (i_ + 4 > s_.size()) fail("four hex digits after \\u");
-            const long code = std::strtol(s_.substr(i_, 4).c_str(), nullptr, 16);
-            i_ += 4;
-            utf8(code, &out);
-            continue;
-          }
-          default: break;  // '"', '\\', '/' stand for themselves
+        c = s_[i_++];
+        if (c == 'u') {
+          if (i_ + 4 > s_.size()) fail("four hex digits after \\u");
+          const long code = std::strtol(s_.substr(i_, 4).c_str(), nullptr, 16);
+          i_ += 4;
+          utf8(code, &out);
+          continue;
         }
+        c = unescaped(c);
       }
       out += c;
     }
     if (i_ >= s_.size()) fail("a closing quote");
     ++i_;
     return out;
+  }
+
+  // '"', '\\' and '/' stand for themselves.
+  static char unescaped(char c) {
+    static const std::string from = "ntrbf", to = "\n\t\r\b\f";
+    const std::size_t at = from.find(c);
+    return at == std::string::npos ? c : to[at];
   }
 
   static void utf8(long code, std::string* out) {

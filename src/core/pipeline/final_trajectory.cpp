@@ -4,7 +4,8 @@
 
 namespace binloop {
 
-Trajectory finalTrajectory(const std::vector<msg::TrackedFrame>& frames, const KeyframePoseFn& keyframe_pose) {
+Trajectory finalTrajectory(const std::vector<msg::TrackedFrame>& frames,
+                           const KeyframePoseFn& keyframe_pose) {
   Trajectory out;
   out.reserve(frames.size());
   for (const msg::TrackedFrame& f : frames) {

@@ -38,7 +38,9 @@ TEST(JsonFields, ReadsBackWhatJsonObjectWrites) {
   JsonObject tricky;
   tricky.add("a", "detector").add("detector", "none");
   EXPECT_EQ(readJsonFields(tricky.str(), "x").at("detector"), "none");
-  EXPECT_EQ(readJsonFields("{\"u\": \"\\u00e9\\u0041\"}", "x").at("u"), "\xc3\xa9" "A");
+  EXPECT_EQ(readJsonFields("{\"u\": \"\\u00e9\\u0041\"}", "x").at("u"),
+            "\xc3\xa9"
+            "A");
   EXPECT_TRUE(readJsonFields(" { } ", "x").empty());
 }
 
