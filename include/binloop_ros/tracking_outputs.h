@@ -13,6 +13,7 @@
 #include "binloop/messages/keyframe.h"
 #include "binloop/messages/tracked_frame.h"
 #include "binloop/tracking/frame.h"
+#include "binloop/tracking/tracking_stage.h"
 #include "binloop_ros/frame_publisher.h"
 
 namespace binloop_ros {
@@ -27,6 +28,8 @@ class TrackingOutputs {
   bool keyframesHeard() const { return keyframe_pub_.getNumSubscribers() > 0; }
 
   void keyframe(const binloop::msg::KeyFrame& k);
+  /// The keyframes a restarted local mapping lacks (TrackingStage::takeResend), once it listens; says so.
+  void resendKeyframes(binloop::TrackingStage& stage);
   /// The tracked frame, and for a tracked one its pose, odometry, tf and live path (a lost one keeps
   /// map -> odom alive). `corrections`: the loop corrections applied so far (when it moved since the last
   /// pose, the slam-frame pose may jump and odometry must not). Returns tf's problem, "" if none.

@@ -7,9 +7,11 @@
 #include <sensor_msgs/point_cloud2_iterator.h>
 #include <pluginlib/class_list_macros.hpp>
 
+#include <cstdlib>
 #include <memory>
 
 #include "binloop/mapping/local_mapper.h"
+#include "binloop/mapping/map_autosave.h"
 #include "binloop_ros/callback_guard.h"
 #include "binloop_ros/cpu_meter.h"
 #include "binloop_ros/node_params.h"
@@ -32,11 +34,14 @@ class LocalMappingNodelet : public nodelet::Nodelet {
   StageServiceHandlers serviceHandlers();
   void publishMap(const ros::Time& stamp);
   void problem(const std::string& what);
+  void setUpAutosave(ros::NodeHandle& pnh);
+  void autosave(bool after_keyframe);
   void diagnose(diagnostic_updater::DiagnosticStatusWrapper& s);
 
   binloop::LocalMapperParams params_;
   std::unique_ptr<binloop::LocalMapper> mapper_;
   std::unique_ptr<StageServices> services_;
+  std::unique_ptr<binloop::MapAutosave> autosave_;
   CallbackGuard guard_{"LocalMapping"};
   std::string counts() const;
   std::string slam_frame_;
@@ -55,10 +60,11 @@ void LocalMappingNodelet::onInit() {
   ros::NodeHandle& nh = getNodeHandle();
   ros::NodeHandle& pnh = getPrivateNodeHandle();
   try {
-    requireKnownParams(pnh, {"config", "slam_frame", "cloud_every"});
+    requireKnownParams(
+        pnh, {"config", "slam_frame", "cloud_every", "autosave_every", "autosave_path", "autosave_session"});
     params_ = slamConfigFrom(pnh).mapper;
     params_.global_ba_in_background = true;  // mapping goes on while it runs (with global_ba_after_loop)
-    mapper_ = std::make_unique<binloop::LocalMapper>(params_);
+    setUpAutosave(pnh);
   } catch (const std::exception& e) {
     NODELET_FATAL("binloop/LocalMapping: %s", e.what());
     throw;
@@ -91,6 +97,36 @@ void LocalMappingNodelet::onInit() {
   services_ = std::make_unique<StageServices>(pnh, "local_mapping", serviceHandlers());
 }
 
+// A respawned process resumes its graph's autosave (mapping/map_autosave.h), before anyone subscribes: the
+// map then goes to every stage that connects, and tracking sends the keyframes made after the save again.
+void LocalMappingNodelet::setUpAutosave(ros::NodeHandle& pnh) {
+  const char* home = std::getenv("ROS_HOME");
+  const std::string ros_home =
+      home ? home : std::string(std::getenv("HOME") ? std::getenv("HOME") : ".") + "/.ros";
+  const int every = static_cast<int>(numberParam(pnh, "autosave_every", 0));
+  autosave_ = std::make_unique<binloop::MapAutosave>(
+      stringParam(pnh, "autosave_path", ros_home + "/binloop/local_mapping.autosave"), every,
+      stringParam(pnh, "autosave_session", ""));
+  std::string note;
+  mapper_ = autosave_->resume(params_, &note);
+  if (!mapper_) mapper_ = std::make_unique<binloop::LocalMapper>(params_);
+  if (autosave_->on())
+    NODELET_INFO("binloop/LocalMapping: autosave every %d keyframes: %s", every, note.c_str());
+}
+
+// Saves the map for a respawn (every N keyframes, or now: after a loop, a global BA, a load or a reset); a
+// failure is said and mapping goes on.
+void LocalMappingNodelet::autosave(bool after_keyframe) {
+  try {
+    if (after_keyframe)
+      autosave_->afterKeyframe(*mapper_);
+    else
+      autosave_->save(*mapper_);
+  } catch (const std::exception& e) {
+    problem(std::string("autosave failed: ") + e.what());
+  }
+}
+
 // The stage's part in the graph-wide map services (stage_services.h).
 StageServiceHandlers LocalMappingNodelet::serviceHandlers() {
   StageServiceHandlers h;
@@ -104,12 +140,14 @@ StageServiceHandlers LocalMappingNodelet::serviceHandlers() {
     return PreparedLoad{[this, fresh] {
       mapper_ = std::move(*fresh);
       publishMap(ros::Time::now());
+      autosave(false);
       return counts();
     }};
   };
   h.reset = [this] {
     mapper_ = std::make_unique<binloop::LocalMapper>(params_);
     publishMap(ros::Time::now());
+    autosave(false);
   };
   h.statistics = [this] {
     return StageStatistics{{"keyframes", std::to_string(mapper_->keyframeCount())},
@@ -149,6 +187,7 @@ void LocalMappingNodelet::mergeGlobalBa() {
   header.frame_id = slam_frame_;
   update_pub_.publish(boost::make_shared<binloop::LocalMapUpdate>(toRos(*u, header)));
   publishMap(header.stamp);
+  autosave(false);
   NODELET_INFO("binloop/LocalMapping: global BA merged (%.0f ms over %d keyframes, %d added meanwhile)",
                mapper_->globalBaStats().last_ms, mapper_->globalBaStats().last_keyframes,
                mapper_->globalBaStats().last_added_meanwhile);
@@ -172,6 +211,7 @@ void LocalMappingNodelet::onKeyframe(const binloop::KeyFrameConstPtr& m) {
   refined_pub_.publish(boost::make_shared<binloop::KeyFrame>(toRos(*out.refined, slam_frame_)));
   update_pub_.publish(boost::make_shared<binloop::LocalMapUpdate>(toRos(*out.update, header)));
   if (keyframes_ % cloud_every_ == 0) publishMap(m->header.stamp);
+  autosave(true);
 }
 
 void LocalMappingNodelet::resendMap(const ros::SingleSubscriberPublisher& to) {
@@ -197,6 +237,7 @@ void LocalMappingNodelet::onCorrection(const binloop::CorrectionConstPtr& m) {
   header.frame_id = slam_frame_;
   update_pub_.publish(boost::make_shared<binloop::LocalMapUpdate>(toRos(*u, header)));
   publishMap(m->header.stamp);
+  autosave(false);
 }
 
 void LocalMappingNodelet::publishMap(const ros::Time& stamp) {
@@ -236,6 +277,9 @@ void LocalMappingNodelet::diagnose(diagnostic_updater::DiagnosticStatusWrapper& 
   s.add("last global BA failure", mapper_ ? mapper_->globalBaStats().last_failure : std::string());
   s.add("last keyframe ms", last_ms_);
   s.add("last local BA ms", last_ba_ms_);
+  s.add("autosaves", autosave_ ? autosave_->saves() : 0);
+  s.add("last autosave ms", autosave_ ? autosave_->lastMs() : 0.0);
+  s.add("last autosave MB", autosave_ ? autosave_->lastBytes() / 1e6 : 0.0);
   addCommonLines(s, rejected_, last_problem_, guard_, cpu_.seconds());
 }
 

@@ -48,6 +48,7 @@ void TrackingNodelet::onInit() {
 // Local mapping's map taken by this (restarted) tracking.
 void TrackingNodelet::adopted(binloop::TrackingStage::Adopted how) {
   using Adopted = binloop::TrackingStage::Adopted;
+  if (how == Adopted::kBehind) return out_->resendKeyframes(*stage_);
   if (how == Adopted::kKept || how == Adopted::kIgnored) return;
   if (how == Adopted::kTakenAfterStartOver) startedOver();
   NODELET_INFO(
@@ -107,6 +108,7 @@ std::string TrackingNodelet::check(const sensor_msgs::Image& left, const sensor_
 
 void TrackingNodelet::onImages(const ImageConstPtr& left, const ImageConstPtr& right) {
   CpuMeter::Scope cpu(cpu_);
+  out_->resendKeyframes(*stage_);  // to a local mapping that was not listening yet
   last_pair_wall_ = ros::WallTime::now();
   const std::string given_up =
       stage_->inFlight().giveUpIfStale(last_pair_wall_.toSec(), out_->keyframesHeard());

@@ -14,7 +14,7 @@ namespace binloop_ros {
 
 TrackingOutputs::TrackingOutputs(ros::NodeHandle& nh, ros::NodeHandle& pnh, size_t path_max_poses)
     : frames_(std::make_unique<FramePublisher>(nh, pnh)), path_max_poses_(path_max_poses) {
-  keyframe_pub_ = nh.advertise<binloop::KeyFrame>("keyframe", 10);
+  keyframe_pub_ = nh.advertise<binloop::KeyFrame>("keyframe", 200);  // room for a resend (TrackingStage)
   frame_pub_ = nh.advertise<binloop::TrackedFrame>("tracked_frame", 100);
   pose_pub_ = nh.advertise<geometry_msgs::PoseStamped>("pose", 10);
   path_pub_ = nh.advertise<nav_msgs::Path>("live_path", 1, true);
@@ -23,6 +23,17 @@ TrackingOutputs::TrackingOutputs(ros::NodeHandle& nh, ros::NodeHandle& pnh, size
 
 void TrackingOutputs::keyframe(const binloop::msg::KeyFrame& k) {
   keyframe_pub_.publish(boost::make_shared<binloop::KeyFrame>(toRos(k, slamFrame())));
+}
+
+void TrackingOutputs::resendKeyframes(binloop::TrackingStage& stage) {
+  if (!stage.resendPending() || !keyframesHeard()) return;
+  uint64_t lost = 0;
+  const std::vector<binloop::msg::KeyFramePtr> again = stage.takeResend(ros::WallTime::now().toSec(), &lost);
+  for (const binloop::msg::KeyFramePtr& k : again) keyframe(*k);
+  ROS_WARN(
+      "binloop/Tracking: local mapping restarted without the last %zu keyframes: sent again (%lu older "
+      "ones no longer kept)",
+      again.size(), static_cast<unsigned long>(lost));
 }
 
 std::string TrackingOutputs::frame(const binloop::msg::TrackedFrame& f, const std_msgs::Header& header,

@@ -32,6 +32,8 @@ void TrackingStatus::report(diagnostic_updater::DiagnosticStatusWrapper& s,
   s.add("keyframes sent", keyframes_sent);
   s.add("mapping queue", in_flight.count());
   s.add("keyframes given up (mapping did not answer)", in_flight.givenUp());
+  s.add("keyframes sent again (mapping restarted)", stage.keyframesResent());
+  s.add("keyframes mapping lost for good", stage.keyframesNotResent());
   s.add("pairs waiting", now.waiting);
   s.add("loop corrections applied", stage.corrections());
   s.add("stereo stamp difference s", now.stamp_diff_s);

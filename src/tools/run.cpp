@@ -24,6 +24,7 @@
 #include "binloop/util/package_paths.h"
 #include "binloop/util/percentile.h"
 #include "binloop/util/progress_bar.h"
+#include "binloop/util/stopwatch.h"
 
 namespace fs = std::filesystem;
 using namespace binloop;
@@ -352,8 +353,10 @@ int main(int argc, char** argv) {
     if (args.has("load-map")) slam.loadMap(args.str("load-map"));
     const Played played = play(slam, seq, start, end, rate);
     if (args.has("save-map")) {
+      const auto t0 = std::chrono::steady_clock::now();
       slam.saveMap(args.str("save-map"));
-      std::cerr << "run: map saved in " << args.str("save-map") << "\n";
+      std::cerr << "run: map saved in " << args.str("save-map") << " (" << std::fixed << std::setprecision(0)
+                << msSince(t0) << " ms)\n";
     }
 
     const LocalMapper& mapper = slam.mapper();

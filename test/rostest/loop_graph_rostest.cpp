@@ -490,10 +490,11 @@ TEST_F(LoopGraph, PairsWithoutCameraInfoAreReportedThenTrackingStarts) {
 int main(int argc, char** argv) { return binloop::test::runRostest(argc, argv, "loop_graph_rostest"); }
 
 // Run alone by stage_restarts.test (the split graph with respawn on; the other .test files leave it out):
-// each stage's process but local mapping's is killed during the drive and comes back; local mapping sends it
-// the map again (the loop stages every keyframe, tracking the whole map to relocalise in), so tracking goes
-// on in the same map, and the revisit at the end is still closed against keyframes made before the restarts
-// and applied by mapping (the correction sequences agree again).
+// each stage's process is killed during the drive and comes back. Local mapping resumes its autosave and
+// tracking sends it the keyframes made after it again; to the others local mapping sends the map again (the
+// loop stages every keyframe, tracking the whole map to relocalise in), so tracking goes on in the same
+// map, and the revisit at the end is still closed against keyframes made before the restarts and applied
+// by mapping (the correction sequences agree again).
 TEST_F(LoopGraph, RestartedStagesGetTheMapAgainAndTheRevisitIsClosed) {
   const Drive& d = drive();
   ASSERT_TRUE(d.problem.empty()) << d.problem;
@@ -508,12 +509,25 @@ TEST_F(LoopGraph, RestartedStagesGetTheMapAgainAndTheRevisitIsClosed) {
     bool back = false;
     std::string holds;  // what the restarted stage holds once back
   };
-  std::vector<Restart> restarts = {
-      {40, "loop_closing"}, {lap / 2, "loop_detector"}, {lap * 3 / 4, "tracking"}};
+  std::vector<Restart> restarts = {{40, "loop_closing"},
+                                   {lap / 4, "loop_detector"},
+                                   {lap / 2, "local_mapping"},
+                                   {lap * 3 / 4, "tracking"}};
   size_t tracked_again_at = 0;  // the first pair with a pose after tracking's restart
+  std::string mapping_before, resent,
+      lost_for_good;  // local mapping's keyframes when killed; tracking's counts
   for (size_t i = 0; i < pairs.size(); ++i) {
+    if (i == lap / 2 + 20) {  // 20 pairs after local mapping's restart; before tracking's clears its counts
+      ASSERT_TRUE(
+          waitFor(5, [&] { return !seen_.tracking("keyframes sent again (mapping restarted)").empty(); }));
+      resent = seen_.tracking("keyframes sent again (mapping restarted)");
+      lost_for_good = seen_.tracking("keyframes mapping lost for good");
+      std::cout << "local mapping held " << mapping_before << " keyframes when killed; tracking sent "
+                << resent << " again (" << lost_for_good << " no longer kept)\n";
+    }
     for (Restart& r : restarts) {
       if (i != r.at) continue;
+      if (std::string(r.stage) == "local_mapping") mapping_before = statistics()["local_mapping/keyframes"];
       const std::string node = std::string("/binloop/") + r.stage;
       ASSERT_EQ(binloop::test::runCommand("rosnode kill " + node).code, 0) << "could not kill " << node;
       const ros::WallTime until = ros::WallTime::now() + ros::WallDuration(60);
@@ -521,7 +535,12 @@ TEST_F(LoopGraph, RestartedStagesGetTheMapAgainAndTheRevisitIsClosed) {
       while (!r.back && ros::WallTime::now() < until) {
         const auto s = statistics();
         auto mine = s.find(std::string(r.stage) + "/keyframes"), mapping = s.find("local_mapping/keyframes");
-        if (std::string(r.stage) == "tracking") {
+        if (std::string(r.stage) == "local_mapping") {
+          // Back when it answers with the map of its autosave (an empty one would hold none).
+          r.back = mapping != s.end() && std::stoi(mapping->second) > 0;
+          r.holds =
+              r.back ? mapping->second + " keyframes (its autosave, then those tracking sent again)" : "";
+        } else if (std::string(r.stage) == "tracking") {
           // Back when it takes pairs again (its map comes with its camera, at the next pair).
           r.back =
               s.count("tracking/frames") && left_.getNumSubscribers() > 0 && right_.getNumSubscribers() > 0;
@@ -577,6 +596,9 @@ TEST_F(LoopGraph, RestartedStagesGetTheMapAgainAndTheRevisitIsClosed) {
       EXPECT_LT((d.route[q->second].translation() - d.route[c.match_frame].translation()).norm(), 10);
     }
   }
+  // Nothing local mapping lacked after its restart was lost: tracking sent those keyframes again.
+  EXPECT_GT(std::stol(resent.empty() ? "0" : resent), 0) << "tracking sent no keyframe again";
+  EXPECT_EQ(lost_for_good, "0");
   // Mapping applied it: its correction count follows loop closing's.
   bool applied = false;
   for (int tries = 0; tries < 20 && !applied; ++tries, ros::WallDuration(0.5).sleep()) {

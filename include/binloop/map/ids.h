@@ -24,6 +24,10 @@ class IdCounter {
   uint64_t issued() const { return count_; }
   /// Continues after `issued` ids (a loaded map), so that no id is issued twice.
   void restore(uint64_t issued) { count_ = issued; }
+  /// Jumps to the next multiple of 2^32 (a new session of this issuer): a stage restored from a state file
+  /// older than the ids it had issued before it stopped (an autosave) issues none of those again, though it
+  /// cannot know how many there were. 2^24 sessions of 2^32 ids each.
+  void startSession() { count_ = ((count_ >> 32) + 1) << 32; }
 
  private:
   uint64_t base_;

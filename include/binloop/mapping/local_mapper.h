@@ -124,6 +124,9 @@ class LocalMapper {
   void save(StateWriter& w) const;
   /// Into a newly made mapper. Throws DataError for a broken file.
   void load(StateReader& r);
+  /// After load() of a state older than what this mapper's predecessor had done (its process restarted from
+  /// an autosave): the point ids it issued after that state are unknown, so new ones start a new session.
+  void resumeAfterRestart() { point_ids_.startSession(); }
 
  private:
   struct KF {

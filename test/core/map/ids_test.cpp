@@ -72,5 +72,20 @@ TEST(Ids, SameCounterFromDifferentIssuersDiffers) {
   EXPECT_NE(issuerOf(x), issuerOf(y));
 }
 
+// A stage restored from an older state (an autosave) does not know how many ids its predecessor issued after
+// it: a new session starts beyond every id of the old one, at a multiple of 2^32.
+TEST(Ids, ANewSessionIssuesNoIdOfThePreviousOne) {
+  IdCounter before(IdIssuer::kLocalMapping);
+  for (int i = 0; i < 1000; ++i) before.next();
+  IdCounter restored(IdIssuer::kLocalMapping);
+  restored.restore(400);  // the autosave's count
+  restored.startSession();
+  const uint64_t first = restored.next();
+  EXPECT_EQ(counterOf(first), (uint64_t{1} << 32) + 1);
+  EXPECT_GT(first, before.next());
+  restored.startSession();  // and again after a second restart
+  EXPECT_EQ(counterOf(restored.next()), (uint64_t{2} << 32) + 1);
+}
+
 }  // namespace
 }  // namespace binloop

@@ -1,4 +1,6 @@
 #include "binloop/mapping/local_mapper.h"
+#include "binloop/io/data_error.h"
+#include "binloop/mapping/map_autosave.h"
 
 #include "support/test_support.h"
 
@@ -207,6 +209,50 @@ TEST_F(LocalMapperTest, TheMapsKeyframesAreSentAgainInTheOrderTheyCame) {
     EXPECT_TRUE(again[i]->state.T_w_c.isApprox(T));
     EXPECT_EQ(again[i]->camera.fx, sent[i].camera.fx);
   }
+}
+
+// The autosave a respawned local mapping resumes (mapping/map_autosave.h): saved every second keyframe,
+// resumed by the same session only, refused with a reason for another session's file or a broken one.
+TEST_F(LocalMapperTest, AnAutosaveIsResumedByItsOwnSessionOnly) {
+  for (int i = 0; i < 200; ++i) addPoint({rng.uniform(-6, 6), rng.uniform(-2, 1), rng.uniform(8, 18)});
+  test::TempDir dir;
+  const std::string path = dir.path() + "/binloop/local_mapping.autosave";  // the folder is made
+  LocalMapperParams p;
+  p.cull_keyframes = false;
+  LocalMapper m(p);
+  MapAutosave autosave(path, 2, "graph_1");
+  std::vector<bool> saved;
+  for (const auto& k : {keyframe(0, range(0, 100), true), keyframe(0.5, range(50, 150), true),
+                        keyframe(1.0, range(100, 200), true)}) {
+    m.process(k);
+    saved.push_back(autosave.afterKeyframe(m));
+  }
+  EXPECT_EQ(saved, (std::vector<bool>{false, true, false}));
+  autosave.wait();  // written on another thread
+  EXPECT_EQ(autosave.saves(), 1u);
+  EXPECT_GT(autosave.lastBytes(), 0u);
+  EXPECT_FALSE(autosave.save(m)) << "a save within 20 times the last one's duration is skipped";
+
+  std::string note;
+  const std::unique_ptr<LocalMapper> back = MapAutosave(path, 2, "graph_1").resume(p, &note);
+  ASSERT_NE(back, nullptr) << note;
+  EXPECT_EQ(back->keyframeCount(), 2u) << "the state of the second keyframe";
+  EXPECT_NE(note.find("resumed 2 keyframes"), std::string::npos) << note;
+
+  EXPECT_EQ(MapAutosave(path, 2, "graph_2").resume(p, &note), nullptr);
+  EXPECT_NE(note.find("another graph's"), std::string::npos) << note;
+  EXPECT_EQ(MapAutosave(path, 2, "").resume(p, &note), nullptr);
+  EXPECT_EQ(MapAutosave(path, 0, "graph_1").resume(p, &note), nullptr) << "autosave off";
+  test::writeText(path, "BLSTATE1 and then nothing");
+  EXPECT_EQ(MapAutosave(path, 2, "graph_1").resume(p, &note), nullptr);
+  EXPECT_NE(note.find("could not be read"), std::string::npos) << note;
+  EXPECT_EQ(MapAutosave(dir.path() + "/none", 2, "graph_1").resume(p, &note), nullptr);
+  EXPECT_NE(note.find("no autosave"), std::string::npos) << note;
+
+  test::writeText(dir.path() + "/a_file", "");
+  MapAutosave nowhere(dir.path() + "/a_file/local_mapping.autosave", 1, "graph_1");
+  EXPECT_TRUE(nowhere.save(m));
+  EXPECT_THROW(nowhere.wait(), DataError) << "a write that failed is said";
 }
 
 // A loop correction names k1 (unchanged) and k2 (moved 1 m sideways and turned 2 degrees); k3, which loop

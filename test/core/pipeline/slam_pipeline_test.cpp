@@ -12,7 +12,9 @@
 #include <opencv2/imgproc.hpp>
 #include "binloop/eval/trajectory_metrics.h"
 #include "binloop/io/kitti_sequence.h"
+#include "binloop/io/state_file.h"
 #include "binloop/io/trajectory_io.h"
+#include "binloop/mapping/local_mapper.h"
 #include "binloop/pipeline/slam_pipeline.h"
 #include "binloop/place/hbow_recognizer.h"
 #include "binloop/sim/stereo_renderer.h"
@@ -434,8 +436,11 @@ TEST(TrackingStage, TakesLocalMappingsMapWhenTheCameraIsKnownAndCountsKeyframesI
   EXPECT_EQ(stage.inFlight().count(), 1);
   stage.apply(msg::LocalMapUpdate{}, 200);  // mapping's answer
   EXPECT_EQ(stage.inFlight().count(), 0);
-  EXPECT_EQ(stage.adopt(whole), TrackingStage::Adopted::kIgnored)
-      << "a tracker on the map does not start over";
+  const Tracker* running = stage.tracker();
+  EXPECT_EQ(stage.adopt(whole), TrackingStage::Adopted::kBehind)
+      << "a tracker on the map does not start over; the map lacks the keyframe it made";
+  EXPECT_EQ(stage.tracker(), running);
+  EXPECT_EQ(stage.takeResend(200).size(), 1u);
   stage.reset();
   EXPECT_EQ(stage.tracker(), nullptr);
 
@@ -447,6 +452,58 @@ TEST(TrackingStage, TakesLocalMappingsMapWhenTheCameraIsKnownAndCountsKeyframesI
   EXPECT_EQ(fixed.tracker()->map().keyframeCount(), whole->keyframes.size());
   fixed.reset();
   EXPECT_NE(fixed.tracker(), nullptr);
+}
+
+// Local mapping's process restarted from its autosave (the split launch with respawn): the map it holds
+// lacks the keyframes tracking sent after that save. The running tracker does not take that map, but sends
+// those keyframes again; the restarted mapper then holds every keyframe tracking made, issues point ids
+// that collide with none its predecessor issued, and tracking goes on in it.
+TEST(TrackingStage, ALocalMappingRestartedFromAnAutosaveGetsTheKeyframesItLacksAgain) {
+  const RenderedStretch* s = renderedStretch(200, true);
+  if (!s) GTEST_SKIP() << "needs " << test::sharedData("kitti/poses/06.txt");
+  test::TempDir dir;
+  const std::string autosave = dir.path() + "/local_mapping.autosave";
+  LocalMapper live{LocalMapperParams{}};
+  TrackingStage stage({}, s->cam, 5, 100);
+  auto drive = [&](LocalMapper& mapper, int from, int to) {
+    for (int i = from; i < to; ++i) {
+      const Tracker::Output out = stage.track(s->frames[i], i);
+      ASSERT_EQ(out.frame.state, msg::TrackingState::kOk) << "frame " << i;
+      if (out.keyframe) stage.apply(*mapper.process(*out.keyframe).update, i);
+    }
+  };
+  drive(live, 0, 60);
+  saveStateFile(live, autosave, "local_mapping", 7);
+  drive(live, 60, 120);
+  const uint64_t made = live.wholeMap()->tracking_keyframe_ids;
+
+  LocalMapper restarted{LocalMapperParams{}};
+  loadStateFile(restarted, autosave, "local_mapping");
+  restarted.resumeAfterRestart();
+  const msg::LocalMapUpdatePtr behind = restarted.wholeMap();
+  ASSERT_LT(behind->tracking_keyframe_ids, made) << "the autosave should lack the last keyframes";
+  ASSERT_EQ(stage.adopt(behind), TrackingStage::Adopted::kBehind);
+  uint64_t missing = 99;
+  const std::vector<msg::KeyFramePtr> again = stage.takeResend(120, &missing);
+  EXPECT_EQ(missing, 0u);
+  EXPECT_EQ(again.size(), made - behind->tracking_keyframe_ids);
+  EXPECT_EQ(stage.inFlight().count(), 0) << "keyframes sent again must not stop new ones";
+  std::set<MapPointId> before, saved;  // the point ids of the first mapper's map, and of its autosave
+  for (const msg::MapPoint& p : live.wholeMap()->points) before.insert(p.id);
+  for (const msg::MapPoint& p : behind->points) saved.insert(p.id);
+  for (const msg::KeyFramePtr& k : again) stage.apply(*restarted.process(*k).update, 120);
+  EXPECT_EQ(restarted.wholeMap()->tracking_keyframe_ids, made);
+  EXPECT_EQ(stage.adopt(restarted.wholeMap()), TrackingStage::Adopted::kIgnored) << "nothing lacking now";
+
+  drive(restarted, 120, 200);
+  int made_after = 0;
+  for (const msg::MapPoint& p : restarted.wholeMap()->points) {
+    if (issuerOf(p.id) != IdIssuer::kLocalMapping || saved.count(p.id)) continue;
+    ++made_after;
+    EXPECT_EQ(before.count(p.id), 0u) << "point id " << p.id << " issued twice";
+  }
+  EXPECT_GT(made_after, 0) << "the restarted mapper triangulated no point";
+  EXPECT_GT(restarted.keyframeCount(), live.keyframeCount()) << "no keyframe made after the restart";
 }
 
 // Frame 309 of route 06 comes out of a bend: after 10 missing frames the ordinary tracking (the motion
