@@ -7,6 +7,7 @@
 #include <Eigen/Core>
 #include <limits>
 
+#include "binloop/features/stereo_matcher.h"
 #include "binloop/messages/keyframe.h"
 #include "binloop/types/pose.h"
 #include "binloop/types/stereo_camera.h"
@@ -27,12 +28,11 @@ inline Eigen::Vector3d projectStereo(const Eigen::Vector3d& p, const StereoCamer
 }
 
 /// The right-image x a pose optimisation or BA residual uses: the keypoint's own, or -1 (a bearing only) for
-/// a keypoint farther than `close_depth_baselines` unless `far_disparity`. A tenth of a pixel of bias in the
+/// a keypoint that is not close (isCloseDepth) unless `p.far_disparity`. A tenth of a pixel of bias in the
 /// disparity is 0.8 % of the depth of a point 30 m away: on real KITTI frames the far disparities made the
 /// trajectory 0.5 % too long (docs/decisions.md). The depth itself still places new points.
-inline float measuredRightX(const msg::KeyPoint& k, const StereoCamera& cam, double close_depth_baselines,
-                            bool far_disparity) {
-  if (far_disparity || k.right_x < 0 || k.depth < close_depth_baselines * cam.baseline_m) return k.right_x;
+inline float measuredRightX(const msg::KeyPoint& k, const StereoCamera& cam, const StereoMatchParams& p) {
+  if (p.far_disparity || k.right_x < 0 || isCloseDepth(k.depth, cam, p)) return k.right_x;
   return -1.f;
 }
 

@@ -15,6 +15,7 @@
 #include <unordered_map>
 #include <vector>
 
+#include "binloop/features/stereo_matcher.h"
 #include "binloop/map/correction_history.h"
 #include "binloop/map/ids.h"
 #include "binloop/map/keypoint_grid.h"
@@ -56,8 +57,9 @@ struct LocalMapperParams {
   // in, moving keyframes added meanwhile with their spanning-tree ancestor. A new correction stops it.
   bool global_ba_in_background = false;
   float redundant_ratio = 0.9f;  // a keyframe whose points are this often seen by >= 3 others goes
-  float close_depth_baselines = 40;
-  bool far_disparity = true;  // BA takes far keypoints' disparity as a measurement (stereo.far_disparity)
+  // The tracker's stereo settings (SlamConfig copies them): which keypoints are close (culling) and whether
+  // BA takes far keypoints' disparity as a measurement (`far_disparity`).
+  StereoMatchParams stereo;
 };
 
 class LocalMapper {

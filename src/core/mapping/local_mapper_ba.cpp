@@ -41,12 +41,11 @@ LocalMapper::BaSetup LocalMapper::makeBaProblem(const std::vector<SlamKeyframeId
       addKf(k, true);
       const KF& o = kfs_.at(k);
       const msg::KeyPoint& kp = o.keypoints[idx];
-      b.problem.observations.push_back(
-          {kf_index.at(k),
-           pt_index.at(bp.id),
-           {kp.x, kp.y},
-           measuredRightX(kp, camera_, p_.close_depth_baselines, p_.far_disparity),
-           scales_.inv_sigma2[kp.octave]});
+      b.problem.observations.push_back({kf_index.at(k),
+                                        pt_index.at(bp.id),
+                                        {kp.x, kp.y},
+                                        measuredRightX(kp, camera_, p_.stereo),
+                                        scales_.inv_sigma2[kp.octave]});
       b.obs_of.emplace_back(bp.id, k);
     }
   return b;

@@ -29,7 +29,7 @@ void LocalMapper::removeKeyframe(SlamKeyframeId id) {
 }
 
 void LocalMapper::cullKeyframes(KF& kf, msg::LocalMapUpdate& u) {
-  const double close = p_.close_depth_baselines * camera_.baseline_m;
+  const double close = p_.stereo.close_depth_baselines * camera_.baseline_m;
   for (SlamKeyframeId k : neighbors(kf, std::numeric_limits<int>::max())) {
     if (k == first_kf_) continue;
     KF& c = kfs_.at(k);

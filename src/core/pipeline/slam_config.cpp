@@ -274,8 +274,7 @@ SlamConfig loadSlamConfig(const std::string& path) {
   }
   if (c.tracker.orb.min_fast > c.tracker.orb.ini_fast)
     throw ConfigError(path + ": orb.min_fast must not exceed orb.ini_fast");
-  c.mapper.close_depth_baselines = static_cast<float>(c.tracker.stereo.close_depth_baselines);
-  c.mapper.far_disparity = c.tracker.stereo.far_disparity;
+  c.mapper.stereo = c.tracker.stereo;
   return c;
 }
 

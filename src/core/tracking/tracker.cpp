@@ -275,7 +275,7 @@ std::vector<PoseObservation> Tracker::observationsOf(Frame& f, std::vector<int>*
     PoseObservation o;
     o.p_w = mp->p_w;
     o.uv = {k.x, k.y};
-    o.u_right = measuredRightX(k, cam_, p_.stereo.close_depth_baselines, p_.stereo.far_disparity);
+    o.u_right = measuredRightX(k, cam_, p_.stereo);
     o.inv_sigma2 = s.inv_sigma2[k.octave];
     obs.push_back(o);
     if (index) index->push_back(static_cast<int>(i));

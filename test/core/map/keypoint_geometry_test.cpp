@@ -13,16 +13,23 @@ msg::KeyPoint at(float depth_m, const StereoCamera& c) {
   return k;
 }
 
+StereoMatchParams stereo(double close_depth_baselines, bool far_disparity) {
+  StereoMatchParams p;
+  p.close_depth_baselines = close_depth_baselines;
+  p.far_disparity = far_disparity;
+  return p;
+}
+
 TEST(KeypointGeometry, AFarKeypointsDisparityIsMeasuredOnlyWhenAskedFor) {
   const StereoCamera c = kitti00Camera();  // 40 baselines: 21.49 m
   const msg::KeyPoint close = at(21.4f, c), far = at(21.6f, c), none = at(-1.f, c);
-  EXPECT_EQ(measuredRightX(close, c, 40, false), close.right_x);
-  EXPECT_EQ(measuredRightX(close, c, 40, true), close.right_x);
-  EXPECT_EQ(measuredRightX(far, c, 40, false), -1.f);
-  EXPECT_EQ(measuredRightX(far, c, 40, true), far.right_x);
-  EXPECT_EQ(measuredRightX(far, c, 50, false), far.right_x);  // close by a wider bound
-  EXPECT_EQ(measuredRightX(none, c, 40, true), -1.f);
-  EXPECT_EQ(measuredRightX(none, c, 40, false), -1.f);
+  EXPECT_EQ(measuredRightX(close, c, stereo(40, false)), close.right_x);
+  EXPECT_EQ(measuredRightX(close, c, stereo(40, true)), close.right_x);
+  EXPECT_EQ(measuredRightX(far, c, stereo(40, false)), -1.f);
+  EXPECT_EQ(measuredRightX(far, c, stereo(40, true)), far.right_x);
+  EXPECT_EQ(measuredRightX(far, c, stereo(50, false)), far.right_x);  // close by a wider bound
+  EXPECT_EQ(measuredRightX(none, c, stereo(40, true)), -1.f);
+  EXPECT_EQ(measuredRightX(none, c, stereo(40, false)), -1.f);
   EXPECT_NEAR(unprojectKeypoint(far, c).z(), 21.6, 1e-5);  // the depth still places a point
 }
 

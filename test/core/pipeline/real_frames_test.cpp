@@ -25,7 +25,7 @@ namespace {
 // disparities left out of the estimators).
 std::vector<Pose3> trackLockStep(const KittiSequence& seq, bool far_disparity = true) {
   SlamConfig config = loadSlamConfig(std::string(BINLOOP_ROOT_DIR) + "/config/kitti.yaml");
-  config.tracker.stereo.far_disparity = config.mapper.far_disparity = far_disparity;
+  config.tracker.stereo.far_disparity = config.mapper.stereo.far_disparity = far_disparity;
   SlamPipeline slam(seq.camera(), config.tracker, config.mapper, PipelineMode::kLockStep);
   std::vector<msg::TrackedFrame> out;
   for (size_t i = 0; i < seq.size(); ++i) out.push_back(slam.process(seq.load(i)));

@@ -31,7 +31,7 @@ TEST(SlamConfig, KittiYamlEqualsTheDefaults) {
   const SlamConfig defaults;
   EXPECT_EQ(describe(loaded), describe(defaults));
   // Settings describe() does not list.
-  EXPECT_EQ(loaded.mapper.close_depth_baselines, defaults.mapper.close_depth_baselines);
+  EXPECT_TRUE(loaded.mapper.stereo == defaults.mapper.stereo);
   EXPECT_TRUE(loaded.tracker.orb == defaults.tracker.orb);
   EXPECT_TRUE(loaded.tracker.stereo == defaults.tracker.stereo);
 }
@@ -82,7 +82,7 @@ TEST(SlamConfig, KeysGivenOverrideTheRestKeepDefaults) {
   EXPECT_EQ(c.tracker.orb.levels, d.tracker.orb.levels);
   EXPECT_DOUBLE_EQ(c.tracker.stereo.close_depth_baselines, 35.5);
   // The mapper's "close" is the stereo matcher's.
-  EXPECT_FLOAT_EQ(c.mapper.close_depth_baselines, 35.5f);
+  EXPECT_DOUBLE_EQ(c.mapper.stereo.close_depth_baselines, 35.5);
   EXPECT_FLOAT_EQ(c.tracker.keyframe_ref_ratio, 0.5f);
   EXPECT_EQ(c.tracker.min_inliers, d.tracker.min_inliers);
   EXPECT_FALSE(c.mapper.fuse);
