@@ -5,6 +5,7 @@
 // Then it saves the map, resets the graph and loads the map into it (the same keyframes and index, and a
 // pair of the start tracked in it again), and sends malformed stereo pairs and checks that the graph says
 // so and keeps tracking.
+#include <binloop/AddExternalLoop.h>
 #include <binloop/Correction.h>
 #include <binloop/KeyFrame.h>
 #include <binloop/LoadMap.h>
@@ -13,6 +14,7 @@
 #include <binloop/SaveMap.h>
 #include <dynamic_reconfigure/Reconfigure.h>
 #include <ros/ros.h>
+#include <rosgraph_msgs/Clock.h>
 
 #include <filesystem>
 #include <fstream>
@@ -485,6 +487,70 @@ TEST_F(LoopGraph, PairsWithoutCameraInfoAreReportedThenTrackingStarts) {
   publishPair(p.left, p.right, p.left_info, p.right_info);
   EXPECT_TRUE(waitFor(10, [&] { return seen_.poses.count(p.left.header.stamp.toSec()) > 0; }))
       << "tracking did not start once camera_info came";
+}
+
+// Run alone by sim_time_merge.test (one manager, /use_sim_time true, a detector that proposes nothing): the
+// drive is played with its own /clock, as `rosbag play --clock` plays a bag, and ends; then a loop is given
+// from outside. Its global BA finishes after the clock has stopped, and local mapping merges it on a
+// wall-clock timer: on a ROS timer it would wait for a /clock that never comes, so the last global BA of a
+// bag was never merged (nor sent to tracking, nor saved).
+TEST_F(LoopGraph, AGlobalBaThatFinishesAfterTheBagEndedIsMerged) {
+  const Drive& d = drive();
+  ASSERT_TRUE(d.problem.empty()) << d.problem;
+  const std::vector<Pair> pairs = readPairs(d.bag);
+  ASSERT_TRUE(graphConnected());
+  ros::NodeHandle nh;
+  ros::Publisher clock = nh.advertise<rosgraph_msgs::Clock>("/clock", 10, true);
+  for (const Pair& p : pairs) {
+    rosgraph_msgs::Clock c;
+    c.clock = p.left.header.stamp;
+    clock.publish(c);
+    publishPair(p.left, p.right, p.left_info, p.right_info);
+    const double stamp = p.left.header.stamp.toSec();
+    waitFor(1.0, [&] { return seen_.poses.count(stamp) > 0; });
+  }
+  ros::WallDuration(2.0).sleep();  // the last keyframes through the stages; the clock stands still from here
+  std::map<uint64_t, uint64_t> keyframe_at;  // frame -> keyframe id, from the detector's queries
+  {
+    std::lock_guard<std::mutex> lk(seen_.m);
+    for (const auto& c : seen_.candidates) keyframe_at[c.query_frame] = c.query;
+    for (const auto& c : seen_.closures)
+      ASSERT_NE(c.status, binloop::LoopClosure::ACCEPTED) << "a loop closed before the clock stopped";
+  }
+  ASSERT_GT(keyframe_at.size(), 20u);
+  const auto before = statistics();
+  ASSERT_EQ(before.at("local_mapping/corrections"), "0");
+  const std::string merged_before = before.at("local_mapping/global_ba_merged");
+
+  // The last keyframe (in the revisit) and the first lap's keyframe nearest to it.
+  const auto [query_frame, query] = *keyframe_at.rbegin();
+  std::pair<uint64_t, uint64_t> match{0, 0};
+  double best = 1e9;
+  const size_t lap = static_cast<size_t>(d.route.size() / 1.25);
+  for (const auto& [frame, id] : keyframe_at) {
+    if (frame + 100 > lap) break;
+    const double dist = (d.route[frame].translation() - d.route[query_frame].translation()).norm();
+    if (dist < best) best = dist, match = {frame, id};
+  }
+  binloop::AddExternalLoop srv;
+  srv.request.query = query;
+  srv.request.match = match.second;
+  srv.request.source = "rostest";
+  ASSERT_TRUE(ros::service::call("/binloop/add_external_loop", srv));
+  ASSERT_TRUE(srv.response.accepted) << "frames " << query_frame << " and " << match.first << " (" << best
+                                     << " m apart): "
+                                     << (srv.response.closures.empty() ? ""
+                                                                       : srv.response.closures.back().detail);
+  std::map<std::string, std::string> after;
+  const bool merged = waitFor(60, [&] {
+    after = statistics();
+    return after["local_mapping/corrections"] == "1" &&
+           std::stoi(after["local_mapping/global_ba_merged"]) > std::stoi(merged_before);
+  });
+  EXPECT_TRUE(merged) << "with the clock stopped, local mapping applied "
+                      << after["local_mapping/corrections"] << " corrections and merged "
+                      << after["local_mapping/global_ba_merged"] << " global BAs (" << merged_before
+                      << " before the loop)";
 }
 
 int main(int argc, char** argv) { return binloop::test::runRostest(argc, argv, "loop_graph_rostest"); }
