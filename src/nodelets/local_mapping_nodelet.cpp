@@ -52,6 +52,7 @@ class LocalMappingNodelet : public nodelet::Nodelet {
   std::unique_ptr<StageDiagnostics> diag_;
   CpuMeter cpu_;
   uint64_t keyframes_ = 0, corrections_ = 0, rejected_ = 0, resends_ = 0;
+  size_t resumed_keyframes_ = 0;  // from the autosave, at start
   double last_ms_ = 0, last_ba_ms_ = 0;
   std::string last_problem_;
 };
@@ -109,6 +110,7 @@ void LocalMappingNodelet::setUpAutosave(ros::NodeHandle& pnh) {
       stringParam(pnh, "autosave_session", ""));
   std::string note;
   mapper_ = autosave_->resume(params_, &note);
+  if (mapper_) resumed_keyframes_ = mapper_->keyframeCount();
   if (!mapper_) mapper_ = std::make_unique<binloop::LocalMapper>(params_);
   if (autosave_->on())
     NODELET_INFO("binloop/LocalMapping: autosave every %d keyframes: %s", every, note.c_str());
@@ -153,7 +155,8 @@ StageServiceHandlers LocalMappingNodelet::serviceHandlers() {
     return StageStatistics{{"keyframes", std::to_string(mapper_->keyframeCount())},
                            {"map_points", std::to_string(mapper_->pointCount())},
                            {"corrections", std::to_string(mapper_->correctionsApplied())},
-                           {"global_ba_merged", std::to_string(mapper_->globalBaStats().merged)}};
+                           {"global_ba_merged", std::to_string(mapper_->globalBaStats().merged)},
+                           {"resumed_keyframes", std::to_string(resumed_keyframes_)}};
   };
   return h;
 }

@@ -14,7 +14,8 @@ namespace binloop_ros {
 
 TrackingOutputs::TrackingOutputs(ros::NodeHandle& nh, ros::NodeHandle& pnh, size_t path_max_poses)
     : frames_(std::make_unique<FramePublisher>(nh, pnh)), path_max_poses_(path_max_poses) {
-  keyframe_pub_ = nh.advertise<binloop::KeyFrame>("keyframe", 200);  // room for a resend (TrackingStage)
+  // Room for a whole resend (TrackingStage::takeResend), which goes out at once.
+  keyframe_pub_ = nh.advertise<binloop::KeyFrame>("keyframe", binloop::TrackingStage::kResendWindow + 10);
   frame_pub_ = nh.advertise<binloop::TrackedFrame>("tracked_frame", 100);
   pose_pub_ = nh.advertise<geometry_msgs::PoseStamped>("pose", 10);
   path_pub_ = nh.advertise<nav_msgs::Path>("live_path", 1, true);

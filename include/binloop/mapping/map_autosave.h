@@ -42,8 +42,8 @@ class MapAutosave {
   /// After a keyframe: starts a save at every `every`-th (or the first one after, when spaced out); true
   /// when it started one. Throws DataError for the last write's failure.
   bool afterKeyframe(const LocalMapper& m);
-  /// Starts a save now (after a correction or a global BA merge), when on and not spaced out; true when it
-  /// started one. Throws DataError for the last write's failure.
+  /// Starts a save now (after a correction or a global BA merge), when on and not spaced out (then the next
+  /// keyframe saves); true when it started one. Throws DataError for the last write's failure.
   bool save(const LocalMapper& m);
   /// Waits for the write in progress. Throws DataError for its failure.
   void wait();

@@ -22,9 +22,10 @@ namespace binloop {
 class TrackingStage {
  public:
   /// `camera`: a fixed camera (the tracker is made now; throws for a bad one), or none until setCamera().
-  /// `resend_window`: how many of the last keyframes sent are kept to be sent again.
+  /// How many of the last keyframes sent are kept to be sent again, by default (about 100 KB each).
+  static constexpr size_t kResendWindow = 300;
   TrackingStage(TrackerParams params, std::optional<StereoCamera> camera, double keyframe_timeout_s,
-                size_t resend_window = 300);
+                size_t resend_window = kResendWindow);
 
   Tracker* tracker() { return tracker_.get(); }
   const Tracker* tracker() const { return tracker_.get(); }

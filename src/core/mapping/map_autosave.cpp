@@ -83,7 +83,11 @@ void MapAutosave::collect() {
 void MapAutosave::wait() { collect(); }
 
 bool MapAutosave::save(const LocalMapper& m) {
-  if (!on() || spacedOut()) return false;
+  if (!on()) return false;
+  if (spacedOut()) {
+    due_ = true;  // a loop or a global BA skipped here is saved at the next keyframe that may
+    return false;
+  }
   due_ = false;
   last_start_ = std::chrono::steady_clock::now();
   const std::filesystem::path dir = std::filesystem::path(path_).parent_path();

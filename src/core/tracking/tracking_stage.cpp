@@ -41,10 +41,9 @@ bool TrackingStage::behind(const msg::LocalMapUpdate& whole) {
   const uint64_t held = whole.tracking_keyframe_ids;
   resend_.clear();
   resend_missing_ = 0;
-  uint64_t next = held + 1;
   for (const msg::KeyFramePtr& k : sent_) {
     if (issuerOf(k->id) != IdIssuer::kTracking || counterOf(k->id) <= held) continue;
-    if (resend_.empty()) resend_missing_ = counterOf(k->id) - next;
+    if (resend_.empty()) resend_missing_ = counterOf(k->id) - (held + 1);  // sent, but no longer kept
     resend_.push_back(k);
   }
   return !resend_.empty();

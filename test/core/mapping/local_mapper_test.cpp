@@ -1,14 +1,16 @@
 #include "binloop/mapping/local_mapper.h"
-#include "binloop/io/data_error.h"
-#include "binloop/mapping/map_autosave.h"
 
 #include "support/test_support.h"
 
 #include <gtest/gtest.h>
 
 #include <algorithm>
+#include <chrono>
+#include <thread>
 
 #include "../optim/optim_test_scene.h"
+#include "binloop/io/data_error.h"
+#include "binloop/mapping/map_autosave.h"
 
 namespace binloop {
 namespace {
@@ -231,7 +233,14 @@ TEST_F(LocalMapperTest, AnAutosaveIsResumedByItsOwnSessionOnly) {
   autosave.wait();  // written on another thread
   EXPECT_EQ(autosave.saves(), 1u);
   EXPECT_GT(autosave.lastBytes(), 0u);
-  EXPECT_FALSE(autosave.save(m)) << "a save within 20 times the last one's duration is skipped";
+  {
+    MapAutosave spaced(dir.path() + "/spaced.autosave", 100, "graph_1");
+    EXPECT_TRUE(spaced.save(m));
+    spaced.wait();
+    EXPECT_FALSE(spaced.save(m)) << "a save within 20 times the last one's duration is skipped";
+    std::this_thread::sleep_for(std::chrono::milliseconds(static_cast<int>(spaced.lastMs() * 25) + 5));
+    EXPECT_TRUE(spaced.afterKeyframe(m)) << "the skipped save is made at the next keyframe";
+  }
 
   std::string note;
   const std::unique_ptr<LocalMapper> back = MapAutosave(path, 2, "graph_1").resume(p, &note);
