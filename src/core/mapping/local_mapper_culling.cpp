@@ -29,7 +29,6 @@ void LocalMapper::removeKeyframe(SlamKeyframeId id) {
 }
 
 void LocalMapper::cullKeyframes(KF& kf, msg::LocalMapUpdate& u) {
-  const double close = p_.stereo.close_depth_baselines * camera_.baseline_m;
   for (SlamKeyframeId k : neighbors(kf, std::numeric_limits<int>::max())) {
     if (k == first_kf_) continue;
     KF& c = kfs_.at(k);
@@ -37,8 +36,9 @@ void LocalMapper::cullKeyframes(KF& kf, msg::LocalMapUpdate& u) {
     for (size_t i = 0; i < c.state.point_ids.size(); ++i) {
       const MapPointId pid = c.state.point_ids[i];
       if (pid == kNoId) continue;
-      const float d = c.keypoints[i].depth;
-      if (d > close || d < 0) continue;  // stereo: only close points count (ORB-SLAM2)
+      // Stereo: only close points count (ORB-SLAM2). Its test keeps depth == the bound and 0 too, which no
+      // keypoint has (the matcher's depth is bf / disparity > 0, or -1 without a match).
+      if (!isCloseDepth(c.keypoints[i].depth, camera_, p_.stereo)) continue;
       ++points;
       const MP& mp = pts_.at(pid);
       if (mp.obs.size() <= 3) continue;
