@@ -19,6 +19,7 @@ namespace {
 
 using binloop::test::Drive;
 using binloop::test::drive;
+using binloop::test::firstLapKeyframe;
 
 class CameraBag : public binloop::test::GraphTest {
  protected:
@@ -118,17 +119,6 @@ TEST_F(CameraBag, AnExternalLoopIsVerifiedLikeADetectedOne) {
   const auto [query_frame, query] =
       *keyframe_at.rbegin();  // the last keyframe, a quarter lap into the revisit
   ASSERT_GE(query_frame, lap);
-  auto nearestInFirstLap = [&](double metres_away) {
-    std::pair<uint64_t, uint64_t> best{0, 0};
-    double best_gap = 1e9;
-    for (const auto& [frame, id] : keyframe_at) {
-      if (frame + 100 > lap) break;  // the first lap's first stretch only
-      const double dist = (d.route[frame].translation() - d.route[query_frame].translation()).norm();
-      if (std::abs(dist - metres_away) < best_gap)
-        best_gap = std::abs(dist - metres_away), best = {frame, id};
-    }
-    return best;
-  };
   auto call = [](uint64_t q, uint64_t m) {
     binloop::AddExternalLoop srv;
     srv.request.query = q;
@@ -137,7 +127,7 @@ TEST_F(CameraBag, AnExternalLoopIsVerifiedLikeADetectedOne) {
     EXPECT_TRUE(ros::service::call("/binloop/add_external_loop", srv));
     return srv.response;
   };
-  const auto [near_frame, near] = nearestInFirstLap(0);
+  const auto [near_frame, near] = firstLapKeyframe(d, keyframe_at, query_frame, 0);
   const auto good = call(query, near);
   ASSERT_FALSE(good.closures.empty());
   std::cout << "keyframes " << query << " and " << near << ", frames " << query_frame << " and " << near_frame
@@ -146,7 +136,7 @@ TEST_F(CameraBag, AnExternalLoopIsVerifiedLikeADetectedOne) {
   EXPECT_EQ(good.closures.back().model, "rostest");
   EXPECT_EQ(good.closures.back().match_frame, near_frame);
 
-  const auto [far_frame, far] = nearestInFirstLap(40);
+  const auto [far_frame, far] = firstLapKeyframe(d, keyframe_at, query_frame, 40);
   const auto wrong = call(query, far);
   ASSERT_FALSE(wrong.closures.empty());
   std::cout << "frames " << query_frame << " and " << far_frame << ": " << wrong.closures.back().status

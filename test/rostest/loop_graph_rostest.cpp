@@ -33,6 +33,7 @@ namespace {
 
 using binloop::test::Drive;
 using binloop::test::drive;
+using binloop::test::firstLapKeyframe;
 using binloop::test::Pair;
 using binloop::test::readPairs;
 using binloop::test::statistics;
@@ -524,14 +525,8 @@ TEST_F(LoopGraph, AGlobalBaThatFinishesAfterTheBagEndedIsMerged) {
 
   // The last keyframe (in the revisit) and the first lap's keyframe nearest to it.
   const auto [query_frame, query] = *keyframe_at.rbegin();
-  std::pair<uint64_t, uint64_t> match{0, 0};
-  double best = 1e9;
-  const size_t lap = static_cast<size_t>(d.route.size() / 1.25);
-  for (const auto& [frame, id] : keyframe_at) {
-    if (frame + 100 > lap) break;
-    const double dist = (d.route[frame].translation() - d.route[query_frame].translation()).norm();
-    if (dist < best) best = dist, match = {frame, id};
-  }
+  const auto match = firstLapKeyframe(d, keyframe_at, query_frame, 0);
+  const double best = (d.route[match.first].translation() - d.route[query_frame].translation()).norm();
   binloop::AddExternalLoop srv;
   srv.request.query = query;
   srv.request.match = match.second;

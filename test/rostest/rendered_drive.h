@@ -6,9 +6,11 @@
 #include <sensor_msgs/CameraInfo.h>
 #include <sensor_msgs/Image.h>
 
+#include <cmath>
 #include <map>
 #include <memory>
 #include <string>
+#include <utility>
 #include <vector>
 
 #include "binloop/io/trajectory_io.h"
@@ -41,6 +43,24 @@ inline const Drive& drive() {
     if (r.code != 0) d.problem = "kitti2bag failed: " + r.out;
   }
   return d;
+}
+
+/// Among `keyframe_at` (frame -> keyframe id) in the first stretch of the drive's first lap (up to 100 frames
+/// before the revisit begins), the keyframe whose place is nearest to `metres_away` from frame
+/// `query_frame`'s: (frame, keyframe id), or (0, 0) when there is none. 0 m: the keyframe a revisit should
+/// close on.
+inline std::pair<uint64_t, uint64_t> firstLapKeyframe(const Drive& d,
+                                                      const std::map<uint64_t, uint64_t>& keyframe_at,
+                                                      uint64_t query_frame, double metres_away) {
+  const size_t lap = static_cast<size_t>(d.route.size() / 1.25);
+  std::pair<uint64_t, uint64_t> best{0, 0};
+  double best_gap = 1e9;
+  for (const auto& [frame, id] : keyframe_at) {
+    if (frame + 100 > lap) break;
+    const double dist = (d.route[frame].translation() - d.route[query_frame].translation()).norm();
+    if (std::abs(dist - metres_away) < best_gap) best_gap = std::abs(dist - metres_away), best = {frame, id};
+  }
+  return best;
 }
 
 struct Pair {
