@@ -148,6 +148,13 @@ class Tracker {
   /// after, only while this tracker's own map is that young (at most 2 keyframes, fewer than `whole`'s) —
   /// a pair that reached a restarted tracking before the map did began a new map, which gives way.
   bool givesWayTo(const msg::LocalMapUpdate& whole) const;
+  /// Keyframe and point ids issued so far (IdCounter::issued).
+  uint64_t keyframeIdsIssued() const { return keyframe_ids_.issued(); }
+  uint64_t pointIdsIssued() const { return point_ids_.issued(); }
+  /// Ids from a new session (IdCounter::startSession) after `keyframes` / `points` issued, or after this
+  /// tracker's own if higher: a tracker that takes another's place (a reset, a loaded map) issues none of
+  /// the ids its predecessor issued, which messages in flight and the other stages may still hold.
+  void continueIdsInNewSession(uint64_t keyframes, uint64_t points);
   /// The camera a saved tracking state was made with, to make the tracker that loads it.
   static StereoCamera savedCamera(const std::string& path);
 

@@ -46,6 +46,8 @@ class TrackingStage {
   std::vector<msg::KeyFramePtr> takeResend(double now_s, uint64_t* missing = nullptr);
   bool resendPending() const { return !resend_.empty(); }
   /// A loaded map's tracker, or (null) none until the camera is known; nothing is in flight, no map kept.
+  /// Its ids go on in a new session after every id this stage's trackers issued (Tracker::
+  /// continueIdsInNewSession): local mapping may still hold the old keyframes, or have them on the way.
   void startOver(std::unique_ptr<Tracker> tracker);
   /// A reset: a fresh tracker when the camera is fixed, else none until the camera is known.
   void reset();
@@ -65,6 +67,8 @@ class TrackingStage {
   uint64_t keyframesNotResent() const { return not_resent_; }
 
  private:
+  /// Makes `t` the tracker, continuing the ids of those before it (none: until the camera is known).
+  void replaceTracker(std::unique_ptr<Tracker> t);
   /// Whether the map lacks keyframes kept in sent_; fills resend_.
   bool behind(const msg::LocalMapUpdate& whole);
   TrackerParams params_;
@@ -77,6 +81,7 @@ class TrackingStage {
   uint64_t resend_missing_ = 0;
   KeyframesInFlight in_flight_;
   uint64_t corrections_ = 0, maps_adopted_ = 0, resent_ = 0, not_resent_ = 0;
+  uint64_t keyframe_ids_ = 0, point_ids_ = 0;  // the most any tracker of this stage issued
 };
 
 }  // namespace binloop

@@ -1,4 +1,6 @@
 // Tracker's save/load (tracking's state file).
+#include <algorithm>
+
 #include "binloop/features/orb_slam_extractor.h"
 #include "binloop/io/state_file.h"
 #include "binloop/messages/message_state.h"
@@ -84,9 +86,17 @@ void Tracker::adoptMap(const msg::LocalMapUpdate& whole) {
   corrections_seen_ = whole.corrections_seen;
   // A tracker restarted alone counts its ids from 1 again, and mapping refuses ids it holds: go on after
   // the highest of this tracker's issuer in the map.
-  keyframe_ids_.restore(whole.tracking_keyframe_ids);  // none issued yet: it has not started
-  point_ids_.restore(whole.tracking_point_ids);
+  // It has issued none yet, but a tracker that took another's place counts in a new session already.
+  keyframe_ids_.restore(std::max(keyframe_ids_.issued(), whole.tracking_keyframe_ids));
+  point_ids_.restore(std::max(point_ids_.issued(), whole.tracking_point_ids));
   if (map_.keyframeCount() > 0) startLostAtLastKeyframe();
+}
+
+void Tracker::continueIdsInNewSession(uint64_t keyframes, uint64_t points) {
+  keyframe_ids_.restore(std::max(keyframe_ids_.issued(), keyframes));
+  point_ids_.restore(std::max(point_ids_.issued(), points));
+  keyframe_ids_.startSession();
+  point_ids_.startSession();
 }
 
 StereoCamera Tracker::savedCamera(const std::string& path) {

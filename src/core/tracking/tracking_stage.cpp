@@ -1,5 +1,6 @@
 #include "binloop/tracking/tracking_stage.h"
 
+#include <algorithm>
 #include <utility>
 
 namespace binloop {
@@ -17,8 +18,18 @@ std::unique_ptr<Tracker> TrackingStage::freshTracker(const StereoCamera& camera)
   return std::make_unique<Tracker>(camera, params_);
 }
 
+void TrackingStage::replaceTracker(std::unique_ptr<Tracker> t) {
+  if (tracker_) {
+    keyframe_ids_ = std::max(keyframe_ids_, tracker_->keyframeIdsIssued());
+    point_ids_ = std::max(point_ids_, tracker_->pointIdsIssued());
+  }
+  tracker_ = std::move(t);
+  if (tracker_ && (keyframe_ids_ > 0 || point_ids_ > 0))
+    tracker_->continueIdsInNewSession(keyframe_ids_, point_ids_);
+}
+
 void TrackingStage::setCamera(const StereoCamera& camera) {
-  tracker_ = freshTracker(camera);
+  replaceTracker(freshTracker(camera));
   if (kept_) adopt(std::exchange(kept_, nullptr));
 }
 
@@ -64,7 +75,7 @@ void TrackingStage::startOver(std::unique_ptr<Tracker> tracker) {
   kept_.reset();
   sent_.clear();
   resend_.clear();
-  tracker_ = std::move(tracker);
+  replaceTracker(std::move(tracker));
   in_flight_.clear();
 }
 

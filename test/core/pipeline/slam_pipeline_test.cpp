@@ -506,6 +506,42 @@ TEST(TrackingStage, ALocalMappingRestartedFromAnAutosaveGetsTheKeyframesItLacksA
   EXPECT_GT(restarted.keyframeCount(), live.keyframeCount()) << "no keyframe made after the restart";
 }
 
+// A tracking reset (or a loaded map) while local mapping keeps its map: the new tracker's ids start a new
+// session, so mapping takes its keyframes. Before sessions, the fresh tracker issued keyframe 1 again and
+// mapping refused every keyframe it made as "already in the map".
+TEST(TrackingStage, ATrackerAfterAResetIssuesNoIdLocalMappingAlreadyHolds) {
+  const RenderedStretch* s = renderedStretch(120, true);
+  if (!s) GTEST_SKIP() << "needs " << test::sharedData("kitti/poses/06.txt");
+  LocalMapper mapper{LocalMapperParams{}};
+  TrackingStage stage({}, s->cam, 5);
+  std::set<SlamKeyframeId> ids;
+  auto drive = [&](int from, int to) {
+    for (int i = from; i < to; ++i) {
+      const Tracker::Output out = stage.track(s->frames[i], i);
+      if (!out.keyframe) continue;
+      EXPECT_TRUE(ids.insert(out.keyframe->id).second)
+          << "keyframe id " << out.keyframe->id << " issued twice";
+      // Mapping refuses a keyframe or a new point whose id it holds (LocalMapper::insert).
+      EXPECT_NO_THROW(stage.apply(*mapper.process(*out.keyframe).update, i)) << "frame " << i;
+    }
+  };
+  drive(0, 50);
+  const size_t before = mapper.keyframeCount();
+  ASSERT_GT(before, 3u);
+  const uint64_t issued = stage.tracker()->keyframeIdsIssued();
+  stage.reset();
+  EXPECT_GE(stage.tracker()->keyframeIdsIssued(), uint64_t{1} << 32)
+      << "the fresh tracker is in a new session";
+  drive(50, 120);
+  EXPECT_GT(mapper.keyframeCount(), before) << "mapping took no keyframe of the tracker after the reset";
+  EXPECT_GT(stage.tracker()->keyframeIdsIssued(), issued);
+
+  // A map loaded into the stage continues after the highest ids too (its file's own may be older).
+  auto loaded = stage.freshTracker(s->cam);
+  stage.startOver(std::move(loaded));
+  EXPECT_GE(stage.tracker()->keyframeIdsIssued(), uint64_t{2} << 32);
+}
+
 // Frame 309 of route 06 comes out of a bend: after 10 missing frames the ordinary tracking (the motion
 // model, then matching without a prediction) put the frame 8 m behind the truth and 7 degrees off, with
 // enough inliers to call it tracked. A pose the camera could not have reached since the last tracked
