@@ -2,6 +2,7 @@
 // Keyframe and map-point ids. Stages run apart (threads, processes, machines) and each creates entities
 // without asking the others, so an id carries the stage that issued it in its top byte and a counter in
 // the rest: two stages never collide and no id is ever reused. 0 means "none".
+#include <algorithm>
 #include <cstdint>
 
 namespace binloop {
@@ -22,8 +23,9 @@ class IdCounter {
   explicit IdCounter(IdIssuer who) : base_(uint64_t(static_cast<uint8_t>(who)) << 56) {}
   uint64_t next() { return base_ | ++count_; }
   uint64_t issued() const { return count_; }
-  /// Continues after `issued` ids (a loaded map), so that no id is issued twice.
-  void restore(uint64_t issued) { count_ = issued; }
+  /// Continues after `issued` ids (a loaded map, a map adopted), so that no id is issued twice; a counter
+  /// already past them stays where it is (it never goes back).
+  void restore(uint64_t issued) { count_ = std::max(count_, issued); }
   /// Jumps to the next multiple of 2^32 (a new session of this issuer): a stage restored from a state file
   /// older than the ids it had issued before it stopped (an autosave) issues none of those again, though it
   /// cannot know how many there were. 2^24 sessions of 2^32 ids each.

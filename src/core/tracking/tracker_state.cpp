@@ -1,6 +1,4 @@
 // Tracker's save/load (tracking's state file).
-#include <algorithm>
-
 #include "binloop/features/orb_slam_extractor.h"
 #include "binloop/io/state_file.h"
 #include "binloop/messages/message_state.h"
@@ -87,14 +85,14 @@ void Tracker::adoptMap(const msg::LocalMapUpdate& whole) {
   // A tracker restarted alone counts its ids from 1 again, and mapping refuses ids it holds: go on after
   // the highest of this tracker's issuer in the map.
   // It has issued none yet, but a tracker that took another's place counts in a new session already.
-  keyframe_ids_.restore(std::max(keyframe_ids_.issued(), whole.tracking_keyframe_ids));
-  point_ids_.restore(std::max(point_ids_.issued(), whole.tracking_point_ids));
+  keyframe_ids_.restore(whole.tracking_keyframe_ids);
+  point_ids_.restore(whole.tracking_point_ids);
   if (map_.keyframeCount() > 0) startLostAtLastKeyframe();
 }
 
 void Tracker::continueIdsInNewSession(uint64_t keyframes, uint64_t points) {
-  keyframe_ids_.restore(std::max(keyframe_ids_.issued(), keyframes));
-  point_ids_.restore(std::max(point_ids_.issued(), points));
+  keyframe_ids_.restore(keyframes);
+  point_ids_.restore(points);
   keyframe_ids_.startSession();
   point_ids_.startSession();
 }

@@ -1,6 +1,5 @@
 #include "binloop/tracking/tracking_stage.h"
 
-#include <algorithm>
 #include <utility>
 
 namespace binloop {
@@ -19,9 +18,9 @@ std::unique_ptr<Tracker> TrackingStage::freshTracker(const StereoCamera& camera)
 }
 
 void TrackingStage::replaceTracker(std::unique_ptr<Tracker> t) {
-  if (tracker_) {
-    keyframe_ids_ = std::max(keyframe_ids_, tracker_->keyframeIdsIssued());
-    point_ids_ = std::max(point_ids_, tracker_->pointIdsIssued());
+  if (tracker_) {  // it went on from those before it, so its counts are the stage's highest
+    keyframe_ids_ = tracker_->keyframeIdsIssued();
+    point_ids_ = tracker_->pointIdsIssued();
   }
   tracker_ = std::move(t);
   if (tracker_ && (keyframe_ids_ > 0 || point_ids_ > 0))
