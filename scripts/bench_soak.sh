@@ -4,10 +4,13 @@
 # and the stamp-to-pose delay (p95, first and last --window minutes), the manager's resident memory against
 # the keyframes it holds, the largest message of every /binloop topic early and late. Not a test: it prints
 # a table and writes <out>/soak.json.
-#   scripts/bench.sh soak [--minutes 60] [--route 06] [--end 1100] [--detector hmvlad] [--window 10] [--out <dir>]
+# --split runs kitti_stereo_split.launch respawn:=true instead (each stage its own process, local mapping
+# autosaving every 10 keyframes): the memory is then the four processes' together.
+#   scripts/bench.sh soak [--minutes 60] [--route 06] [--end 1100] [--detector hmvlad] [--window 10] [--split]
+#                         [--out <dir>]
 set -euo pipefail
 source "$(dirname "${BASH_SOURCE[0]}")/env.sh"
-minutes=60 route=06 end=1100 detector=hmvlad window=10 out="$BINLOOP_BUILD/bench/soak"
+minutes=60 route=06 end=1100 detector=hmvlad window=10 split=0 out="$BINLOOP_BUILD/bench/soak"
 while [ $# -gt 0 ]; do
   case "$1" in
     --minutes) minutes="$2"; shift 2 ;;
@@ -15,8 +18,10 @@ while [ $# -gt 0 ]; do
     --end) end="$2"; shift 2 ;;
     --detector) detector="$2"; shift 2 ;;
     --window) window="$2"; shift 2 ;;
+    --split) split=1; shift ;;
     --out) out="$2"; shift 2 ;;
-    *) echo "bench soak: unknown option $1 (--minutes, --route, --end, --detector, --window, --out)" >&2; exit 2 ;;
+    *) echo "bench soak: unknown option $1 (--minutes, --route, --end, --detector, --window, --split, --out)" >&2
+       exit 2 ;;
   esac
 done
 shared="$BINLOOP_ROOT/../shared"
@@ -54,16 +59,25 @@ if ! rosnode list >/dev/null 2>&1; then
   for _ in $(seq 100); do rosnode list >/dev/null 2>&1 && break; sleep 0.1; done
 fi
 rosparam set /use_sim_time true
-roslaunch binloop kitti_stereo.launch detector:="$detector" use_sim_time:=true >"$out/graph.log" 2>&1 &
+if [ "$split" = 1 ]; then
+  launch=(kitti_stereo_split.launch respawn:=true) processes=4 pattern='nodelet standalone binloop/'
+else
+  launch=(kitti_stereo.launch) processes=1 pattern='nodelet manager'
+fi
+roslaunch binloop "${launch[@]}" detector:="$detector" use_sim_time:=true >"$out/graph.log" 2>&1 &
 pids+=($!)
+graph=()
 for _ in $(seq 300); do
-  rostopic list 2>/dev/null | grep -qx /binloop/tracked_frame && break
+  if rostopic list 2>/dev/null | grep -qx /binloop/tracked_frame; then
+    mapfile -t graph < <(pgrep -f "$pattern")
+    [ "${#graph[@]}" -ge "$processes" ] && break
+  fi
   sleep 0.1
 done
-manager="$(pgrep -f 'nodelet manager' | head -1)"
-[ -n "$manager" ] || { echo "bench soak: no nodelet manager running (see $out/graph.log)" >&2; exit 1; }
-echo "bench soak: $bag looped at 1x for $minutes min (detector $detector, manager pid $manager); graph log $out/graph.log"
+[ "${#graph[@]}" -ge "$processes" ] || { echo "bench soak: the graph is not running (see $out/graph.log)" >&2; exit 1; }
+echo "bench soak: $bag looped at 1x for $minutes min (detector $detector, ${launch[0]}, pids ${graph[*]});" \
+  "graph log $out/graph.log"
 rosbag play --clock -q -l -d 1 "$bag" >"$out/play.log" 2>&1 &
 pids+=($!)
-/usr/bin/python3 "$BINLOOP_ROOT/scripts/soak_monitor.py" --minutes "$minutes" --pid "$manager" --window-min "$window" \
+/usr/bin/python3 "$BINLOOP_ROOT/scripts/soak_monitor.py" --minutes "$minutes" $(printf -- '--pid %s ' "${graph[@]}") --window-min "$window" \
   --out "$out" | tee "$out/soak.txt"

@@ -22,15 +22,19 @@ from binloop.srv import Statistics
 LOST, NOT_INITIALIZED = 2, 0
 
 
-def rss_mb(pid):
-    try:
-        with open(f"/proc/{pid}/status") as f:
-            for line in f:
-                if line.startswith("VmRSS:"):
-                    return int(line.split()[1]) / 1024.0
-    except OSError:
-        return None
-    return None
+def rss_mb(pids):
+    """The processes' resident memory together; None once one of them is gone (a respawn is a new process)."""
+    total = 0.0
+    for pid in pids:
+        try:
+            with open(f"/proc/{pid}/status") as f:
+                rss = [int(line.split()[1]) for line in f if line.startswith("VmRSS:")]
+        except OSError:
+            return None
+        if not rss:
+            return None
+        total += rss[0] / 1024.0
+    return total
 
 
 def p95(values):
@@ -102,7 +106,8 @@ def window(frames, lo, hi, idx):
 def main():
     ap = argparse.ArgumentParser()
     ap.add_argument("--minutes", type=float, default=60)
-    ap.add_argument("--pid", type=int, required=True, help="the nodelet manager's process")
+    ap.add_argument("--pid", type=int, action="append", required=True,
+                    help="the graph's process (the nodelet manager, or each stage of the split launch)")
     ap.add_argument("--sample-s", type=float, default=30)
     ap.add_argument("--window-min", type=float, default=10, help="the first and last stretch compared")
     ap.add_argument("--out", required=True)
@@ -149,6 +154,7 @@ def main():
         "delay_ms_p95_first": p95(first_delay), "delay_ms_p95_last": p95(last_delay),
         "rss_mb_first": kf[0]["rss_mb"] if kf else None, "rss_mb_last": kf[-1]["rss_mb"] if kf else None,
         "keyframes_first": kf[0]["keyframes"] if kf else None, "keyframes_last": kf[-1]["keyframes"] if kf else None,
+        "samples_with_a_process_gone": sum(1 for s in mon.samples if s["rss_mb"] is None),
         "mb_per_keyframe": mb_per_kf, "message_bytes": growth, "samples": mon.samples, "wrap_list": wraps,
     }
     os.makedirs(a.out, exist_ok=True)
@@ -164,8 +170,11 @@ def main():
     for name, f0, f1 in (("tracking work p95 (ms)", result["work_ms_p95_first"], result["work_ms_p95_last"]),
                          ("stamp-to-pose delay p95 (ms)", result["delay_ms_p95_first"], result["delay_ms_p95_last"])):
         print(f"| {name} | {fmt(f0)} | {fmt(f1)} | {fmt(f1 / f0 if f0 else None, 2)} |")
-    print(f"| manager resident memory (MB) | {fmt(result['rss_mb_first'])} | {fmt(result['rss_mb_last'])} | |")
+    print(f"| the graph's resident memory (MB) | {fmt(result['rss_mb_first'])} | {fmt(result['rss_mb_last'])} | |")
     print(f"| keyframes | {result['keyframes_first']} | {result['keyframes_last']} | |")
+    if result["samples_with_a_process_gone"]:
+        print(f"a process of the graph was gone (died or respawned) in {result['samples_with_a_process_gone']} "
+              f"of {len(mon.samples)} samples")
     print(f"MB per keyframe (resident growth / keyframes added): {fmt(mb_per_kf, 3)}")
     for t, g in growth.items():
         print(f"  {t}: largest message {g['first_max_bytes']} B in the first window, {g['last_max_bytes']} B in the last")

@@ -140,6 +140,7 @@ StageServiceHandlers LocalMappingNodelet::serviceHandlers() {
     auto fresh = std::make_shared<std::unique_ptr<binloop::LocalMapper>>(
         loadStage(std::make_unique<binloop::LocalMapper>(params_), path, "local_mapping"));
     return PreparedLoad{[this, fresh] {
+      (*fresh)->continueIdsInNewSession(mapper_->pointIdsIssued());
       mapper_ = std::move(*fresh);
       publishMap(ros::Time::now());
       autosave(false);
@@ -147,7 +148,10 @@ StageServiceHandlers LocalMappingNodelet::serviceHandlers() {
     }};
   };
   h.reset = [this] {
-    mapper_ = std::make_unique<binloop::LocalMapper>(params_);
+    // Ids go on in a new session: an update of the old map may still be on its way to the other stages.
+    auto fresh = std::make_unique<binloop::LocalMapper>(params_);
+    fresh->continueIdsInNewSession(mapper_->pointIdsIssued());
+    mapper_ = std::move(fresh);
     publishMap(ros::Time::now());
     autosave(false);
   };
@@ -235,12 +239,20 @@ void LocalMappingNodelet::onCorrection(const binloop::CorrectionConstPtr& m) {
   } catch (const std::exception& e) {
     return problem(std::string("correction dropped: ") + e.what());
   }
+  if (!u) return;  // sent again, but this one had arrived: applied once
   ++corrections_;
+  // Saved before tracking hears of it: a respawn from an autosave without it would get tracking's later
+  // keyframes in the corrected frame. Killed before the save, nobody has applied it and loop closing sends
+  // it again (loop/correction_outbox.h).
+  try {
+    autosave_->saveBeforeGoingOn(*mapper_);
+  } catch (const std::exception& e) {
+    problem(std::string("autosave failed: ") + e.what());
+  }
   std_msgs::Header header = m->header;
   header.frame_id = slam_frame_;
   update_pub_.publish(boost::make_shared<binloop::LocalMapUpdate>(toRos(*u, header)));
   publishMap(m->header.stamp);
-  autosave(false);
 }
 
 void LocalMappingNodelet::publishMap(const ros::Time& stamp) {

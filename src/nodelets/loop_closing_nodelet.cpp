@@ -35,6 +35,7 @@ class LoopClosingNodelet : public nodelet::Nodelet {
   bool onExternalLoop(binloop::AddExternalLoop::Request& req, binloop::AddExternalLoop::Response& res);
   void runPending();
   void handle(const binloop::LoopCloser::Output& out, const std_msgs::Header& header);
+  void sendAgain(const std::vector<binloop::msg::CorrectionPtr>& again, bool gap, const std_msgs::Header& header);
   void publishPathAndEdges(const ros::Time& stamp);
   void problem(const std::string& what);
   void diagnose(diagnostic_updater::DiagnosticStatusWrapper& s);
@@ -116,6 +117,7 @@ StageServiceHandlers LoopClosingNodelet::serviceHandlers() {
     return StageStatistics{{"keyframes", std::to_string(closer_->keyframeCount())},
                            {"loops", std::to_string(closer_->loops().size())},
                            {"corrections", std::to_string(closer_->correctionsMade())},
+                           {"corrections_resent", std::to_string(closer_->correctionsResent())},
                            {"loops_verified", std::to_string(verified_)}};
   };
   return h;
@@ -158,11 +160,14 @@ void LoopClosingNodelet::onKeyframe(const binloop::KeyFrameConstPtr& m) {
 
 void LoopClosingNodelet::onUpdate(const binloop::LocalMapUpdateConstPtr& m) {
   CpuMeter::Scope cpu(cpu_);
+  std::vector<binloop::msg::CorrectionPtr> again;
+  bool gap = false;
   try {
-    closer_->apply(fromRos(*m));
+    again = closer_->apply(fromRos(*m), &gap);
   } catch (const std::exception& e) {
     return problem(std::string("local map update dropped: ") + e.what());
   }
+  if (!again.empty()) sendAgain(again, gap, m->header);
   if (!m->correction)
     pending_.updateArrived(m->keyframe);
   else
@@ -216,6 +221,21 @@ void LoopClosingNodelet::handle(const binloop::LoopCloser::Output& out, const st
     correction_pub_.publish(boost::make_shared<binloop::Correction>(toRos(*out.correction, h)));
   }
   if (!out.closures.empty()) publishPathAndEdges(header.stamp);
+}
+
+// Local mapping lacks corrections it was sent (correction_outbox.h): they go again, in sequence.
+void LoopClosingNodelet::sendAgain(const std::vector<binloop::msg::CorrectionPtr>& again, bool gap,
+                                   const std_msgs::Header& header) {
+  std_msgs::Header h = header;
+  h.frame_id = slam_frame_;
+  NODELET_WARN("binloop/LoopClosing: local mapping's updates still lack corrections %lu-%lu (it restarted, or "
+               "one was lost on the way): sent again%s",
+               static_cast<unsigned long>(again.front()->sequence),
+               static_cast<unsigned long>(again.back()->sequence),
+               gap ? "; it also lacks older ones, no longer kept, so it will refuse these" : "");
+  if (gap) problem("local mapping lacks corrections no longer kept: it refuses every later one");
+  for (const binloop::msg::CorrectionPtr& c : again)
+    correction_pub_.publish(boost::make_shared<binloop::Correction>(toRos(*c, h)));
 }
 
 bool LoopClosingNodelet::onExternalLoop(binloop::AddExternalLoop::Request& req,

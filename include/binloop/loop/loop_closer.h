@@ -31,6 +31,7 @@
 #include <unordered_map>
 #include <vector>
 
+#include "binloop/loop/correction_outbox.h"
 #include "binloop/loop/essential_graph.h"
 #include "binloop/loop/loop_verifier.h"
 #include "binloop/map/correction_history.h"
@@ -66,6 +67,8 @@ struct LoopCloserParams {
   // nearest to the query when the verified pair is more than this far apart (0: never).
   double reanchor_min_m = 5;
   bool fuse = true;  // ask local mapping to merge the points around the loop
+  // Local mapping's updates that may lack a sent correction before it is sent again (correction_outbox.h).
+  int resend_corrections_after_updates = 8;
 };
 
 class LoopCloser {
@@ -80,8 +83,10 @@ class LoopCloser {
   /// A refined keyframe from local mapping (a later revision replaces the stored one). Throws
   /// std::invalid_argument for a malformed message (sizes differ).
   void addKeyframe(const msg::KeyFramePtr& kf);
-  /// Local mapping's later refinements of poses and covisibility, and its culled keyframes.
-  void apply(const msg::LocalMapUpdate& u);
+  /// Local mapping's later refinements of poses and covisibility, and its culled keyframes. Returns the
+  /// corrections to send local mapping again, when its updates show it lacks some (correction_outbox.h);
+  /// `*gap` (if given) says that some it lacks are no longer kept.
+  std::vector<msg::CorrectionPtr> apply(const msg::LocalMapUpdate& u, bool* gap = nullptr);
   /// The active detector's result: verifies its accepted candidate, if any (shadow results are ignored).
   Output process(const msg::LoopCandidates& c);
   /// A loop proposed from outside (another front end, a person): verified and guarded the same way.
@@ -101,6 +106,7 @@ class LoopCloser {
   std::vector<KeyframePose> keyframePoses() const;
   const std::vector<LoopEdge>& loops() const { return loops_; }
   uint64_t correctionsMade() const { return history_.applied(); }
+  uint64_t correctionsResent() const { return outbox_.resent(); }
 
   /// Its keyframes (as refined and corrected), the loops closed and the corrections made. A held loop is not
   /// saved: it waits for a confirmation that a loaded map will not bring (finish() first reports it).
@@ -157,6 +163,7 @@ class LoopCloser {
   std::vector<LoopEdge> loops_;
   std::optional<Held> held_;
   CorrectionHistory history_;
+  CorrectionOutbox outbox_;
   SlamKeyframeId first_ = kNoId;
   size_t last_correction_at_ = 0;  // keyframes stored when the last correction was made
 };

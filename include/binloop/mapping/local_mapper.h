@@ -77,8 +77,9 @@ class LocalMapper {
   /// unknown points (they are dropped); throws std::invalid_argument for a malformed message (sizes differ).
   Output process(const msg::KeyFrame& kf);
   /// A loop correction (messages/correction.h): keyframes and points move, the loop's points merge. Returns
-  /// the update for tracking: the whole corrected map. Throws std::invalid_argument for a correction out of
-  /// sequence.
+  /// the update for tracking: the whole corrected map. Null for a correction already applied (loop closing
+  /// sends one again when it thinks it lost: loop/correction_outbox.h). Throws std::invalid_argument for a
+  /// correction that skips one (it comes again after the missing one).
   msg::LocalMapUpdatePtr apply(const msg::Correction& c);
   uint64_t correctionsApplied() const { return history_.applied(); }
 
@@ -129,6 +130,14 @@ class LocalMapper {
   /// After load() of a state older than what this mapper's predecessor had done (its process restarted from
   /// an autosave): the point ids it issued after that state are unknown, so new ones start a new session.
   void resumeAfterRestart() { point_ids_.startSession(); }
+  /// Point ids issued so far (IdCounter::issued).
+  uint64_t pointIdsIssued() const { return point_ids_.issued(); }
+  /// Point ids from a new session after `issued` and after this mapper's own: for a mapper that takes
+  /// another's place (a reset, a loaded map) while points of the other may still be on their way.
+  void continueIdsInNewSession(uint64_t issued) {
+    point_ids_.restore(issued);
+    point_ids_.startSession();
+  }
 
  private:
   struct KF {

@@ -45,6 +45,11 @@ class MapAutosave {
   /// Starts a save now (after a correction or a global BA merge), when on and not spaced out (then the next
   /// keyframe saves); true when it started one. Throws DataError for the last write's failure.
   bool save(const LocalMapper& m);
+  /// Saves now and returns once the file is written, however recent the last save (after a loop correction,
+  /// before its update goes out: a process respawned from an autosave then never lacks a correction that
+  /// tracking has applied, which would leave tracking's later keyframes in a frame the map is not in).
+  /// Throws DataError for this write's or the last one's failure.
+  void saveBeforeGoingOn(const LocalMapper& m);
   /// Waits for the write in progress. Throws DataError for its failure.
   void wait();
 
@@ -67,6 +72,7 @@ class MapAutosave {
   std::future<double> writing_;  // the write's ms
 
   bool spacedOut();  // collects a finished write
+  void start(const LocalMapper& m);  // serialises here, writes on another thread
   void collect();
 };
 

@@ -14,7 +14,7 @@
 
 namespace binloop {
 
-LoopCloser::LoopCloser(const LoopCloserParams& p) : p_(p) {}
+LoopCloser::LoopCloser(const LoopCloserParams& p) : p_(p), outbox_(p.resend_corrections_after_updates) {}
 
 std::vector<LoopCloser::KeyframePose> LoopCloser::keyframePoses() const {
   std::vector<KeyframePose> out;
@@ -47,7 +47,7 @@ void LoopCloser::addKeyframe(const msg::KeyFramePtr& kf) {
   if (first_ == kNoId) first_ = kf->id;
 }
 
-void LoopCloser::apply(const msg::LocalMapUpdate& u) {
+std::vector<msg::CorrectionPtr> LoopCloser::apply(const msg::LocalMapUpdate& u, bool* gap) {
   for (const msg::KeyframeState& k : u.keyframes) {
     auto it = states_.find(k.id);
     if (it == states_.end()) continue;  // not refined yet: its keyframe message will bring it
@@ -63,6 +63,7 @@ void LoopCloser::apply(const msg::LocalMapUpdate& u) {
     frames_.erase(k);
     order_.erase(std::remove(order_.begin(), order_.end(), k), order_.end());
   }
+  return outbox_.mappingSaw(u.corrections_seen, gap);
 }
 
 double LoopCloser::travelBetween(SlamKeyframeId a, SlamKeyframeId b) const {
@@ -408,6 +409,7 @@ bool LoopCloser::correct(const std::vector<LoopEdge>& new_loops,
   c->keyframes_corrected = static_cast<int>(g.nodes.size());
   last_correction_at_ = order_.size();
   out->correction = corr;
+  outbox_.sent(corr);
   return true;
 }
 

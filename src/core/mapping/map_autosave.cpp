@@ -88,6 +88,18 @@ bool MapAutosave::save(const LocalMapper& m) {
     due_ = true;  // a loop or a global BA skipped here is saved at the next keyframe that may
     return false;
   }
+  start(m);
+  return true;
+}
+
+void MapAutosave::saveBeforeGoingOn(const LocalMapper& m) {
+  if (!on()) return;
+  collect();  // the write in progress first: the files are written in order
+  start(m);
+  collect();
+}
+
+void MapAutosave::start(const LocalMapper& m) {
   due_ = false;
   last_start_ = std::chrono::steady_clock::now();
   const std::filesystem::path dir = std::filesystem::path(path_).parent_path();
@@ -104,7 +116,6 @@ bool MapAutosave::save(const LocalMapper& m) {
     return msSince(t0);
   });
   ++saves_;
-  return true;
 }
 
 }  // namespace binloop

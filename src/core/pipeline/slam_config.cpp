@@ -135,7 +135,8 @@ Sections backEndSettings(SlamConfig& c) {
         {"max_residual_ratio", {S::kDouble, &l.max_residual_ratio, 0}},
         {"min_keyframes_between_loops", {S::kInt, &l.min_keyframes_between_loops, 0}},
         {"reanchor_min_m", {S::kDouble, &l.reanchor_min_m, 0}},
-        {"fuse", {S::kBool, &l.fuse, 0}}}},
+        {"fuse", {S::kBool, &l.fuse, 0}},
+        {"resend_corrections_after_updates", {S::kInt, &l.resend_corrections_after_updates, 1}}}},
   };
 }
 

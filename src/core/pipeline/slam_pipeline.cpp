@@ -114,7 +114,7 @@ void SlamPipeline::sendMapUpdate(const msg::LocalMapUpdatePtr& u, bool loop_thre
   if (mode_ == PipelineMode::kThreaded && loop_thread_running)
     loop_inbox_.push({nullptr, u, std::nullopt});
   else
-    closer_->apply(*u);
+    closer_->apply(*u);  // what it would send again is ignored here: in one process no correction is lost
 }
 
 void SlamPipeline::mergeGlobalBa(bool wait, bool loop_thread_running) {
@@ -124,6 +124,7 @@ void SlamPipeline::mergeGlobalBa(bool wait, bool loop_thread_running) {
 void SlamPipeline::map(const MappingInput& in) {
   if (const auto* c = std::get_if<msg::CorrectionPtr>(&in)) {
     msg::LocalMapUpdatePtr u = mapper_.apply(**c);
+    if (!u) return;  // applied already
     last_correction_ba_ms_ = u->ba_ms;
     sendMapUpdate(u, true);
     return;

@@ -164,6 +164,31 @@ TEST_F(LoopCloserTest, AStageStartedAfterCorrectionsFollowsTheMapsSequence) {
   EXPECT_EQ(out.correction->sequence, 4u);
 }
 
+// Local mapping lost the correction (its process restarted from an autosave made before it): its updates go
+// on without it, and after resend_corrections_after_updates of them the closer gives it again; the next loop's
+// correction follows it in sequence.
+TEST_F(LoopCloserTest, ACorrectionMappingsUpdatesLackIsSentAgain) {
+  LoopCloserParams p;
+  p.resend_corrections_after_updates = 4;
+  LoopCloser lc(p);
+  driveLap(lc);
+  Pose3 truth = truthOnCircle(0);
+  truth.translation().x() += 1.0;
+  lc.addKeyframe(keyframe(kLap, truth, 0, truthOnCircle(0)));
+  const LoopCloser::Output out = lc.process(proposal(kLap, 0));
+  ASSERT_TRUE(out.correction) << out.closures.at(0)->detail;
+  msg::LocalMapUpdate u;
+  u.corrections_seen = 0;
+  for (int i = 0; i < 3; ++i) EXPECT_TRUE(lc.apply(u).empty()) << "update " << i;
+  const std::vector<msg::CorrectionPtr> again = lc.apply(u);
+  ASSERT_EQ(again.size(), 1u);
+  EXPECT_EQ(again[0], out.correction);
+  EXPECT_EQ(lc.correctionsResent(), 1u);
+  u.corrections_seen = 1;
+  for (int i = 0; i < 8; ++i) EXPECT_TRUE(lc.apply(u).empty());
+  EXPECT_EQ(lc.correctionsMade(), 1u);
+}
+
 TEST_F(LoopCloserTest, ACandidateFromAnotherPlaceIsRejectedForTooFewMatches) {
   LoopCloser lc;
   driveLap(lc);

@@ -77,6 +77,27 @@ class LocalMapperTest : public ::testing::Test {
     return v;
   }
 
+  // Two keyframes 4 m apart (and 2 m sideways) sharing 150 near stereo points, each also seeing 150 far
+  // ones 30-60 m away without stereo, which local mapping triangulates into points of its own.
+  std::pair<msg::KeyFrame, msg::KeyFrame> twoKeyframesWithFarPoints() {
+    for (int i = 0; i < 150; ++i) addPoint({rng.uniform(-6, 6), rng.uniform(-2, 1), rng.uniform(8, 18)});
+    for (int i = 0; i < 150; ++i) addPoint({rng.uniform(-15, 15), rng.uniform(-3, 2), rng.uniform(30, 60)});
+    auto withMono = [&](msg::KeyFrame kf, const msg::KeyFrame& mono) {
+      kf.keypoints.insert(kf.keypoints.end(), mono.keypoints.begin(), mono.keypoints.end());
+      kf.descriptors.insert(kf.descriptors.end(), mono.descriptors.begin(), mono.descriptors.end());
+      kf.state.point_ids.insert(kf.state.point_ids.end(), mono.state.point_ids.begin(),
+                                mono.state.point_ids.end());
+      return kf;
+    };
+    const size_t first = scene.size() - 300;
+    const int a = static_cast<int>(first), b = a + 150, c = a + 300;
+    msg::KeyFrame k1 = withMono(keyframe(0, range(a, b), true), keyframe(0, range(b, c), false, true));
+    // Sideways as well as forwards: straight ahead, 4 m of forward motion give far points too little parallax.
+    msg::KeyFrame k2 =
+        withMono(keyframe(4, range(a, b), false, false, 2), keyframe(4, range(b, c), false, true, 2));
+    return {k1, k2};
+  }
+
   static uint32_t weightTo(const msg::KeyframeState& s, SlamKeyframeId other) {
     for (const auto& e : s.covisible)
       if (e.id == other) return e.weight;
@@ -122,24 +143,10 @@ TEST_F(LocalMapperTest, CovisibilityCountsSharedPointsAndTheSpanningTreeFollowsT
 }
 
 TEST_F(LocalMapperTest, KeypointsWithoutStereoSeenFromTwoKeyframesBecomePoints) {
-  // 150 near points both keyframes share (covisibility), 150 far ones 30-60 m away seen without stereo.
-  for (int i = 0; i < 150; ++i) addPoint({rng.uniform(-6, 6), rng.uniform(-2, 1), rng.uniform(8, 18)});
-  for (int i = 0; i < 150; ++i) addPoint({rng.uniform(-15, 15), rng.uniform(-3, 2), rng.uniform(30, 60)});
   LocalMapperParams p;
   p.cull_keyframes = false;
   LocalMapper m(p);
-  auto withMono = [&](msg::KeyFrame kf, const msg::KeyFrame& mono) {
-    kf.keypoints.insert(kf.keypoints.end(), mono.keypoints.begin(), mono.keypoints.end());
-    kf.descriptors.insert(kf.descriptors.end(), mono.descriptors.begin(), mono.descriptors.end());
-    kf.state.point_ids.insert(kf.state.point_ids.end(), mono.state.point_ids.begin(),
-                              mono.state.point_ids.end());
-    return kf;
-  };
-  const msg::KeyFrame k1 =
-      withMono(keyframe(0, range(0, 150), true), keyframe(0, range(150, 300), false, true));
-  // Sideways as well as forwards: straight ahead, 4 m of forward motion give far points too little parallax.
-  const msg::KeyFrame k2 =
-      withMono(keyframe(4, range(0, 150), false, false, 2), keyframe(4, range(150, 300), false, true, 2));
+  const auto [k1, k2] = twoKeyframesWithFarPoints();
   m.process(k1);
   const auto o2 = m.process(k2);
   EXPECT_GT(o2.update->points_triangulated, 120) << "of 150 far keypoints";
@@ -157,6 +164,35 @@ TEST_F(LocalMapperTest, KeypointsWithoutStereoSeenFromTwoKeyframesBecomePoints) 
     ++checked;
   }
   EXPECT_EQ(checked, o2.update->points_triangulated);
+}
+
+// A reset or a loaded map puts a new mapper in the old one's place while the old one's updates may still be
+// on their way: the new one's points carry ids of a new session, none the old one issued.
+TEST_F(LocalMapperTest, AMapperInAnothersPlaceIssuesNoPointIdOfIt) {
+  LocalMapperParams p;
+  p.cull_keyframes = false;
+  const auto [k1, k2] = twoKeyframesWithFarPoints();
+  auto triangulated = [&](LocalMapper& m) {
+    m.process(k1);
+    const auto o2 = m.process(k2);
+    std::vector<MapPointId> ids;
+    for (const msg::MapPoint& mp : o2.update->points)
+      if (issuerOf(mp.id) == IdIssuer::kLocalMapping) ids.push_back(mp.id);
+    return ids;
+  };
+  LocalMapper before(p);
+  const std::vector<MapPointId> old_ids = triangulated(before);
+  ASSERT_GT(old_ids.size(), 100u);
+  ASSERT_EQ(before.pointIdsIssued(), old_ids.size());
+  LocalMapper after(p);
+  after.continueIdsInNewSession(before.pointIdsIssued());
+  const std::vector<MapPointId> new_ids = triangulated(after);
+  ASSERT_GT(new_ids.size(), 100u);
+  const MapPointId newest_old = *std::max_element(old_ids.begin(), old_ids.end());
+  for (MapPointId id : new_ids) EXPECT_GT(id, newest_old) << "point id " << counterOf(id) << " again";
+  LocalMapper unaware(p);  // what a reset made before: ids from 1 again
+  const std::vector<MapPointId> again = triangulated(unaware);
+  EXPECT_NE(std::find(old_ids.begin(), old_ids.end(), again.front()), old_ids.end());
 }
 
 TEST_F(LocalMapperTest, AKeyframeNamingSizesThatDifferIsRefused) {
@@ -240,6 +276,14 @@ TEST_F(LocalMapperTest, AnAutosaveIsResumedByItsOwnSessionOnly) {
     EXPECT_FALSE(spaced.save(m)) << "a save within 20 times the last one's duration is skipped";
     std::this_thread::sleep_for(std::chrono::milliseconds(static_cast<int>(spaced.lastMs() * 25) + 5));
     EXPECT_TRUE(spaced.afterKeyframe(m)) << "the skipped save is made at the next keyframe";
+    // After a loop correction the save is made at once and written before the caller goes on.
+    spaced.saveBeforeGoingOn(m);
+    EXPECT_EQ(spaced.saves(), 3u);
+    std::string note;
+    const auto written = MapAutosave(dir.path() + "/spaced.autosave", 100, "graph_1").resume(p, &note);
+    ASSERT_NE(written, nullptr) << note;
+    EXPECT_EQ(written->keyframeCount(), 3u);
+    EXPECT_FALSE(spaced.save(m)) << "and it counts for the spacing";
   }
 
   std::string note;
@@ -309,7 +353,16 @@ TEST_F(LocalMapperTest, ACorrectionMovesKeyframesWithTheirParentAndPointsWithThe
     const Eigen::Vector3d expected = i < 100 ? scene[i].p_w : Eigen::Vector3d(delta * scene[i].p_w);
     EXPECT_LT((mp.p_w - expected).norm(), 1e-9) << "point " << i;
   }
-  EXPECT_THROW(m.apply(c), std::invalid_argument) << "the same correction twice";
+  // Loop closing sends a correction again when mapping's updates lack it (a restart, a lost message): when
+  // it had arrived after all, it is applied once. One that skips a correction is refused until the
+  // missing one comes.
+  EXPECT_EQ(m.apply(c), nullptr) << "the same correction twice";
+  ASSERT_TRUE(m.keyframePose(k3.id, &T));
+  EXPECT_LT((T.translation() - (delta * k3.state.T_w_c).translation()).norm(), 1e-9) << "moved once";
+  msg::Correction third = c;
+  third.sequence = 3;
+  EXPECT_THROW(m.apply(third), std::invalid_argument) << "the third before the second";
+  EXPECT_EQ(m.correctionsApplied(), 1u);
 
   // Tracking made k4 on k3 before it applied the correction.
   msg::KeyFrame k4 = keyframe(1.5, range(160, 300), true);
