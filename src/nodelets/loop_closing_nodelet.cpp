@@ -35,7 +35,8 @@ class LoopClosingNodelet : public nodelet::Nodelet {
   bool onExternalLoop(binloop::AddExternalLoop::Request& req, binloop::AddExternalLoop::Response& res);
   void runPending();
   void handle(const binloop::LoopCloser::Output& out, const std_msgs::Header& header);
-  void sendAgain(const std::vector<binloop::msg::CorrectionPtr>& again, bool gap, const std_msgs::Header& header);
+  void sendAgain(const std::vector<binloop::msg::CorrectionPtr>& again, bool gap,
+                 const std_msgs::Header& header);
   void publishPathAndEdges(const ros::Time& stamp);
   void problem(const std::string& what);
   void diagnose(diagnostic_updater::DiagnosticStatusWrapper& s);
@@ -228,11 +229,11 @@ void LoopClosingNodelet::sendAgain(const std::vector<binloop::msg::CorrectionPtr
                                    const std_msgs::Header& header) {
   std_msgs::Header h = header;
   h.frame_id = slam_frame_;
-  NODELET_WARN("binloop/LoopClosing: local mapping's updates still lack corrections %lu-%lu (it restarted, or "
-               "one was lost on the way): sent again%s",
-               static_cast<unsigned long>(again.front()->sequence),
-               static_cast<unsigned long>(again.back()->sequence),
-               gap ? "; it also lacks older ones, no longer kept, so it will refuse these" : "");
+  NODELET_WARN(
+      "binloop/LoopClosing: local mapping's updates still lack corrections %lu-%lu (it restarted, or "
+      "one was lost on the way): sent again%s",
+      static_cast<unsigned long>(again.front()->sequence), static_cast<unsigned long>(again.back()->sequence),
+      gap ? "; it also lacks older ones, no longer kept, so it will refuse these" : "");
   if (gap) problem("local mapping lacks corrections no longer kept: it refuses every later one");
   for (const binloop::msg::CorrectionPtr& c : again)
     correction_pub_.publish(boost::make_shared<binloop::Correction>(toRos(*c, h)));

@@ -71,7 +71,7 @@ class MapAutosave {
   std::chrono::steady_clock::time_point last_start_;
   std::future<double> writing_;  // the write's ms
 
-  bool spacedOut();  // collects a finished write
+  bool spacedOut();                  // collects a finished write
   void start(const LocalMapper& m);  // serialises here, writes on another thread
   void collect();
 };

@@ -13,8 +13,8 @@ namespace binloop {
 msg::LocalMapUpdatePtr LocalMapper::apply(const msg::Correction& c) {
   const auto t0 = std::chrono::steady_clock::now();
   if (c.sequence <= history_.applied()) return nullptr;  // sent again, and this one had come after all
-  history_.begin(c.sequence);  // throws for a correction out of order
-  stopGlobalBa();              // its result would undo the correction (ORB-SLAM2 stops it too)
+  history_.begin(c.sequence);                            // throws for a correction out of order
+  stopGlobalBa();  // its result would undo the correction (ORB-SLAM2 stops it too)
   auto u = std::make_shared<msg::LocalMapUpdate>();
   u->sequence = ++updates_;
   u->keyframe = c.query;

@@ -165,8 +165,8 @@ TEST_F(LoopCloserTest, AStageStartedAfterCorrectionsFollowsTheMapsSequence) {
 }
 
 // Local mapping lost the correction (its process restarted from an autosave made before it): its updates go
-// on without it, and after resend_corrections_after_updates of them the closer gives it again; the next loop's
-// correction follows it in sequence.
+// on without it, and after resend_corrections_after_updates of them the closer gives it again; the next
+// loop's correction follows it in sequence.
 TEST_F(LoopCloserTest, ACorrectionMappingsUpdatesLackIsSentAgain) {
   LoopCloserParams p;
   p.resend_corrections_after_updates = 4;

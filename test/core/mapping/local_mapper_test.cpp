@@ -92,7 +92,8 @@ class LocalMapperTest : public ::testing::Test {
     const size_t first = scene.size() - 300;
     const int a = static_cast<int>(first), b = a + 150, c = a + 300;
     msg::KeyFrame k1 = withMono(keyframe(0, range(a, b), true), keyframe(0, range(b, c), false, true));
-    // Sideways as well as forwards: straight ahead, 4 m of forward motion give far points too little parallax.
+    // Sideways as well as forwards: straight ahead, 4 m of forward motion give far points too little
+    // parallax.
     msg::KeyFrame k2 =
         withMono(keyframe(4, range(a, b), false, false, 2), keyframe(4, range(b, c), false, true, 2));
     return {k1, k2};
