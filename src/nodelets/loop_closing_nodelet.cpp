@@ -80,7 +80,7 @@ void LoopClosingNodelet::onInit() {
     throw;
   }
   slam_frame_ = stringParam(pnh, "slam_frame", "slam");  // tracking publishes map -> slam
-  correction_pub_ = nh.advertise<binloop::Correction>("correction", 10);
+  correction_pub_ = nh.advertise<binloop::Correction>("correction", binloop::CorrectionOutbox::kKept + 10);
   closure_pub_ = nh.advertise<binloop::LoopClosure>("loop_closure", 100);
   path_pub_ = nh.advertise<nav_msgs::Path>("corrected_path", 1, true);
   edges_pub_ = nh.advertise<visualization_msgs::MarkerArray>("loop_edges", 1, true);

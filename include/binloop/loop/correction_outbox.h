@@ -19,7 +19,10 @@ namespace binloop {
 
 class CorrectionOutbox {
  public:
-  explicit CorrectionOutbox(int resend_after_updates = 8, size_t kept = 32);
+  /// Corrections kept by default: a publisher of corrections needs a queue at least this long, or a resend
+  /// of them all would drop the oldest.
+  static constexpr size_t kKept = 32;
+  explicit CorrectionOutbox(int resend_after_updates = 8, size_t kept = kKept);
   /// A correction just sent (sequence one after the last).
   void sent(const msg::CorrectionPtr& c);
   /// An update local mapping made after applying `seen` corrections: the corrections to send again (in
