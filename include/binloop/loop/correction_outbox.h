@@ -32,8 +32,6 @@ class CorrectionOutbox {
   uint64_t lastSent() const { return kept_.empty() ? 0 : kept_.back()->sequence; }
   /// Corrections sent again so far.
   uint64_t resent() const { return resent_; }
-  /// Forgets what was sent (a new map: its corrections are not the old map's).
-  void clear();
 
  private:
   int resend_after_;

@@ -33,9 +33,4 @@ std::vector<msg::CorrectionPtr> CorrectionOutbox::mappingSaw(uint64_t seen, bool
   return again;
 }
 
-void CorrectionOutbox::clear() {
-  kept_.clear();
-  behind_ = 0;
-}
-
 }  // namespace binloop
