@@ -30,6 +30,12 @@ class IdCounter {
   /// older than the ids it had issued before it stopped (an autosave) issues none of those again, though it
   /// cannot know how many there were. 2^24 sessions of 2^32 ids each.
   void startSession() { count_ = ((count_ >> 32) + 1) << 32; }
+  /// A new session after `issued` ids of another counter of the same issuer and after this one's own: for a
+  /// stage that takes another's place (a reset, a loaded map) while ids of the other may still be in flight.
+  void startSessionAfter(uint64_t issued) {
+    restore(issued);
+    startSession();
+  }
 
  private:
   uint64_t base_;

@@ -7,6 +7,7 @@
 #include <unordered_map>
 #include <vector>
 
+#include "binloop/map/map_store.h"
 #include "binloop/messages/keyframe.h"
 #include "binloop/messages/local_map_update.h"
 
@@ -45,8 +46,8 @@ class MapReplica {
   /// Keyframes whose camera lies within radius_m of `centre`, nearest first (ties: newer first), at most n.
   std::vector<SlamKeyframeId> keyframesNear(const Eigen::Vector3d& centre, double radius_m, size_t n) const;
 
-  size_t pointCount() const { return points_.size(); }
-  size_t keyframeCount() const { return keyframes_.size(); }
+  size_t pointCount() const { return map_.points().size(); }
+  size_t keyframeCount() const { return map_.keyframes().size(); }
   SlamKeyframeId lastKeyframe() const { return last_keyframe_; }
 
   /// Its whole content, in id order (two saves of the same replica give the same bytes); load() replaces it.
@@ -59,13 +60,11 @@ class MapReplica {
   /// For apply(u, true): each held keyframe that `u` neither names nor culls -> how it moves.
   std::unordered_map<SlamKeyframeId, Pose3> unsentMoves(const msg::LocalMapUpdate& u) const;
 
-  std::unordered_map<MapPointId, msg::MapPoint> points_;
-  std::unordered_map<SlamKeyframeId, msg::KeyframeState> keyframes_;
+  // Culled keyframes keep their parent then: an unsent keyframe made on one is carried as that parent moves.
+  // Not saved: a loaded replica has nothing in flight, and a keyframe made after the load names a held
+  // parent.
+  MapStore<msg::KeyframeState, msg::MapPoint> map_;
   std::unordered_map<MapPointId, std::vector<SlamKeyframeId>> observers_;
-  std::unordered_map<MapPointId, MapPointId> replaced_;
-  // Culled keyframe -> its parent then: an unsent keyframe made on it is carried as that parent moves. Not
-  // saved: a loaded replica has nothing in flight, and a keyframe made after the load names a held parent.
-  std::unordered_map<SlamKeyframeId, SlamKeyframeId> culled_parent_;
   SlamKeyframeId last_keyframe_ = kNoId;
 };
 

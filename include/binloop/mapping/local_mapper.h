@@ -19,6 +19,7 @@
 #include "binloop/map/correction_history.h"
 #include "binloop/map/ids.h"
 #include "binloop/map/keypoint_grid.h"
+#include "binloop/map/map_store.h"
 #include "binloop/map/scale_pyramid.h"
 #include "binloop/mapping/epipolar_matcher.h"
 #include "binloop/mapping/triangulation.h"
@@ -111,8 +112,8 @@ class LocalMapper {
 
   /// Every map point's position now (for display).
   std::vector<Eigen::Vector3d> pointPositions() const;
-  size_t keyframeCount() const { return kfs_.size(); }
-  size_t pointCount() const { return pts_.size(); }
+  size_t keyframeCount() const { return map_.keyframes().size(); }
+  size_t pointCount() const { return map_.points().size(); }
 
   /// Every keyframe of the map as local mapping sends it to the loop stages, marked `resent`, in the order
   /// they came: for a loop stage that started after them (a restarted process), so that it holds the map
@@ -134,10 +135,7 @@ class LocalMapper {
   uint64_t pointIdsIssued() const { return point_ids_.issued(); }
   /// Point ids from a new session after `issued` and after this mapper's own: for a mapper that takes
   /// another's place (a reset, a loaded map) while points of the other may still be on their way.
-  void continueIdsInNewSession(uint64_t issued) {
-    point_ids_.restore(issued);
-    point_ids_.startSession();
-  }
+  void continueIdsInNewSession(uint64_t issued) { point_ids_.startSessionAfter(issued); }
 
  private:
   struct KF {
@@ -200,11 +198,7 @@ class LocalMapper {
   LocalMapperParams p_;
   ScalePyramid scales_;
   StereoCamera camera_;
-  std::unordered_map<SlamKeyframeId, KF> kfs_;
-  std::unordered_map<MapPointId, MP> pts_;
-  std::unordered_map<MapPointId, MapPointId> replaced_;
-  std::unordered_map<SlamKeyframeId, std::pair<SlamKeyframeId, Pose3>>
-      culled_;  // id -> (parent, T_parent_kf)
+  MapStore<KF, MP> map_;
   std::deque<MapPointId> recent_;
   std::vector<MapPointId> touched_;  // points whose state goes into this update
   std::atomic<bool> abort_{false};

@@ -3,9 +3,6 @@
 #include <algorithm>
 #include <unordered_set>
 
-#include "binloop/map/ancestors.h"
-#include "binloop/map/fused_points.h"
-
 namespace binloop {
 
 namespace {
@@ -32,12 +29,12 @@ void MapReplica::linkKeyframe(const msg::KeyframeState& kf) {
 }
 
 void MapReplica::upsertKeyframe(const msg::KeyframeState& kf) {
-  auto it = keyframes_.find(kf.id);
-  if (it != keyframes_.end()) {
+  auto it = map_.keyframes().find(kf.id);
+  if (it != map_.keyframes().end()) {
     unlinkKeyframe(it->second);
     it->second = kf;
   } else {
-    it = keyframes_.emplace(kf.id, kf).first;
+    it = map_.keyframes().emplace(kf.id, kf).first;
   }
   // Ids the sender did not know were fused yet are mapped to the kept point.
   for (MapPointId& p : it->second.point_ids) {
@@ -48,17 +45,17 @@ void MapReplica::upsertKeyframe(const msg::KeyframeState& kf) {
 }
 
 void MapReplica::upsertPoint(const msg::MapPoint& p) {
-  if (replaced_.count(p.id)) return;  // fused away meanwhile: the kept point stands for it
-  points_[p.id] = p;
+  if (map_.wasFused(p.id)) return;  // fused away meanwhile: the kept point stands for it
+  map_.points()[p.id] = p;
 }
 
 void MapReplica::removePoint(MapPointId id) {
-  points_.erase(id);
+  map_.points().erase(id);
   auto it = observers_.find(id);
   if (it == observers_.end()) return;
   for (SlamKeyframeId k : it->second) {
-    auto kf = keyframes_.find(k);
-    if (kf == keyframes_.end()) continue;
+    auto kf = map_.keyframes().find(k);
+    if (kf == map_.keyframes().end()) continue;
     for (MapPointId& q : kf->second.point_ids)
       if (q == id) q = kNoId;
   }
@@ -66,27 +63,31 @@ void MapReplica::removePoint(MapPointId id) {
 }
 
 void MapReplica::removeKeyframe(SlamKeyframeId id) {
-  auto it = keyframes_.find(id);
-  if (it == keyframes_.end()) return;
-  culled_parent_[id] = it->second.parent;
+  auto it = map_.keyframes().find(id);
+  if (it == map_.keyframes().end()) return;
+  const auto parent = map_.keyframes().find(it->second.parent);
+  map_.recordCulled(id, it->second.parent,
+                    parent == map_.keyframes().end()
+                        ? Pose3::Identity()
+                        : Pose3(parent->second.T_w_c.inverse() * it->second.T_w_c));
   unlinkKeyframe(it->second);
-  keyframes_.erase(it);
+  map_.keyframes().erase(it);
 }
 
 void MapReplica::fuse(MapPointId removed, MapPointId kept) {
   // Another stage may name a point that was itself fused meanwhile: merge what it has become.
-  removed = followFusions(replaced_, removed);
+  removed = map_.followed(removed);
   kept = resolve(kept);
   if (removed == kept || kept == kNoId) return;
-  replaced_[removed] = kept;
+  map_.recordFusion(removed, kept);
   auto it = observers_.find(removed);
   if (it != observers_.end()) {
     const std::vector<SlamKeyframeId> seen = it->second;
     observers_.erase(it);
     auto& kv = observers_[kept];
     for (SlamKeyframeId k : seen) {
-      auto kf = keyframes_.find(k);
-      if (kf == keyframes_.end()) continue;
+      auto kf = map_.keyframes().find(k);
+      if (kf == map_.keyframes().end()) continue;
       // A keyframe that already sees the kept point drops the duplicate (as local mapping does).
       const bool has_kept = std::find(kf->second.point_ids.begin(), kf->second.point_ids.end(), kept) !=
                             kf->second.point_ids.end();
@@ -95,7 +96,7 @@ void MapReplica::fuse(MapPointId removed, MapPointId kept) {
       if (std::find(kv.begin(), kv.end(), k) == kv.end()) kv.push_back(k);
     }
   }
-  points_.erase(removed);
+  map_.points().erase(removed);
 }
 
 void MapReplica::add(const msg::KeyFrame& kf) {
@@ -113,12 +114,12 @@ void MapReplica::apply(const msg::LocalMapUpdate& u, bool carry_unsent) {
   for (const auto& k : u.keyframes) upsertKeyframe(k);
   if (moves.empty()) return;
   for (const auto& [id, d] : moves) {
-    auto it = keyframes_.find(id);
-    if (it != keyframes_.end()) it->second.T_w_c = orthonormalized(d * it->second.T_w_c);
+    auto it = map_.keyframes().find(id);
+    if (it != map_.keyframes().end()) it->second.T_w_c = orthonormalized(d * it->second.T_w_c);
   }
   std::unordered_set<MapPointId> sent;
   for (const auto& p : u.points) sent.insert(p.id);
-  for (auto& [id, p] : points_) {
+  for (auto& [id, p] : map_.points()) {
     auto m = moves.find(p.reference);
     if (m == moves.end() || sent.count(id)) continue;
     p.p_w = m->second * p.p_w;
@@ -129,45 +130,38 @@ void MapReplica::apply(const msg::LocalMapUpdate& u, bool carry_unsent) {
 std::unordered_map<SlamKeyframeId, Pose3> MapReplica::unsentMoves(const msg::LocalMapUpdate& u) const {
   std::unordered_map<SlamKeyframeId, Pose3> sent;  // keyframes in `u` -> how they moved here
   for (const auto& k : u.keyframes) {
-    auto it = keyframes_.find(k.id);
-    sent[k.id] = it == keyframes_.end() ? Pose3::Identity() : Pose3(k.T_w_c * it->second.T_w_c.inverse());
+    auto it = map_.keyframes().find(k.id);
+    sent[k.id] =
+        it == map_.keyframes().end() ? Pose3::Identity() : Pose3(k.T_w_c * it->second.T_w_c.inverse());
   }
   const std::unordered_set<SlamKeyframeId> culled(u.culled_keyframes.begin(), u.culled_keyframes.end());
-  auto parentOf = [this](SlamKeyframeId k) {
-    if (auto held = keyframes_.find(k); held != keyframes_.end()) return held->second.parent;
-    auto gone = culled_parent_.find(k);  // culled meanwhile
-    return gone == culled_parent_.end() ? kNoId : gone->second;
-  };
   std::unordered_map<SlamKeyframeId, Pose3> moves;
-  for (const auto& [id, kf] : keyframes_) {
+  for (const auto& [id, kf] : map_.keyframes()) {
     if (sent.count(id) || culled.count(id)) continue;
     // Up the parents (unsent ones were made here one on another) to the first the update names; with an
     // ancestor neither side holds, it stays.
     const SlamKeyframeId a =
-        firstAncestor(kf.parent, parentOf, [&](SlamKeyframeId x) { return sent.count(x) > 0; });
+        map_.firstAncestor(kf.parent, [&](SlamKeyframeId x) { return sent.count(x) > 0; });
     moves.emplace(id, a == kNoId ? Pose3::Identity() : sent.at(a));
   }
   return moves;
 }
 
-MapPointId MapReplica::resolve(MapPointId id) const {
-  id = followFusions(replaced_, id);
-  return points_.count(id) ? id : kNoId;
-}
+MapPointId MapReplica::resolve(MapPointId id) const { return map_.resolve(id); }
 
 const msg::MapPoint* MapReplica::point(MapPointId id) const {
-  auto it = points_.find(resolve(id));
-  return it == points_.end() ? nullptr : &it->second;
+  auto it = map_.points().find(resolve(id));
+  return it == map_.points().end() ? nullptr : &it->second;
 }
 
 const msg::KeyframeState* MapReplica::keyframe(SlamKeyframeId id) const {
-  auto it = keyframes_.find(id);
-  return it == keyframes_.end() ? nullptr : &it->second;
+  auto it = map_.keyframes().find(id);
+  return it == map_.keyframes().end() ? nullptr : &it->second;
 }
 
 std::vector<SlamKeyframeId> MapReplica::recentKeyframes(size_t n) const {
   std::vector<SlamKeyframeId> ids;
-  for (const auto& [id, kf] : keyframes_) ids.push_back(id);
+  for (const auto& [id, kf] : map_.keyframes()) ids.push_back(id);
   std::sort(ids.begin(), ids.end(), [](SlamKeyframeId a, SlamKeyframeId b) {
     return counterOf(a) != counterOf(b) ? counterOf(a) > counterOf(b) : a > b;
   });
@@ -178,7 +172,7 @@ std::vector<SlamKeyframeId> MapReplica::recentKeyframes(size_t n) const {
 std::vector<SlamKeyframeId> MapReplica::keyframesNear(const Eigen::Vector3d& centre, double radius_m,
                                                       size_t n) const {
   std::vector<std::pair<double, SlamKeyframeId>> near;
-  for (const auto& [id, kf] : keyframes_) {
+  for (const auto& [id, kf] : map_.keyframes()) {
     const double d = (kf.T_w_c.translation() - centre).norm();
     if (d <= radius_m) near.emplace_back(d, id);
   }

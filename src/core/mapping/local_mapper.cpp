@@ -6,8 +6,6 @@
 #include <stdexcept>
 #include <unordered_set>
 
-#include "binloop/map/ancestors.h"
-#include "binloop/map/fused_points.h"
 #include "binloop/util/stopwatch.h"
 #include "global_ba_job.h"
 
@@ -15,10 +13,7 @@ namespace binloop {
 
 LocalMapper::LocalMapper(const LocalMapperParams& p) : p_(p) {}
 
-MapPointId LocalMapper::resolve(MapPointId id) const {
-  id = followFusions(replaced_, id);
-  return pts_.count(id) ? id : kNoId;
-}
+MapPointId LocalMapper::resolve(MapPointId id) const { return map_.resolve(id); }
 
 void LocalMapper::addObservation(MP& mp, KF& kf, int idx) {
   mp.obs[kf.state.id] = idx;
@@ -33,7 +28,7 @@ void LocalMapper::updatePointShape(MP& mp) {
   const KF* ref = nullptr;
   int ref_idx = -1;
   for (const auto& [kid, idx] : mp.obs) {
-    const KF& kf = kfs_.at(kid);
+    const KF& kf = map_.keyframes().at(kid);
     ds.push_back(&kf.descriptors[idx]);
     const Eigen::Vector3d ray = mp.state.p_w - kf.state.T_w_c.translation();
     normal += ray.normalized();
@@ -69,12 +64,12 @@ void LocalMapper::insert(const msg::KeyFrame& in) {
   if (const std::string bad = msg::keyframeShapeProblem(in); !bad.empty()) throw std::invalid_argument(bad);
   // Ids are never reused: one the map holds (or culled) comes from another tracking session (a tracker
   // restarted while mapping kept its map), and taking it would overwrite a keyframe or point others refer to.
-  if (kfs_.count(in.id) || culled_.count(in.id))
+  if (map_.knows(in.id))
     throw std::invalid_argument("keyframe " + std::to_string(in.id) +
                                 " is already in the map (its id was issued " +
                                 "again: a tracker restarted without mapping?); refused");
   for (const msg::MapPoint& np : in.new_points)
-    if (np.id == kNoId || pts_.count(np.id) || replaced_.count(np.id))
+    if (np.id == kNoId || map_.points().count(np.id) || map_.wasFused(np.id))
       throw std::invalid_argument("keyframe " + std::to_string(in.id) + ": new map point " +
                                   std::to_string(np.id) + " is 0 or already in the map; refused");
   if (scales_.levels() == 0) scales_ = ScalePyramid(in.scale_factor, in.levels);
@@ -82,12 +77,9 @@ void LocalMapper::insert(const msg::KeyFrame& in) {
   // Made before a loop correction tracking had not heard of yet: it moves as its parent did.
   const bool is_late = in.corrections_seen < history_.applied();
   const Pose3 late = is_late ? history_.adopt(in.corrections_seen, in.id, in.state.parent,
-                                              [this](SlamKeyframeId a) {
-                                                auto c = culled_.find(a);
-                                                return c == culled_.end() ? kNoId : c->second.first;
-                                              })
+                                              [this](SlamKeyframeId a) { return map_.culledParent(a); })
                              : Pose3::Identity();
-  KF& kf = kfs_[in.id];
+  KF& kf = map_.keyframes()[in.id];
   kf.state = in.state;
   kf.state.covisible.clear();
   if (is_late) kf.state.T_w_c = orthonormalized(late * kf.state.T_w_c);
@@ -101,7 +93,7 @@ void LocalMapper::insert(const msg::KeyFrame& in) {
 
   std::unordered_set<MapPointId> created;
   for (const msg::MapPoint& np : in.new_points) {
-    MP& mp = pts_[np.id];
+    MP& mp = map_.points()[np.id];
     mp.state = np;
     if (is_late) {
       mp.state.p_w = late * np.p_w;
@@ -117,21 +109,21 @@ void LocalMapper::insert(const msg::KeyFrame& in) {
     id = resolve(id);
     kf.state.point_ids[i] = kNoId;
     if (id == kNoId) continue;  // culled meanwhile
-    MP& mp = pts_.at(id);
+    MP& mp = map_.points().at(id);
     if (mp.obs.count(kf.state.id)) continue;  // two keypoints matched to one point after a fusion
     addObservation(mp, kf, static_cast<int>(i));
     touched_.push_back(id);
   }
   for (MapPointId id : created) {
-    MP& mp = pts_.at(id);
+    MP& mp = map_.points().at(id);
     if (mp.obs.empty()) {
-      pts_.erase(id);
+      map_.points().erase(id);
       continue;
     }
     updatePointShape(mp);
   }
   for (MapPointId id : touched_)
-    if (pts_.count(id)) updatePointShape(pts_.at(id));
+    if (map_.points().count(id)) updatePointShape(map_.points().at(id));
   updateConnections(kf);
 }
 
@@ -139,16 +131,16 @@ void LocalMapper::updateConnections(KF& kf) {
   std::map<SlamKeyframeId, int> w;
   for (MapPointId id : kf.state.point_ids) {
     if (id == kNoId) continue;
-    for (const auto& [k, idx] : pts_.at(id).obs)
+    for (const auto& [k, idx] : map_.points().at(id).obs)
       if (k != kf.state.id) ++w[k];
   }
   // Old edges of this keyframe go, then the new ones are written on both sides.
   for (const auto& [k, c] : kf.weights) {
-    auto it = kfs_.find(k);
-    if (it != kfs_.end()) it->second.weights.erase(kf.state.id);
+    auto it = map_.keyframes().find(k);
+    if (it != map_.keyframes().end()) it->second.weights.erase(kf.state.id);
   }
   kf.weights = w;
-  for (const auto& [k, c] : w) kfs_.at(k).weights[kf.state.id] = c;
+  for (const auto& [k, c] : w) map_.keyframes().at(k).weights[kf.state.id] = c;
   auto covisible = [&](const KF& x) {
     std::vector<msg::CovisibleEdge> e;
     int best = 0;
@@ -163,24 +155,25 @@ void LocalMapper::updateConnections(KF& kf) {
   };
   kf.state.covisible = covisible(kf);
   for (const auto& e : kf.state.covisible) {
-    KF& o = kfs_.at(e.id);
+    KF& o = map_.keyframes().at(e.id);
     o.state.covisible = covisible(o);
   }
   // Spanning tree: the first time, the keyframe with most shared points becomes the parent.
   if (kf.state.id != first_kf_ && !kf.state.covisible.empty() &&
-      (kf.state.parent == kNoId || !kfs_.count(kf.state.parent) || kf.state.parent == kf.state.id))
+      (kf.state.parent == kNoId || !map_.keyframes().count(kf.state.parent) ||
+       kf.state.parent == kf.state.id))
     kf.state.parent = kf.state.covisible.front().id;
-  if (kf.state.parent != kNoId && !kfs_.count(kf.state.parent)) kf.state.parent = kNoId;
+  if (kf.state.parent != kNoId && !map_.keyframes().count(kf.state.parent)) kf.state.parent = kNoId;
 }
 
 void LocalMapper::removePoint(MapPointId id) {
-  auto it = pts_.find(id);
-  if (it == pts_.end()) return;
+  auto it = map_.points().find(id);
+  if (it == map_.points().end()) return;
   for (const auto& [k, idx] : it->second.obs) {
-    auto kf = kfs_.find(k);
-    if (kf != kfs_.end()) kf->second.state.point_ids[idx] = kNoId;
+    auto kf = map_.keyframes().find(k);
+    if (kf != map_.keyframes().end()) kf->second.state.point_ids[idx] = kNoId;
   }
-  pts_.erase(it);
+  map_.points().erase(it);
 }
 
 std::vector<SlamKeyframeId> LocalMapper::neighbors(const KF& kf, int n) const {
@@ -196,7 +189,7 @@ std::vector<MapPointId> LocalMapper::pointsOf(const std::vector<SlamKeyframeId>&
   std::vector<MapPointId> out;
   std::unordered_set<MapPointId> seen;
   for (SlamKeyframeId k : keyframes)
-    for (MapPointId id : kfs_.at(k).state.point_ids)
+    for (MapPointId id : map_.keyframes().at(k).state.point_ids)
       if (id != kNoId && seen.insert(id).second) out.push_back(id);
   return out;
 }
@@ -209,26 +202,26 @@ LocalMapper::Output LocalMapper::process(const msg::KeyFrame& in) {
   u->keyframe = in.id;
   touched_.clear();
   insert(in);
-  KF& kf = kfs_.at(in.id);
+  KF& kf = map_.keyframes().at(in.id);
   cullRecentPoints(*u);
   if (p_.triangulate) createNewPoints(kf, *u);
   if (p_.fuse) fuseWithNeighbors(kf, *u);
-  if (p_.local_ba && kfs_.size() > 1) localBundleAdjustment(kf, *u);
+  if (p_.local_ba && map_.keyframes().size() > 1) localBundleAdjustment(kf, *u);
   if (p_.cull_keyframes) cullKeyframes(kf, *u);
 
   // The update: every keyframe of the local window (poses, associations, edges) and every touched point.
   std::unordered_set<SlamKeyframeId> sent;
   auto sendKf = [&](SlamKeyframeId id) {
-    auto it = kfs_.find(id);
-    if (it != kfs_.end() && sent.insert(id).second) u->keyframes.push_back(it->second.state);
+    auto it = map_.keyframes().find(id);
+    if (it != map_.keyframes().end() && sent.insert(id).second) u->keyframes.push_back(it->second.state);
   };
   sendKf(kf.state.id);
   for (SlamKeyframeId k : neighbors(kf, p_.local_ba_max_keyframes)) sendKf(k);
   std::sort(touched_.begin(), touched_.end());
   touched_.erase(std::unique(touched_.begin(), touched_.end()), touched_.end());
   for (MapPointId id : touched_) {
-    auto it = pts_.find(id);
-    if (it != pts_.end()) u->points.push_back(it->second.state);
+    auto it = map_.points().find(id);
+    if (it != map_.points().end()) u->points.push_back(it->second.state);
   }
   u->corrections_seen = history_.applied();
   u->total_ms = msSince(t0);
@@ -240,15 +233,16 @@ LocalMapper::Output LocalMapper::process(const msg::KeyFrame& in) {
 
 std::vector<LocalMapper::KeyframePose> LocalMapper::keyframes() const {
   std::vector<KeyframePose> out;
-  for (const auto& [id, kf] : kfs_) out.push_back({id, kf.frame_index, kf.stamp_s, kf.state.T_w_c});
+  for (const auto& [id, kf] : map_.keyframes())
+    out.push_back({id, kf.frame_index, kf.stamp_s, kf.state.T_w_c});
   std::sort(out.begin(), out.end(), [](const auto& a, const auto& b) { return a.id < b.id; });
   return out;
 }
 
 std::vector<Eigen::Vector3d> LocalMapper::pointPositions() const {
   std::vector<Eigen::Vector3d> out;
-  out.reserve(pts_.size());
-  for (const auto& [id, mp] : pts_) out.push_back(mp.state.p_w);
+  out.reserve(map_.points().size());
+  for (const auto& [id, mp] : map_.points()) out.push_back(mp.state.p_w);
   return out;
 }
 
@@ -257,14 +251,14 @@ bool LocalMapper::keyframePose(SlamKeyframeId id, Pose3* T_w_c) const {
   const SlamKeyframeId held = firstAncestor(
       id,
       [&](SlamKeyframeId k) {
-        auto c = culled_.find(k);
-        if (c == culled_.end()) return kNoId;
-        T = c->second.second * T;
-        return c->second.first;
+        const auto* c = map_.culled(k);
+        if (!c) return kNoId;
+        T = c->T_parent_kf * T;
+        return c->parent;
       },
-      [&](SlamKeyframeId k) { return kfs_.count(k) > 0; });
+      [&](SlamKeyframeId k) { return map_.keyframes().count(k) > 0; });
   if (held == kNoId) return false;
-  *T_w_c = kfs_.at(held).state.T_w_c * T;
+  *T_w_c = map_.keyframes().at(held).state.T_w_c * T;
   return true;
 }
 
@@ -286,7 +280,7 @@ std::shared_ptr<msg::KeyFrame> LocalMapper::messageOf(const KF& kf) const {
 
 std::vector<msg::KeyFramePtr> LocalMapper::keyframeMessages() const {
   std::vector<const KF*> kfs;
-  for (const auto& [id, kf] : kfs_) kfs.push_back(&kf);
+  for (const auto& [id, kf] : map_.keyframes()) kfs.push_back(&kf);
   std::sort(kfs.begin(), kfs.end(), [](const KF* a, const KF* b) { return a->seq < b->seq; });
   std::vector<msg::KeyFramePtr> out;
   for (const KF* kf : kfs) {
@@ -304,19 +298,19 @@ msg::LocalMapUpdatePtr LocalMapper::wholeMap() const {
   auto seen = [](uint64_t& highest, uint64_t id) {
     if (issuerOf(id) == IdIssuer::kTracking) highest = std::max(highest, counterOf(id));
   };
-  for (const auto& [id, kf] : kfs_) seen(u->tracking_keyframe_ids, id);
-  for (const auto& [id, c] : culled_) seen(u->tracking_keyframe_ids, id);
-  for (const auto& [id, mp] : pts_) seen(u->tracking_point_ids, id);
-  for (const auto& [id, kept] : replaced_) seen(u->tracking_point_ids, id);
+  for (const auto& [id, kf] : map_.keyframes()) seen(u->tracking_keyframe_ids, id);
+  for (const auto& [id, c] : map_.culledKeyframes()) seen(u->tracking_keyframe_ids, id);
+  for (const auto& [id, mp] : map_.points()) seen(u->tracking_point_ids, id);
+  for (const auto& [id, kept] : map_.fusions()) seen(u->tracking_point_ids, id);
   return u;
 }
 
 void LocalMapper::wholeMapInto(msg::LocalMapUpdate& u) const {
   std::vector<SlamKeyframeId> ids;
-  for (const auto& [id, kf] : kfs_) ids.push_back(id);
+  for (const auto& [id, kf] : map_.keyframes()) ids.push_back(id);
   std::sort(ids.begin(), ids.end());
-  for (SlamKeyframeId id : ids) u.keyframes.push_back(kfs_.at(id).state);
-  for (const auto& [id, mp] : pts_) u.points.push_back(mp.state);
+  for (SlamKeyframeId id : ids) u.keyframes.push_back(map_.keyframes().at(id).state);
+  for (const auto& [id, mp] : map_.points()) u.points.push_back(mp.state);
   std::sort(u.points.begin(), u.points.end(), [](const auto& a, const auto& b) { return a.id < b.id; });
   u.corrections_seen = history_.applied();
 }

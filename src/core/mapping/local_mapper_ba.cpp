@@ -26,20 +26,20 @@ LocalMapper::BaSetup LocalMapper::makeBaProblem(const std::vector<SlamKeyframeId
     if (kf_index.count(id)) return;
     kf_index[id] = b.problem.keyframes.size();
     b.problem.keyframes.push_back(
-        {id, orthonormalized(kfs_.at(id).state.T_w_c.inverse()), fixed || id == first_kf_});
+        {id, orthonormalized(map_.keyframes().at(id).state.T_w_c.inverse()), fixed || id == first_kf_});
   };
   for (SlamKeyframeId k : free) addKf(k, false);
   b.free = b.problem.keyframes.size();
   for (size_t i = 0; i < b.free; ++i)
-    for (MapPointId id : kfs_.at(b.problem.keyframes[i].id).state.point_ids)
+    for (MapPointId id : map_.keyframes().at(b.problem.keyframes[i].id).state.point_ids)
       if (id != kNoId && !pt_index.count(id)) {
         pt_index[id] = b.problem.points.size();
-        b.problem.points.push_back({id, pts_.at(id).state.p_w});
+        b.problem.points.push_back({id, map_.points().at(id).state.p_w});
       }
   for (const BaPoint& bp : b.problem.points)
-    for (const auto& [k, idx] : pts_.at(bp.id).obs) {
+    for (const auto& [k, idx] : map_.points().at(bp.id).obs) {
       addKf(k, true);
-      const KF& o = kfs_.at(k);
+      const KF& o = map_.keyframes().at(k);
       const msg::KeyPoint& kp = o.keypoints[idx];
       b.problem.observations.push_back({kf_index.at(k),
                                         pt_index.at(bp.id),
@@ -61,10 +61,10 @@ void LocalMapper::bundleAdjust(const std::vector<SlamKeyframeId>& free, const Lo
   u.ba_iterations = r.iterations;
   u.ba_outliers = r.num_outliers;
   for (const BaRefinedKeyframe& rk : r.keyframes)
-    kfs_.at(rk.id).state.T_w_c = orthonormalized(rk.T_c_w.inverse());
-  for (const BaPoint& bp : r.points) pts_.at(bp.id).state.p_w = bp.p_w;
+    map_.keyframes().at(rk.id).state.T_w_c = orthonormalized(rk.T_c_w.inverse());
+  for (const BaPoint& bp : r.points) map_.points().at(bp.id).state.p_w = bp.p_w;
   removeBaOutliers(b, r, u);
-  for (size_t i = 0; i < b.free; ++i) updateConnections(kfs_.at(b.problem.keyframes[i].id));
+  for (size_t i = 0; i < b.free; ++i) updateConnections(map_.keyframes().at(b.problem.keyframes[i].id));
 }
 
 void LocalMapper::removeBaOutliers(const BaSetup& b, const LocalBaResult& r, msg::LocalMapUpdate& u) {
@@ -73,19 +73,19 @@ void LocalMapper::removeBaOutliers(const BaSetup& b, const LocalBaResult& r, msg
   for (size_t i = 0; i < r.outlier.size(); ++i) {
     if (!r.outlier[i]) continue;
     const auto& [pid, k] = b.obs_of[i];
-    auto p = pts_.find(pid);
-    auto kf = kfs_.find(k);
-    if (p == pts_.end() || kf == kfs_.end()) continue;
+    auto p = map_.points().find(pid);
+    auto kf = map_.keyframes().find(k);
+    if (p == map_.points().end() || kf == map_.keyframes().end()) continue;
     auto it = p->second.obs.find(k);
     if (it == p->second.obs.end()) continue;
     kf->second.state.point_ids[it->second] = kNoId;
     p->second.obs.erase(it);
   }
   for (const BaPoint& bp : b.problem.points) {
-    auto p = pts_.find(bp.id);
-    if (p == pts_.end()) continue;
+    auto p = map_.points().find(bp.id);
+    if (p == map_.points().end()) continue;
     if (p->second.obs.empty()) {
-      pts_.erase(p);
+      map_.points().erase(p);
       u.culled_points.push_back(bp.id);
       continue;
     }
@@ -153,13 +153,14 @@ msg::LocalMapUpdatePtr LocalMapper::mergeGlobalBa(bool wait) {
     delta[rk.id] = rk.T_c_w.inverse() * start.keyframes[rk.index].T_c_w;
   std::unordered_map<MapPointId, Eigen::Vector3d> placed;
   for (size_t i = 0; i < job->result.points.size(); ++i)  // in the problem's order
-    if (auto p = pts_.find(start.points[i].id); p != pts_.end() && p->second.state.p_w == start.points[i].p_w)
+    if (auto p = map_.points().find(start.points[i].id);
+        p != map_.points().end() && p->second.state.p_w == start.points[i].p_w)
       placed[start.points[i].id] = job->result.points[i].p_w;
   size_t added = 0;
-  for (const auto& [id, kf] : kfs_) added += kf.seq > job->seq_at_start;
+  for (const auto& [id, kf] : map_.keyframes()) added += kf.seq > job->seq_at_start;
   moveMap(delta, &placed);
   removeBaOutliers(job->setup, job->result, *u);
-  for (auto& [id, kf] : kfs_) updateConnections(kf);
+  for (auto& [id, kf] : map_.keyframes()) updateConnections(kf);
   const double ms = 1000 * job->result.time_s;
   u->ba_ms = ms;
   u->ba_iterations = job->result.iterations;

@@ -34,19 +34,19 @@ msg::LocalMapUpdatePtr LocalMapper::apply(const msg::Correction& c) {
     const MapPointId a = resolve(removed), b = resolve(kept);
     if (a != kNoId && b != kNoId) replacePoint(a, b, *u);
   }
-  auto q = kfs_.find(c.query), m = kfs_.find(c.match);
-  if (c.fuse_by_projection && q != kfs_.end() && m != kfs_.end()) {
+  auto q = map_.keyframes().find(c.query), m = map_.keyframes().find(c.match);
+  if (c.fuse_by_projection && q != map_.keyframes().end() && m != map_.keyframes().end()) {
     std::vector<SlamKeyframeId> near_q{c.query}, near_m{c.match};
     for (SlamKeyframeId k : neighbors(q->second, p_.fuse_neighbors)) near_q.push_back(k);
     for (SlamKeyframeId k : neighbors(m->second, p_.fuse_neighbors)) near_m.push_back(k);
     const std::vector<MapPointId> from_match = pointsOf(near_m);
-    for (SlamKeyframeId k : near_q) fuseInto(kfs_.at(k), from_match, *u);
+    for (SlamKeyframeId k : near_q) fuseInto(map_.keyframes().at(k), from_match, *u);
     for (MapPointId& id : touched_) id = resolve(id);
     std::sort(touched_.begin(), touched_.end());
     touched_.erase(std::unique(touched_.begin(), touched_.end()), touched_.end());
     for (MapPointId id : touched_)
-      if (id != kNoId) updatePointShape(pts_.at(id));
-    for (SlamKeyframeId k : near_q) updateConnections(kfs_.at(k));
+      if (id != kNoId) updatePointShape(map_.points().at(id));
+    for (SlamKeyframeId k : near_q) updateConnections(map_.keyframes().at(k));
     u->points_fused_across_loop = static_cast<int>(u->fused.size());
   }
 
@@ -56,7 +56,7 @@ msg::LocalMapUpdatePtr LocalMapper::apply(const msg::Correction& c) {
   if (p_.global_ba_after_loop) {
     std::vector<SlamKeyframeId> all;
     for (SlamKeyframeId id : ids)
-      if (kfs_.count(id)) all.push_back(id);
+      if (map_.keyframes().count(id)) all.push_back(id);
     if (p_.global_ba_in_background) {
       startGlobalBa(all);
     } else {
@@ -82,14 +82,9 @@ std::vector<std::pair<SlamKeyframeId, Pose3>> LocalMapper::moveMap(
   // in the spanning tree; a culled keyframe's children went to its parent, and a point whose reference
   // keyframe was culled moves with that keyframe's parent. A point in `placed` goes where it says.
   std::unordered_map<SlamKeyframeId, Pose3> resolved;
-  auto parentOf = [&](SlamKeyframeId k) {
-    if (auto kf = kfs_.find(k); kf != kfs_.end()) return kf->second.state.parent;
-    if (auto cu = culled_.find(k); cu != culled_.end()) return cu->second.first;
-    return kNoId;
-  };
   auto deltaOf = [&](SlamKeyframeId id) {
     std::vector<SlamKeyframeId> path;  // climbed without a delta: they move with the ancestor that has one
-    const SlamKeyframeId known = firstAncestor(id, parentOf, [&](SlamKeyframeId k) {
+    const SlamKeyframeId known = map_.firstAncestor(id, [&](SlamKeyframeId k) {
       if (resolved.count(k) || delta.count(k)) return true;
       path.push_back(k);
       return false;
@@ -108,16 +103,16 @@ std::vector<std::pair<SlamKeyframeId, Pose3>> LocalMapper::moveMap(
     return it == placed->end() ? nullptr : &it->second;
   };
   std::vector<std::pair<SlamKeyframeId, Pose3>> moved;
-  for (const auto& [id, kf] : kfs_) moved.emplace_back(id, Pose3::Identity());
+  for (const auto& [id, kf] : map_.keyframes()) moved.emplace_back(id, Pose3::Identity());
   std::sort(moved.begin(), moved.end(), [](const auto& a, const auto& b) { return a.first < b.first; });
   for (auto& [id, d] : moved) {
     d = deltaOf(id);
-    KF& kf = kfs_.at(id);
+    KF& kf = map_.keyframes().at(id);
     kf.state.T_w_c = orthonormalized(d * kf.state.T_w_c);
   }
-  for (auto& [id, mp] : pts_) {
+  for (auto& [id, mp] : map_.points()) {
     SlamKeyframeId ref = mp.state.reference;
-    if (!kfs_.count(ref) && !culled_.count(ref) && !mp.obs.empty()) ref = mp.obs.begin()->first;
+    if (!map_.knows(ref) && !mp.obs.empty()) ref = mp.obs.begin()->first;
     const Pose3 d = deltaOf(ref);
     const Eigen::Vector3d* at = placedAt(id);
     mp.state.p_w = at ? *at : d * mp.state.p_w;

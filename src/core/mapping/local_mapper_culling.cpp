@@ -6,32 +6,32 @@
 namespace binloop {
 
 void LocalMapper::removeKeyframe(SlamKeyframeId id) {
-  KF& kf = kfs_.at(id);
+  KF& kf = map_.keyframes().at(id);
   for (size_t i = 0; i < kf.state.point_ids.size(); ++i) {
     const MapPointId pid = kf.state.point_ids[i];
     if (pid == kNoId) continue;
-    MP& mp = pts_.at(pid);
+    MP& mp = map_.points().at(pid);
     mp.obs.erase(id);
-    if (mp.obs.empty()) pts_.erase(pid);
+    if (mp.obs.empty()) map_.points().erase(pid);
   }
   for (const auto& [k, c] : kf.weights) {
-    auto it = kfs_.find(k);
-    if (it != kfs_.end()) it->second.weights.erase(id);
+    auto it = map_.keyframes().find(k);
+    if (it != map_.keyframes().end()) it->second.weights.erase(id);
   }
   // Children of the culled keyframe take its parent (ORB-SLAM2 picks the best covisible candidate; the
   // parent is the simplest choice that keeps the tree connected).
-  for (auto& [k, o] : kfs_)
+  for (auto& [k, o] : map_.keyframes())
     if (o.state.parent == id) o.state.parent = kf.state.parent;
-  auto parent = kfs_.find(kf.state.parent);
-  if (parent != kfs_.end())
-    culled_[id] = {kf.state.parent, parent->second.state.T_w_c.inverse() * kf.state.T_w_c};
-  kfs_.erase(id);
+  auto parent = map_.keyframes().find(kf.state.parent);
+  if (parent != map_.keyframes().end())
+    map_.recordCulled(id, kf.state.parent, parent->second.state.T_w_c.inverse() * kf.state.T_w_c);
+  map_.keyframes().erase(id);
 }
 
 void LocalMapper::cullKeyframes(KF& kf, msg::LocalMapUpdate& u) {
   for (SlamKeyframeId k : neighbors(kf, std::numeric_limits<int>::max())) {
     if (k == first_kf_) continue;
-    KF& c = kfs_.at(k);
+    KF& c = map_.keyframes().at(k);
     int points = 0, redundant = 0;
     for (size_t i = 0; i < c.state.point_ids.size(); ++i) {
       const MapPointId pid = c.state.point_ids[i];
@@ -40,13 +40,13 @@ void LocalMapper::cullKeyframes(KF& kf, msg::LocalMapUpdate& u) {
       // keypoint has (the matcher's depth is bf / disparity > 0, or -1 without a match).
       if (!isCloseDepth(c.keypoints[i].depth, camera_, p_.stereo)) continue;
       ++points;
-      const MP& mp = pts_.at(pid);
+      const MP& mp = map_.points().at(pid);
       if (mp.obs.size() <= 3) continue;
       const int level = c.keypoints[i].octave;
       int others = 0;
       for (const auto& [o, idx] : mp.obs) {
         if (o == k) continue;
-        if (kfs_.at(o).keypoints[idx].octave <= level + 1) ++others;
+        if (map_.keyframes().at(o).keypoints[idx].octave <= level + 1) ++others;
         if (others >= 3) break;
       }
       if (others >= 3) ++redundant;
@@ -57,7 +57,7 @@ void LocalMapper::cullKeyframes(KF& kf, msg::LocalMapUpdate& u) {
       removeKeyframe(k);
       u.culled_keyframes.push_back(k);
       for (SlamKeyframeId o : nb)
-        if (kfs_.count(o)) updateConnections(kfs_.at(o));
+        if (map_.keyframes().count(o)) updateConnections(map_.keyframes().at(o));
     }
   }
 }

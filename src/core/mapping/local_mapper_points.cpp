@@ -16,8 +16,8 @@ namespace binloop {
 void LocalMapper::cullRecentPoints(msg::LocalMapUpdate& u) {
   std::deque<MapPointId> keep;
   for (MapPointId id : recent_) {
-    auto it = pts_.find(id);
-    if (it == pts_.end()) continue;
+    auto it = map_.points().find(id);
+    if (it == map_.points().end()) continue;
     const uint64_t age = seq_ - it->second.first_seq;
     if (age >= static_cast<uint64_t>(p_.cull_after_keyframes) &&
         static_cast<int>(it->second.obs.size()) < p_.cull_min_observers) {
@@ -33,7 +33,7 @@ void LocalMapper::cullRecentPoints(msg::LocalMapUpdate& u) {
 void LocalMapper::createNewPoints(KF& kf, msg::LocalMapUpdate& u) {
   const auto t0 = std::chrono::steady_clock::now();
   for (SlamKeyframeId k : neighbors(kf, p_.triangulate_neighbors)) {
-    KF& o = kfs_.at(k);
+    KF& o = map_.keyframes().at(k);
     // Closer than the stereo baseline: the stereo pair itself already saw these points with more parallax.
     if ((o.state.T_w_c.translation() - kf.state.T_w_c.translation()).norm() < camera_.baseline_m) continue;
     const EpipolarView va{&kf.state.T_w_c, &camera_, &kf.keypoints, &kf.descriptors, &kf.state.point_ids};
@@ -44,7 +44,7 @@ void LocalMapper::createNewPoints(KF& kf, msg::LocalMapUpdate& u) {
       const TriangulationView tb{&o.state.T_w_c, &camera_, &o.keypoints[j]};
       if (triangulatePair(ta, tb, scales_, p_.triangulation, &X) != TriangulationResult::kOk) continue;
       const MapPointId id = point_ids_.next();
-      MP& mp = pts_[id];
+      MP& mp = map_.points()[id];
       mp.state.id = id;
       mp.state.p_w = X;
       mp.state.reference = kf.state.id;
@@ -63,18 +63,18 @@ void LocalMapper::createNewPoints(KF& kf, msg::LocalMapUpdate& u) {
 
 void LocalMapper::replacePoint(MapPointId removed, MapPointId kept, msg::LocalMapUpdate& u) {
   if (removed == kept) return;
-  MP& gone = pts_.at(removed);
-  MP& stay = pts_.at(kept);
+  MP& gone = map_.points().at(removed);
+  MP& stay = map_.points().at(kept);
   for (const auto& [k, idx] : gone.obs) {
-    KF& kf = kfs_.at(k);
+    KF& kf = map_.keyframes().at(k);
     if (stay.obs.count(k)) {
       kf.state.point_ids[idx] = kNoId;
     } else {
       addObservation(stay, kf, idx);
     }
   }
-  pts_.erase(removed);
-  replaced_[removed] = kept;
+  map_.points().erase(removed);
+  map_.recordFusion(removed, kept);
   u.fused.emplace_back(removed, kept);
   touched_.push_back(kept);
 }
@@ -84,7 +84,7 @@ void LocalMapper::fuseInto(KF& t, const std::vector<MapPointId>& points, msg::Lo
   for (MapPointId id0 : points) {
     const MapPointId id = resolve(id0);
     if (id == kNoId) continue;
-    MP& mp = pts_.at(id);
+    MP& mp = map_.points().at(id);
     if (mp.obs.count(t.state.id)) continue;
     ProjectedPoint pp;  // in front, inside the image, within the distance range, less than 60 deg off
     if (!projectIntoFrame(mp.state, T_c_w, camera_, scales_, &pp)) continue;
@@ -107,7 +107,7 @@ void LocalMapper::fuseInto(KF& t, const std::vector<MapPointId>& points, msg::Lo
       touched_.push_back(id);
     } else if (there != id) {
       // Keep the better-observed point (ORB-SLAM2).
-      if (pts_.at(there).obs.size() >= mp.obs.size())
+      if (map_.points().at(there).obs.size() >= mp.obs.size())
         replacePoint(id, there, u);
       else
         replacePoint(there, id, u);
@@ -121,13 +121,13 @@ void LocalMapper::fuseWithNeighbors(KF& kf, msg::LocalMapUpdate& u) {
   std::unordered_set<SlamKeyframeId> in{kf.state.id};
   for (SlamKeyframeId k : neighbors(kf, p_.fuse_neighbors)) {
     if (in.insert(k).second) targets.push_back(k);
-    for (SlamKeyframeId k2 : neighbors(kfs_.at(k), 5))
+    for (SlamKeyframeId k2 : neighbors(map_.keyframes().at(k), 5))
       if (in.insert(k2).second) targets.push_back(k2);
   }
   std::vector<MapPointId> own;
   for (MapPointId id : kf.state.point_ids)
     if (id != kNoId) own.push_back(id);
-  for (SlamKeyframeId k : targets) fuseInto(kfs_.at(k), own, u);
+  for (SlamKeyframeId k : targets) fuseInto(map_.keyframes().at(k), own, u);
   fuseInto(kf, pointsOf(targets), u);
   for (MapPointId id : kf.state.point_ids)
     if (id != kNoId) touched_.push_back(id);
@@ -135,7 +135,7 @@ void LocalMapper::fuseWithNeighbors(KF& kf, msg::LocalMapUpdate& u) {
   std::sort(touched_.begin(), touched_.end());
   touched_.erase(std::unique(touched_.begin(), touched_.end()), touched_.end());
   for (MapPointId id : touched_)
-    if (id != kNoId) updatePointShape(pts_.at(id));
+    if (id != kNoId) updatePointShape(map_.points().at(id));
   updateConnections(kf);
 }
 

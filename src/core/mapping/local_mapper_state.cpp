@@ -34,9 +34,9 @@ void LocalMapper::save(StateWriter& w) const {
   writeCamera(w, camera_);
   w.put<float>(scales_.factor);
   w.put<int32_t>(scales_.levels());
-  w.put<uint64_t>(kfs_.size());
-  for (SlamKeyframeId id : sortedKeys(kfs_)) {
-    const KF& kf = kfs_.at(id);
+  w.put<uint64_t>(map_.keyframes().size());
+  for (SlamKeyframeId id : sortedKeys(map_.keyframes())) {
+    const KF& kf = map_.keyframes().at(id);
     writeKeyframeState(w, kf.state);
     w.put<uint64_t>(kf.frame_index);
     w.put<uint64_t>(kf.seq);
@@ -45,24 +45,15 @@ void LocalMapper::save(StateWriter& w) const {
     w.putArray(kf.descriptors);
     writeCounts(w, kf.weights);
   }
-  w.put<uint64_t>(pts_.size());
-  for (MapPointId id : sortedKeys(pts_)) {
-    const MP& mp = pts_.at(id);
+  w.put<uint64_t>(map_.points().size());
+  for (MapPointId id : sortedKeys(map_.points())) {
+    const MP& mp = map_.points().at(id);
     writeMapPoint(w, mp.state);
     writeCounts(w, mp.obs);
     w.put<uint64_t>(mp.first_seq);
   }
-  w.put<uint64_t>(replaced_.size());
-  for (MapPointId id : sortedKeys(replaced_)) {
-    w.put<uint64_t>(id);
-    w.put<uint64_t>(replaced_.at(id));
-  }
-  w.put<uint64_t>(culled_.size());
-  for (SlamKeyframeId id : sortedKeys(culled_)) {
-    w.put<uint64_t>(id);
-    w.put<uint64_t>(culled_.at(id).first);
-    writePose(w, culled_.at(id).second);
-  }
+  map_.saveFusions(w);
+  map_.saveCulled(w);
   w.putArray(std::vector<MapPointId>(recent_.begin(), recent_.end()));
   w.put<uint64_t>(point_ids_.issued());
   w.put<uint64_t>(seq_);
@@ -72,7 +63,7 @@ void LocalMapper::save(StateWriter& w) const {
 }
 
 void LocalMapper::load(StateReader& r) {
-  if (!kfs_.empty()) r.fail("local mapping already holds a map; a map loads into a new one");
+  if (!map_.keyframes().empty()) r.fail("local mapping already holds a map; a map loads into a new one");
   camera_ = readCamera(r);
   const float factor = r.get<float>("scale factor");
   const int levels = r.get<int32_t>("pyramid levels");
@@ -82,7 +73,7 @@ void LocalMapper::load(StateReader& r) {
   const uint64_t kfs = r.getCount("keyframes", 100);
   for (uint64_t i = 0; i < kfs; ++i) {
     msg::KeyframeState s = readKeyframeState(r);
-    KF& kf = kfs_[s.id];
+    KF& kf = map_.keyframes()[s.id];
     kf.state = std::move(s);
     kf.frame_index = r.get<uint64_t>("keyframe frame index");
     kf.seq = r.get<uint64_t>("keyframe sequence");
@@ -98,27 +89,18 @@ void LocalMapper::load(StateReader& r) {
   const uint64_t pts = r.getCount("map points", 100);
   for (uint64_t i = 0; i < pts; ++i) {
     msg::MapPoint s = readMapPoint(r);
-    MP& mp = pts_[s.id];
+    MP& mp = map_.points()[s.id];
     mp.state = std::move(s);
     mp.obs = readCounts<SlamKeyframeId>(r, "point observations");
     mp.first_seq = r.get<uint64_t>("point sequence");
     for (const auto& [k, idx] : mp.obs) {
-      auto it = kfs_.find(k);
-      if (it == kfs_.end() || idx < 0 || static_cast<size_t>(idx) >= it->second.keypoints.size())
+      auto it = map_.keyframes().find(k);
+      if (it == map_.keyframes().end() || idx < 0 || static_cast<size_t>(idx) >= it->second.keypoints.size())
         r.fail("map point " + std::to_string(mp.state.id) + " is seen by an unknown keyframe or keypoint");
     }
   }
-  const uint64_t rep = r.getCount("fused points", 16);
-  for (uint64_t i = 0; i < rep; ++i) {
-    const MapPointId removed = r.get<uint64_t>("fused point");
-    replaced_[removed] = r.get<uint64_t>("fused point");
-  }
-  const uint64_t culled = r.getCount("culled keyframes", 72);
-  for (uint64_t i = 0; i < culled; ++i) {
-    const SlamKeyframeId id = r.get<uint64_t>("culled keyframe");
-    const SlamKeyframeId parent = r.get<uint64_t>("culled keyframe parent");
-    culled_[id] = {parent, readPose(r, "culled keyframe pose")};
-  }
+  map_.loadFusions(r, "fused points");
+  map_.loadCulled(r);
   const std::vector<MapPointId> recent = r.getArray<MapPointId>("recent points");
   recent_.assign(recent.begin(), recent.end());
   point_ids_.restore(r.get<uint64_t>("points issued"));

@@ -91,10 +91,8 @@ void Tracker::adoptMap(const msg::LocalMapUpdate& whole) {
 }
 
 void Tracker::continueIdsInNewSession(uint64_t keyframes, uint64_t points) {
-  keyframe_ids_.restore(keyframes);
-  point_ids_.restore(points);
-  keyframe_ids_.startSession();
-  point_ids_.startSession();
+  keyframe_ids_.startSessionAfter(keyframes);
+  point_ids_.startSessionAfter(points);
 }
 
 StereoCamera Tracker::savedCamera(const std::string& path) {

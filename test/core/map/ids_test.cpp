@@ -87,5 +87,21 @@ TEST(Ids, ANewSessionIssuesNoIdOfThePreviousOne) {
   EXPECT_EQ(counterOf(restored.next()), (uint64_t{2} << 32) + 1);
 }
 
+// A stage that takes another's place (a reset, a loaded map) starts its session after the other's ids and its
+// own, whichever counter is further on.
+TEST(Ids, ASessionAfterAnotherCounterIssuesNoIdOfEither) {
+  IdCounter old_one(IdIssuer::kTracking);
+  for (int i = 0; i < 5; ++i) old_one.next();
+  old_one.startSession();
+  old_one.next();  // the old one is in its second session
+  IdCounter fresh(IdIssuer::kTracking);
+  fresh.startSessionAfter(old_one.issued());
+  EXPECT_EQ(counterOf(fresh.next()), (uint64_t{2} << 32) + 1);
+  IdCounter ahead(IdIssuer::kTracking);
+  for (int i = 0; i < 3; ++i) ahead.startSession();
+  ahead.startSessionAfter(7);  // its own count is further on than the other's
+  EXPECT_EQ(counterOf(ahead.next()), (uint64_t{4} << 32) + 1);
+}
+
 }  // namespace
 }  // namespace binloop
