@@ -4,16 +4,26 @@
 #   scripts/build.sh            both
 #   scripts/build.sh --core     only the ROS-free core and its tests
 #   scripts/build.sh --ros      only the catkin package
+#   scripts/build.sh --configure-core   only configure the core (its compile_commands.json, for clang-tidy)
 set -euo pipefail
 source "$(dirname "${BASH_SOURCE[0]}")/env.sh"
 
 what="${1:-all}"
 mkdir -p "$BINLOOP_WS/src" "$BINLOOP_CORE_BUILD"
 
+configure_core() {
+  # Warnings are errors in the project's own builds (cmake/binloop_core.cmake, BINLOOP_WERROR).
+  cmake -S "$BINLOOP_ROOT/cmake/core_only" -B "$BINLOOP_CORE_BUILD" -DCMAKE_BUILD_TYPE=Release -DBINLOOP_WERROR=ON \
+    -DCMAKE_EXPORT_COMPILE_COMMANDS=ON >/dev/null
+}
+if [ "$what" = --configure-core ]; then
+  configure_core
+  exit
+fi
+
 if [ "$what" = all ] || [ "$what" = --core ]; then
   echo "build: core (no ROS) -> $BINLOOP_CORE_BUILD"
-  # Warnings are errors in the project's own builds (cmake/binloop_core.cmake, BINLOOP_WERROR).
-  cmake -S "$BINLOOP_ROOT/cmake/core_only" -B "$BINLOOP_CORE_BUILD" -DCMAKE_BUILD_TYPE=Release -DBINLOOP_WERROR=ON >/dev/null
+  configure_core
   cmake --build "$BINLOOP_CORE_BUILD" -j "$BINLOOP_JOBS"
 fi
 

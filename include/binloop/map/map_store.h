@@ -82,7 +82,8 @@ class MapStore {
   /// The first of `id` and its ancestors (culled ones included) that `stop` accepts, or kNoId.
   template <class Stop>
   SlamKeyframeId firstAncestor(SlamKeyframeId id, const Stop& stop) const {
-    return binloop::firstAncestor(id, [this](SlamKeyframeId k) { return parentOf(k); }, stop);
+    return binloop::firstAncestor(
+        id, [this](SlamKeyframeId k) { return parentOf(k); }, stop);
   }
 
   /// The fusions / culled keyframes in id order (two saves of one store give the same bytes).

@@ -150,23 +150,25 @@ std::string formatAccuracyTable(const std::vector<AccuracyRow>& rows, bool csv) 
                                         "segments_closed_every_run",
                                         "lost_frames_max"};
   std::vector<std::vector<std::string>> cells{header};
-  for (const AccuracyRow& r : rows)
+  for (const AccuracyRow& r : rows) {
     cells.push_back({r.name, std::to_string(r.runs), cell(r.ate_median, 3), cell(r.ate_min, 3),
                      cell(r.ate_max, 3), cell(r.spread(), 2), cell(r.t_rel_median, 3), cell(r.t_rel_min, 3),
                      cell(r.t_rel_max, 3), cell(r.r_rel_median, 3), cell(r.loops_median, 1),
                      std::to_string(r.loops_wrong) + (r.wrong_unjudged_pose ? " (distance only)" : ""),
                      std::to_string(r.segments_every_run) + "/" + std::to_string(r.segments),
                      std::to_string(r.lost_max)});
+  }
   std::vector<size_t> width(header.size(), 0);
   for (const auto& line : cells)
     for (size_t i = 0; i < line.size(); ++i) width[i] = std::max(width[i], line[i].size());
   std::ostringstream o;
   for (const auto& line : cells) {
     for (size_t i = 0; i < line.size(); ++i) {
-      if (csv)
+      if (csv) {
         o << (i ? "," : "") << (line[i].find(',') != std::string::npos ? "\"" + line[i] + "\"" : line[i]);
-      else
+      } else {
         o << line[i] << (i + 1 == line.size() ? "" : std::string(width[i] - line[i].size() + 2, ' '));
+      }
     }
     o << "\n";
   }

@@ -56,9 +56,10 @@ cv::Mat otherView(const cv::Mat& img, HashRng& rng) {
   const double sigma = rng.uniform(0.0, 1.0);
   if (sigma > 0.3) cv::GaussianBlur(warped, warped, cv::Size(0, 0), sigma);
   cv::Mat noise(warped.size(), CV_16S);
-  for (int r = 0; r < noise.rows; ++r)
+  for (int r = 0; r < noise.rows; ++r) {
     for (int c = 0; c < noise.cols; ++c)
       noise.at<int16_t>(r, c) = static_cast<int16_t>(std::lround(rng.uniform(-4, 4)));
+  }
   cv::Mat out;
   warped.convertTo(out, CV_16S);
   out += noise;
@@ -90,9 +91,10 @@ std::vector<LoopSetPlace> readLoopSetList(const std::string& path, const std::st
     p.first = expand(p.first);
     if (p.second == "-") p.second.clear();
     if (!p.second.empty() && p.second != "=") p.second = expand(p.second);
-    for (const auto& img : {p.first, p.second})
+    for (const auto& img : {p.first, p.second}) {
       if (!img.empty() && img != "=" && !fs::is_regular_file(img))
         throw dataError(path, n, img + ": no such image");
+    }
     places.push_back(p);
   }
   if (places.empty()) throw dataError(path, 0, "names no places");
@@ -116,10 +118,11 @@ LoopSet makeLoopSet(const std::vector<LoopSetPlace>& places, const std::string& 
   };
   for (size_t i = 0; i < places.size(); ++i) {
     const cv::Mat a = readGrayImage(places[i].first);
-    for (int c = 0; c < 3; ++c)
+    for (int c = 0; c < 3; ++c) {
       first_frames[i].push_back(
           write(crop(a, 0.5 * c, &last_span),
                 {places[i].name, places[i].first + " crop " + std::to_string(c), false}));
+    }
   }
   std::vector<size_t> order;
   for (size_t i = 0; i < places.size(); ++i)

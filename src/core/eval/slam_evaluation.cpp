@@ -21,10 +21,12 @@ std::vector<RevisitSegment> revisitSegments(const std::vector<std::pair<int, int
 
 bool loopIsCorrect(int query, int match, const std::vector<Pose3>& gt, double radius_m) {
   const int n = static_cast<int>(gt.size());
-  for (int f : {query, match})
-    if (f < 0 || f >= n)
+  for (int f : {query, match}) {
+    if (f < 0 || f >= n) {
       throw DataError("loop " + std::to_string(query) + " -> " + std::to_string(match) + ": frame " +
                       std::to_string(f) + " is outside the " + std::to_string(n) + " ground-truth poses");
+    }
+  }
   return (gt[query].translation() - gt[match].translation()).norm() <= radius_m;
 }
 
@@ -61,16 +63,18 @@ LoopScore scoreLoops(const std::vector<std::pair<int, int>>& accepted, const std
 LoopScore scoreLoops(const std::vector<std::pair<int, int>>& accepted,
                      const std::vector<Pose3>& T_query_match, const std::vector<Pose3>& gt,
                      const std::vector<RevisitSegment>& segments, double radius_m) {
-  if (T_query_match.size() != accepted.size())
+  if (T_query_match.size() != accepted.size()) {
     throw DataError("scoring loops: " + std::to_string(accepted.size()) + " loops but " +
                     std::to_string(T_query_match.size()) + " relative poses");
+  }
   std::vector<std::pair<int, int>> right_pose;
   int wrong = 0;
   for (size_t i = 0; i < accepted.size(); ++i) {
-    if (loopPoseIsWrong(loopPoseError(accepted[i].first, accepted[i].second, T_query_match[i], gt)))
+    if (loopPoseIsWrong(loopPoseError(accepted[i].first, accepted[i].second, T_query_match[i], gt))) {
       ++wrong;
-    else
+    } else {
       right_pose.push_back(accepted[i]);
+    }
   }
   LoopScore s = scoreLoops(right_pose, gt, segments, radius_m);
   s.accepted += wrong;

@@ -26,10 +26,12 @@ std::string num(double v, const char* fmt = "%.6g") {
 std::vector<NumberLine> readFinitePoseLines(const std::string& path) {
   auto lines = readNumberLines(path);
   if (lines.empty()) throw dataError(path, 0, "holds no poses");
-  for (const auto& l : lines)
-    for (double v : l.values)
+  for (const auto& l : lines) {
+    for (double v : l.values) {
       if (!std::isfinite(v))
         throw dataError(path, l.line_no, "holds a number that is not finite (" + num(v) + ")");
+    }
+  }
   return lines;
 }
 
@@ -44,10 +46,11 @@ MatchedPoses assemble(const std::vector<Pose3>& gt, const EstimateFile& est, std
   m.gt_frames = gt.size();
   for (size_t k = 0; k < order.size(); ++k) {
     const size_t i = order[k];
-    if (k > 0 && frame_of[i] == m.frames.back())
+    if (k > 0 && frame_of[i] == m.frames.back()) {
       throw DataError(source + ": poses " + std::to_string(order[k - 1] + 1) + " and " +
                       std::to_string(i + 1) + " both match ground-truth frame " +
                       std::to_string(frame_of[i]));
+    }
     m.frames.push_back(frame_of[i]);
     m.gt.push_back(gt[frame_of[i]]);
     m.est.push_back(est.poses[i].T_w_c);
@@ -62,15 +65,18 @@ const char* formatName(TrajectoryFormat f) { return f == TrajectoryFormat::kitti
 EstimateFile readEstimateFile(const std::string& path) {
   const auto lines = readFinitePoseLines(path);
   const size_t n = lines.front().values.size();
-  if (n != 12 && n != 8)
+  if (n != 12 && n != 8) {
     throw dataError(path, lines.front().line_no,
                     "a pose line needs 12 numbers (KITTI) or 8 (TUM: stamp tx ty tz qx qy qz qw), found " +
                         std::to_string(n));
-  for (const auto& l : lines)
-    if (l.values.size() != n)
+  }
+  for (const auto& l : lines) {
+    if (l.values.size() != n) {
       throw dataError(path, l.line_no,
                       "has " + std::to_string(l.values.size()) + " numbers, but the first pose line has " +
                           std::to_string(n) + (n == 12 ? " (KITTI)" : " (TUM)"));
+    }
+  }
   EstimateFile f;
   if (n == 12) {
     f.format = TrajectoryFormat::kitti;
@@ -91,21 +97,24 @@ std::vector<Pose3> readGroundTruthPoses(const std::string& path) {
 MatchedPoses matchByFrameIndex(const std::vector<Pose3>& gt, const EstimateFile& est,
                                const std::string& source) {
   const bool kitti = est.format == TrajectoryFormat::kitti;
-  if (kitti && est.poses.size() > gt.size())
+  if (kitti && est.poses.size() > gt.size()) {
     throw DataError(source + ": " + std::to_string(est.poses.size()) +
                     " poses, but the ground truth has only " + std::to_string(gt.size()) +
                     " (KITTI lines are matched to frames by position)");
+  }
   std::vector<int> frame_of;
   for (size_t i = 0; i < est.poses.size(); ++i) {
     const double s = est.poses[i].stamp_s;
-    if (std::abs(s - std::round(s)) > 1e-6 || s < 0)
+    if (std::abs(s - std::round(s)) > 1e-6 || s < 0) {
       throw DataError(
           source + ": pose " + std::to_string(i + 1) + " has stamp " + num(s, "%.9g") +
           ", which is not a frame index (a whole number >= 0); match by time with a times file instead");
-    if (s >= static_cast<double>(gt.size()))
+    }
+    if (s >= static_cast<double>(gt.size())) {
       throw DataError(source + ": pose " + std::to_string(i + 1) + " is frame " + num(s, "%.0f") +
                       ", but the ground truth has only " + std::to_string(gt.size()) + " frames (0.." +
                       std::to_string(gt.size() - 1) + ")");
+    }
     frame_of.push_back(static_cast<int>(std::lround(s)));
   }
   MatchedPoses m = assemble(gt, est, std::move(frame_of), source);
@@ -118,9 +127,10 @@ MatchedPoses matchByTime(const std::vector<Pose3>& gt, const std::vector<double>
                          const std::string& source) {
   if (est.format != TrajectoryFormat::tum)
     throw DataError(source + ": KITTI files carry no time stamps; they are matched by frame index");
-  if (gt_times.size() != gt.size())
+  if (gt_times.size() != gt.size()) {
     throw DataError("the times file has " + std::to_string(gt_times.size()) + " stamps for " +
                     std::to_string(gt.size()) + " ground-truth poses");
+  }
   if (!std::is_sorted(gt_times.begin(), gt_times.end()))
     throw DataError("the ground-truth times are not in increasing order");
   std::vector<int> frame_of;
@@ -130,12 +140,13 @@ MatchedPoses matchByTime(const std::vector<Pose3>& gt, const std::vector<double>
     size_t k = static_cast<size_t>(it - gt_times.begin());
     if (k == gt_times.size() || (k > 0 && t - gt_times[k - 1] < gt_times[k] - t)) --k;
     const double dt = std::abs(gt_times[k] - t);
-    if (dt > options.tolerance_s)
+    if (dt > options.tolerance_s) {
       throw DataError(
           source + ": pose " + std::to_string(i + 1) + " (stamp " + num(est.poses[i].stamp_s, "%.6f") +
           (options.stamp_offset_s != 0 ? " - offset " + num(options.stamp_offset_s) : std::string()) +
           ") is " + num(dt, "%.4f") + " s from the nearest ground-truth time (frame " + std::to_string(k) +
           ", " + num(gt_times[k], "%.6f") + " s); the tolerance is " + num(options.tolerance_s) + " s");
+    }
     frame_of.push_back(static_cast<int>(k));
   }
   MatchedPoses m = assemble(gt, est, std::move(frame_of), source);
@@ -147,9 +158,10 @@ MatchedPoses matchByTime(const std::vector<Pose3>& gt, const std::vector<double>
 }
 
 Pose3 alignUmeyama(const std::vector<Eigen::Vector3d>& est, const std::vector<Eigen::Vector3d>& gt) {
-  if (est.size() != gt.size())
+  if (est.size() != gt.size()) {
     throw DataError("alignment needs as many estimated positions (" + std::to_string(est.size()) +
                     ") as ground-truth positions (" + std::to_string(gt.size()) + ")");
+  }
   if (est.size() < 3)
     throw DataError("alignment needs at least 3 positions, got " + std::to_string(est.size()));
   const double n = static_cast<double>(est.size());
@@ -217,20 +229,23 @@ RelativeErrors kittiRelativeErrors(const MatchedPoses& m, const RelativeErrorOpt
 }
 
 TrajectoryMetrics evaluateTrajectory(const MatchedPoses& m, const RelativeErrorOptions& options) {
-  if (m.gt.size() != m.est.size() || m.frames.size() != m.gt.size())
+  if (m.gt.size() != m.est.size() || m.frames.size() != m.gt.size()) {
     throw DataError("matched poses: " + std::to_string(m.gt.size()) + " ground truth, " +
                     std::to_string(m.est.size()) + " estimated, " + std::to_string(m.frames.size()) +
                     " frames");
-  if (m.gt.size() < 3)
+  }
+  if (m.gt.size() < 3) {
     throw DataError("only " + std::to_string(m.gt.size()) +
                     " poses matched the ground truth; at least 3 are needed");
+  }
   std::vector<Eigen::Vector3d> p_est, p_gt;
   for (size_t i = 0; i < m.gt.size(); ++i) {
-    if (!finitePose(m.gt[i]) || !finitePose(m.est[i]))
+    if (!finitePose(m.gt[i]) || !finitePose(m.est[i])) {
       throw DataError(std::string(finitePose(m.gt[i]) ? "the estimated" : "the ground-truth") +
                       " pose of frame " + std::to_string(m.frames[i]) + " is not finite");
-    p_est.push_back(m.est[i].translation());
-    p_gt.push_back(m.gt[i].translation());
+    }
+    p_est.emplace_back(m.est[i].translation());
+    p_gt.emplace_back(m.gt[i].translation());
   }
   TrajectoryMetrics t;
   t.T_gt_est = alignUmeyama(p_est, p_gt);

@@ -114,6 +114,8 @@ void writeTopView(const std::string& path, const std::string& title, const std::
   // Header layout first: its height sets where the plot area starts.
   std::vector<LegendEntry> legend;
   using Key = LegendEntry::Key;
+  legend.reserve(paths.size());
+
   for (const auto& p : paths) legend.push_back({p.label, Key::line, p.colour, p.thickness, {}});
   legend.push_back({"start", Key::start, c_start, 0, {}});
   legend.push_back({"end", Key::end, grey, 2, {}});
@@ -129,11 +131,12 @@ void writeTopView(const std::string& path, const std::string& title, const std::
 
   // Equal scales: the box around all paths (x right, z up), padded, fitted into the plot area.
   double x0 = 1e300, x1 = -1e300, z0 = 1e300, z1 = -1e300;
-  for (const auto& p : paths)
+  for (const auto& p : paths) {
     for (const auto& T : *p.poses) {
       x0 = std::min(x0, T.translation().x()), x1 = std::max(x1, T.translation().x());
       z0 = std::min(z0, T.translation().z()), z1 = std::max(z1, T.translation().z());
     }
+  }
   if (x0 > x1) x0 = z0 = -1, x1 = z1 = 1;  // nothing to draw
   const double span = std::max({x1 - x0, z1 - z0, 1.0});
   const double pad = 0.04 * span, pw = w - l - r, ph = h - t - b;
@@ -172,9 +175,10 @@ void writeTopView(const std::string& path, const std::string& title, const std::
 
   // Header: title, notes, legend.
   cv::putText(img, title, cv::Point(l - 60, 28), font, 0.6, black, 1, cv::LINE_AA);
-  for (size_t i = 0; i < notes.size(); ++i)
+  for (size_t i = 0; i < notes.size(); ++i) {
     cv::putText(img, notes[i], cv::Point(l - 60, 58 + 30 * static_cast<int>(i)), font, 0.6, black, 1,
                 cv::LINE_AA);
+  }
   for (const auto& e : legend) drawLegendEntry(img, e);
   // Scale bar, bottom right below the plot: one grid step.
   drawScaleBar(img, cv::Point(w - r - 70, h - 22), step, static_cast<int>(std::lround(step * s)));
@@ -188,10 +192,11 @@ void writeTrajectoryPlot(const std::string& path, const std::string& title, cons
                          const std::vector<Pose3>& est_aligned, const TrajectoryMetrics& metrics) {
   const RelativeErrors& rel = metrics.relative;
   std::string text = cv::format("ATE RMSE %.3f m", metrics.ate_rmse_m);
-  if (rel.valid)
+  if (rel.valid) {
     text += cv::format("    t_rel %.3f %%    r_rel %.4f deg/100 m", rel.t_rel_pct, rel.r_rel_deg_per_100m);
-  else
+  } else {
     text += cv::format("    t_rel, r_rel: n/a (path of %.0f m is too short)", rel.path_length_m);
+  }
   writeTopView(
       path, title, {text},
       {{"ground truth", &gt, kGroundTruth, 3}, {"estimate (aligned, SE(3))", &est_aligned, kPalette[0], 2}});

@@ -38,9 +38,10 @@ struct Candidate {
 size_t discIndex(int x, int y) {
   const auto& d = briefDisc();
   const auto it = std::find(d.begin(), d.end(), cv::Point(x, y));
-  if (it == d.end())
+  if (it == d.end()) {
     throw FeatureError("test point (" + std::to_string(x) + ", " + std::to_string(y) +
                        ") is outside the radius-15 disc");
+  }
   return static_cast<size_t>(it - d.begin());
 }
 
@@ -49,9 +50,10 @@ size_t discIndex(int x, int y) {
 const std::vector<cv::Point>& briefDisc() {
   static const std::vector<cv::Point> disc = [] {
     std::vector<cv::Point> d;
-    for (int y = -kRadius; y <= kRadius; ++y)
+    for (int y = -kRadius; y <= kRadius; ++y) {
       for (int x = -kRadius; x <= kRadius; ++x)
         if (x * x + y * y <= kRadius * kRadius) d.emplace_back(x, y);
+    }
     return d;
   }();
   return disc;
@@ -116,10 +118,11 @@ void checkInput(const PatchSamples& s, const PatternLearningOptions& o) {
   if (s.keypoints() == 0 || s.values.size() != briefDisc().size())
     throw FeatureError("no patch samples to learn a pattern from");
   if (o.bits < 1 || o.min_separation < 0 || o.start_threshold <= 0 || o.threshold_step <= 0 ||
-      o.pool < size_t(o.bits) || o.tie_margin < 0 || o.max_tie_share <= 0)
+      o.pool < size_t(o.bits) || o.tie_margin < 0 || o.max_tie_share <= 0) {
     throw FeatureError(
         "pattern learning options out of range (bits >= 1, min_separation >= 0, thresholds > 0, "
         "pool >= bits, tie_margin >= 0, max_tie_share > 0)");
+  }
 }
 
 // 1-3. Every test between disc points at least o.min_separation apart: its share of a < b and b < a (ties
@@ -128,10 +131,12 @@ std::vector<Candidate> scoreCandidates(const PatchSamples& s, const PatternLearn
   const auto& disc = briefDisc();
   const size_t n = s.keypoints();
   std::vector<std::pair<uint16_t, uint16_t>> pairs;
-  for (size_t a = 0; a < disc.size(); ++a)
-    for (size_t b = a + 1; b < disc.size(); ++b)
+  for (size_t a = 0; a < disc.size(); ++a) {
+    for (size_t b = a + 1; b < disc.size(); ++b) {
       if (std::max(std::abs(disc[a].x - disc[b].x), std::abs(disc[a].y - disc[b].y)) >= o.min_separation)
         pairs.emplace_back(static_cast<uint16_t>(a), static_cast<uint16_t>(b));
+    }
+  }
   std::vector<Candidate> cand(pairs.size());
   parallelFor((pairs.size() + 255) / 256, o.threads, [&](size_t block) {
     const size_t end = std::min(pairs.size(), 256 * block + 256);

@@ -16,9 +16,10 @@ BitStatistics bitStatistics(const Descriptors& d, uint64_t seed, size_t random_p
   // Bit columns (bit b of every descriptor, 64 descriptors a word): a pair's joint count is then a popcount
   // of an AND, 256 x 255 / 2 pairs over n / 64 words instead of n x 32 640 tests.
   std::vector<uint64_t> col(static_cast<size_t>(kBits) * words, 0);
-  for (size_t i = 0; i < n; ++i)
+  for (size_t i = 0; i < n; ++i) {
     for (int b = 0; b < kBits; ++b)
       if ((d[i].w[b / 64] >> (b % 64)) & 1u) col[b * words + i / 64] |= uint64_t{1} << (i % 64);
+  }
   std::vector<double> p(kBits);
   BitStatistics s;
   s.descriptors = n;

@@ -28,10 +28,11 @@ void declareExtractOptions(CliArgs& args) {
 }
 
 ExtractOptions extractOptionsFrom(const CliArgs& args) {
-  if (args.has("grid-cell"))
+  if (args.has("grid-cell")) {
     throw CliError(
         "--grid-cell is retired: every tool now extracts with the SLAM's ORB extractor (quadtree spread, "
         "--cell-px sets its FAST cells); see docs/loop_models.md, \"Features\"");
+  }
   ExtractOptions eo;
   eo.orb.features = static_cast<int>(args.integer("features"));
   eo.orb.scale_factor = static_cast<float>(args.number("scale-factor"));

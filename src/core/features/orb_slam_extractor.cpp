@@ -68,7 +68,7 @@ float centroidAngle(const cv::Mat& img, cv::Point pt) {
 
 // The pattern's points as float columns, so rotating all 512 is one tight loop.
 struct PatternXY {
-  std::array<float, 2 * Desc256::kBits> x, y;
+  std::array<float, 2 * size_t{Desc256::kBits}> x, y;
 };
 
 const PatternXY& patternXY() {
@@ -92,7 +92,7 @@ Desc256 rotatedBrief(const cv::Mat& blurred, const cv::KeyPoint& kp) {
   briefRotation(kp.angle, &cs, &sn);
   const uint8_t* c = blurred.ptr<uint8_t>(cvRound(kp.pt.y)) + cvRound(kp.pt.x);
   const int step = static_cast<int>(blurred.step1());
-  std::array<int, 2 * Desc256::kBits> offset;
+  std::array<int, 2 * size_t{Desc256::kBits}> offset;
   for (size_t i = 0; i < offset.size(); ++i) {
     const cv::Point q = rotatedTestPoint(pat.x[i], pat.y[i], cs, sn);
     offset[i] = q.y * step + q.x;
@@ -128,7 +128,7 @@ std::vector<cv::KeyPoint> fastInCells(const cv::Mat& img, const OrbSlamParams& p
   for (auto& k : all) {  // corners are at >= 3 inside the area; cell c's detection band starts at c*cw + 3
     const int c = std::min(cols - 1, (static_cast<int>(k.pt.x) - 3) / cw);
     const int r = std::min(rows - 1, (static_cast<int>(k.pt.y) - 3) / ch);
-    found[static_cast<size_t>(r * cols + c)] = 1;
+    found[static_cast<size_t>(r) * cols + c] = 1;
     k.pt.x += static_cast<float>(lo);
     k.pt.y += static_cast<float>(lo);
   }
@@ -138,7 +138,7 @@ std::vector<cv::KeyPoint> fastInCells(const cv::Mat& img, const OrbSlamParams& p
     if (y1 - y0 <= 6) continue;
     for (int c = 0; c < cols; ++c) {
       const int x0 = lo + c * cw, x1 = std::min(x0 + cw + 6, hi_x);
-      if (x1 - x0 <= 6 || found[static_cast<size_t>(r * cols + c)]) continue;
+      if (x1 - x0 <= 6 || found[static_cast<size_t>(r) * cols + c]) continue;
       cv::FAST(img(cv::Range(y0, y1), cv::Range(x0, x1)), cell, p.min_fast, true);
       for (auto& k : cell) {
         k.pt.x += static_cast<float>(x0);
@@ -176,9 +176,10 @@ class QuadTree {
     for (int b = 0, r = 0; r < roots; ++r) {
       const int e = static_cast<int>(
           std::partition(idx_.begin() + b, idx_.end(), [&](int i) { return root(i) == r; }) - idx_.begin());
-      if (e > b)
+      if (e > b) {
         nodes_.push_back({area.x + r * rw, static_cast<float>(area.y), area.x + (r + 1) * rw,
                           static_cast<float>(area.y + area.height), b, e});
+      }
       b = e;
     }
   }
@@ -193,9 +194,10 @@ class QuadTree {
         if (nodes_[i].splittable()) order.push_back(i);
       if (order.empty()) return;
       const bool whole_round = static_cast<int>(nodes_.size() + 3 * order.size()) <= target;
-      if (!whole_round)
+      if (!whole_round) {
         std::stable_sort(order.begin(), order.end(),
                          [&](int a, int b) { return nodes_[a].count() > nodes_[b].count(); });
+      }
       std::vector<Node> next;
       std::vector<char> replaced(nodes_.size(), 0);
       int total = static_cast<int>(nodes_.size());
@@ -251,9 +253,10 @@ class QuadTree {
 
 void checkImage(const cv::Mat& gray) {
   if (gray.empty()) throw FeatureError("cannot extract ORB features from an empty image");
-  if (gray.type() != CV_8UC1)
+  if (gray.type() != CV_8UC1) {
     throw FeatureError("ORB needs an 8-bit single-channel (grey) image, got " +
                        cv::typeToString(gray.type()));
+  }
 }
 
 // OpenCV's ORB describes keypoints it is handed without moving them: on a single level (octave 0) it pads
@@ -271,9 +274,10 @@ void describeWithOrb(const cv::Mat& level, std::vector<cv::KeyPoint>& kps, Descr
   cv::Mat desc;
   orb->compute(level, level_kps, desc);
   if (level_kps.size() != kps.size() || desc.rows != static_cast<int>(kps.size()) || desc.cols != 32 ||
-      desc.type() != CV_8UC1)
+      desc.type() != CV_8UC1) {
     throw FeatureError("ORB-SLAM extractor: OpenCV's ORB described " + std::to_string(desc.rows) + " of " +
                        std::to_string(kps.size()) + " keypoints");
+  }
   for (int r = 0; r < desc.rows; ++r) {
     Desc256 d;
     std::memcpy(d.w.data(), desc.ptr<uint8_t>(r), 32);  // test 8j+i is bit i of byte j, as OpenCV matches it
@@ -384,14 +388,16 @@ OrbSlamExtractor::OrbSlamExtractor(const OrbSlamParams& p) : p_(p) {
 OrbFeatures OrbSlamExtractor::extract(const cv::Mat& gray) const { return extract(pyramid(gray)); }
 
 OrbFeatures OrbSlamExtractor::extract(const ImagePyramid& pyr) const {
-  if (static_cast<int>(pyr.levels.size()) != p_.levels || pyr.scale.size() != pyr.levels.size())
+  if (static_cast<int>(pyr.levels.size()) != p_.levels || pyr.scale.size() != pyr.levels.size()) {
     fail("pyramid has " + std::to_string(pyr.levels.size()) + " levels, expected " +
          std::to_string(p_.levels));
+  }
   checkImage(pyr.levels[0]);
   for (int i = 0; i < p_.levels; ++i) {
-    if (std::abs(pyr.scale[i] - std::pow(p_.scale_factor, static_cast<float>(i))) > 1e-3f * pyr.scale[i])
+    if (std::abs(pyr.scale[i] - std::pow(p_.scale_factor, static_cast<float>(i))) > 1e-3f * pyr.scale[i]) {
       fail("pyramid level " + std::to_string(i) + " has scale " + std::to_string(pyr.scale[i]) +
            ", not scale_factor^" + std::to_string(i));
+    }
     if (pyr.levels[i].type() != CV_8UC1 || pyr.levels[i].cols > pyr.levels[0].cols ||
         pyr.levels[i].rows > pyr.levels[0].rows)
       fail("pyramid level " + std::to_string(i) + " is not 8-bit grey or is larger than level 0");

@@ -22,10 +22,12 @@ void checkSide(const OrbFeatures& f, const ImagePyramid& pyr, const char* side) 
             std::to_string(f.descriptors.size()) + " descriptors");
   check(!pyr.levels.empty() && pyr.scale.size() == pyr.levels.size(),
         std::string(side) + " pyramid is empty or has no scale per level");
-  for (const auto& k : f.keypoints)
-    if (k.octave < 0 || k.octave >= static_cast<int>(pyr.levels.size()))
+  for (const auto& k : f.keypoints) {
+    if (k.octave < 0 || k.octave >= static_cast<int>(pyr.levels.size())) {
       check(false, std::string(side) + " keypoint of octave " + std::to_string(k.octave) +
                        " but the pyramid has " + std::to_string(pyr.levels.size()) + " levels");
+    }
+  }
 }
 
 // Right keypoints by image row, as one array with row offsets: a right keypoint is listed on every row
@@ -147,10 +149,11 @@ StereoMatches matchStereo(const OrbFeatures& left, const ImagePyramid& left_pyra
         "the camera needs fx > 0 and a positive baseline, got fx·b = " + std::to_string(cam.bf()));
   check(left_pyramid.levels.size() == right_pyramid.levels.size(),
         "left and right pyramids differ in levels");
-  for (size_t i = 0; i < left_pyramid.levels.size(); ++i)
+  for (size_t i = 0; i < left_pyramid.levels.size(); ++i) {
     check(left_pyramid.levels[i].size() == right_pyramid.levels[i].size() &&
               left_pyramid.levels[i].type() == CV_8UC1 && right_pyramid.levels[i].type() == CV_8UC1,
           "pyramid level " + std::to_string(i) + " differs between left and right or is not 8-bit grey");
+  }
 
   const size_t n = left.keypoints.size();
   StereoMatches out;
@@ -197,11 +200,12 @@ StereoMatches matchStereo(const OrbFeatures& left, const ImagePyramid& left_pyra
     auto mid = sad_of.begin() + sad_of.size() / 2;
     std::nth_element(sad_of.begin(), mid, sad_of.end());
     out.sad_threshold = p.sad_outlier_factor * static_cast<float>(mid->first);
-    for (const auto& [sad, il] : sad_of)
+    for (const auto& [sad, il] : sad_of) {
       if (static_cast<float>(sad) > out.sad_threshold) {
         out.right_x[il] = out.depth[il] = -1.f;
         ++out.rejected_by_sad;
       }
+    }
   }
   out.matched = static_cast<int>(sad_of.size()) - out.rejected_by_sad;
   return out;

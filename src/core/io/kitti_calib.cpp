@@ -46,11 +46,12 @@ void writeKittiCalib(const std::string& path, const StereoCamera& cam) {
     const auto P = cam.projectionMatrix(i % 2 == 1);
     out << names[i] << ":";
     char buf[32];
-    for (int r = 0; r < 3; ++r)
+    for (int r = 0; r < 3; ++r) {
       for (int c = 0; c < 4; ++c) {
         std::snprintf(buf, sizeof buf, " %.12e", P(r, c));
         out << buf;
       }
+    }
     out << "\n";
   }
   if (!out) throw dataError(path, 0, "write failed");

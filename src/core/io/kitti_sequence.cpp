@@ -49,9 +49,10 @@ KittiSequence KittiSequence::open(const std::string& dir, const std::string& pos
   if (s.left_.size() != s.times_.size()) throw count_error("image_0", s.left_.size());
   if (s.right_.size() != s.times_.size()) throw count_error("image_1", s.right_.size());
   for (size_t i = 0; i < s.left_.size(); ++i) {
-    if (fs::path(s.left_[i]).filename() != fs::path(s.right_[i]).filename())
+    if (fs::path(s.left_[i]).filename() != fs::path(s.right_[i]).filename()) {
       throw dataError(s.right_[i], 0,
                       "is paired with " + s.left_[i] + ": left and right file names must match");
+    }
   }
 
   const cv::Mat first = readGrayImage(s.left_[0]);
@@ -62,18 +63,20 @@ KittiSequence KittiSequence::open(const std::string& dir, const std::string& pos
   std::string pp = poses_path.empty() ? (root / "poses.txt").string() : poses_path;
   if (!poses_path.empty() || fs::exists(pp)) {
     s.poses_ = readKittiPoses(pp);
-    if (s.poses_.size() != s.times_.size())
+    if (s.poses_.size() != s.times_.size()) {
       throw dataError(pp, 0,
                       "has " + std::to_string(s.poses_.size()) + " poses but the sequence has " +
                           std::to_string(s.times_.size()) + " frames");
+    }
   }
   return s;
 }
 
 StereoFrame KittiSequence::load(size_t i) const {
-  if (i >= size())
+  if (i >= size()) {
     throw DataError("frame " + std::to_string(i) + " is past the sequence end (" + std::to_string(size()) +
                     " frames) in " + dir_);
+  }
   StereoFrame f;
   f.index = static_cast<int>(i);
   f.stamp_s = times_[i];
@@ -84,10 +87,11 @@ StereoFrame KittiSequence::load(size_t i) const {
   };
   if (f.left.size() != f.right.size())
     throw dataError(right_[i], 0, "is " + size_str(f.right) + " but its left image is " + size_str(f.left));
-  if (f.left.cols != camera_.width || f.left.rows != camera_.height)
+  if (f.left.cols != camera_.width || f.left.rows != camera_.height) {
     throw dataError(left_[i], 0,
                     "is " + size_str(f.left) + " but the sequence's first image is " +
                         std::to_string(camera_.width) + "x" + std::to_string(camera_.height));
+  }
   return f;
 }
 

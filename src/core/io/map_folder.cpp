@@ -48,10 +48,11 @@ void requireReplaceable(const std::string& directory) {
     const std::string name = e.path().filename().string();
     const bool state =
         e.is_regular_file() && (e.path().extension() == ".state" || e.path().extension() == ".partial");
-    if (!state)
+    if (!state) {
       throw dataError(directory, 0,
                       "holds '" + name + "', which is not a saved map's: a save replaces the folder " +
                           "whole, so give a new folder (or one that holds only a map)");
+    }
   }
   if (ec) throw dataError(directory, 0, "cannot list the folder: " + ec.message());
 }

@@ -62,18 +62,20 @@ Preamble readPreamble(std::ifstream& in, const std::string& path, const std::str
   in.seekg(0, std::ios::end);
   const uint64_t size = static_cast<uint64_t>(in.tellg());
   in.seekg(0);
-  if (size < kHeaderBytes)
+  if (size < kHeaderBytes) {
     throw dataError(path, 0,
                     "not a binloop state file (" + std::to_string(size) + " bytes, shorter than a header)");
+  }
   uint8_t header[kHeaderBytes];
   in.read(reinterpret_cast<char*>(header), kHeaderBytes);
   if (std::memcmp(header, kMagic, 8) != 0)
     throw dataError(path, 0, "not a binloop state file (no BLSTATE1 magic)");
   const uint32_t version = load<uint32_t>(header + 8);
-  if (version != 2 && version != StateWriter::kVersion)
+  if (version != 2 && version != StateWriter::kVersion) {
     throw dataError(path, 0,
                     "state file version " + std::to_string(version) + ", this binloop reads versions 2 and " +
                         std::to_string(StateWriter::kVersion));
+  }
   const uint64_t name_bytes = load<uint32_t>(header + 12);
   const uint64_t id_bytes = version >= 3 ? sizeof(uint64_t) : 0;
   Preamble p;
@@ -81,11 +83,12 @@ Preamble readPreamble(std::ifstream& in, const std::string& path, const std::str
   p.checksum = load<uint64_t>(header + 24);
   // Compared piece by piece: a corrupt size must not wrap the sum round to the file's size.
   const uint64_t rest = size - kHeaderBytes;
-  if (name_bytes > rest || id_bytes > rest - name_bytes || p.payload != rest - name_bytes - id_bytes)
+  if (name_bytes > rest || id_bytes > rest - name_bytes || p.payload != rest - name_bytes - id_bytes) {
     throw dataError(path, 0,
                     "truncated state file (" + std::to_string(size) + " bytes, the header announces " +
                         std::to_string(name_bytes) + " of name and " + std::to_string(p.payload) +
                         " of payload after its " + std::to_string(kHeaderBytes) + ")");
+  }
   std::string name(name_bytes, '\0');
   in.read(name.data(), static_cast<std::streamsize>(name_bytes));
   if (name != stage)

@@ -55,7 +55,7 @@ std::vector<Pose3> readKittiPoses(const std::string& path) {
 void writeKittiPoses(const std::string& path, const std::vector<Pose3>& poses) {
   File out(path);
   for (const auto& T : poses) {
-    const auto M = T.matrix();
+    const auto& M = T.matrix();
     for (int r = 0; r < 3; ++r)
       for (int c = 0; c < 4; ++c) std::fprintf(out.f, (r == 0 && c == 0) ? "%.9e" : " %.9e", M(r, c));
     std::fprintf(out.f, "\n");

@@ -10,10 +10,11 @@ bool intersects(const std::set<SlamKeyframeId>& a, const std::set<SlamKeyframeId
   auto i = a.begin(), j = b.begin();
   while (i != a.end() && j != b.end()) {
     if (*i == *j) return true;
-    if (*i < *j)
+    if (*i < *j) {
       ++i;
-    else
+    } else {
       ++j;
+    }
   }
   return false;
 }
@@ -40,9 +41,10 @@ ConsistencyGroups::Result ConsistencyGroups::update(const std::vector<Proposal>&
     }
     if (!consistent_with_some) next.push_back({p.group, 0, 0});
   }
-  for (size_t g = 0; g < groups_.size(); ++g)
+  for (size_t g = 0; g < groups_.size(); ++g) {
     if (!continued[g] && groups_[g].age < max_gap_)
       next.push_back({groups_[g].group, groups_[g].length, groups_[g].age + 1});
+  }
   groups_ = std::move(next);
   return r;
 }

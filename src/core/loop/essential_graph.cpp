@@ -46,9 +46,10 @@ EssentialGraph buildEssentialGraph(const std::vector<msg::KeyframeState>& keyfra
   for (const msg::KeyframeState& k : keyframes) {
     const size_t i = index.at(k.id);
     auto parent = index.find(k.parent);
-    if (parent != index.end())
+    if (parent != index.end()) {
       g.tree_edges +=
           add(parent->second, i, current(parent->second, i), p.sigma_rot_rad, p.sigma_trans_m, false);
+    }
     for (const msg::CovisibleEdge& e : k.covisible) {
       if (static_cast<int>(e.weight) < p.min_covisibility) continue;
       auto o = index.find(e.id);

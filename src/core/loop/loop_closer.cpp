@@ -192,9 +192,10 @@ SlamKeyframeId LoopCloser::reanchor(SlamKeyframeId query, SlamKeyframeId match, 
     *v = std::move(w);
     return id;
   }
-  if (!tried.empty())
+  if (!tried.empty()) {
     v->detail += "; " + fixedDecimals(far, 2) +
                  " m apart, and nearer keyframes beside the match did not verify: " + tried;
+  }
   return match;
 }
 

@@ -158,9 +158,10 @@ LoopDetector::Output LoopDetector::process(const msg::KeyFrame& kf) {
     return c;
   };
   out.active = withSignature(query(active_, kf.id, kf.frame_index, false), active_signature_ms);
-  for (size_t i = 0; i < shadow_.size(); ++i)
+  for (size_t i = 0; i < shadow_.size(); ++i) {
     out.shadow.push_back(
         withSignature(query(shadow_[i], kf.id, kf.frame_index, true), shadow_signature_ms[i]));
+  }
   return out;
 }
 

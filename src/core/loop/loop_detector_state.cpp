@@ -48,11 +48,12 @@ void LoopDetector::load(StateReader& r) {
   for (const std::string& m : indexedModels()) {
     auto it = saved.find(m);
     const std::string now = identity_ ? identity_(m) : "";
-    if (it != saved.end() && !it->second.empty() && !now.empty() && it->second != now)
+    if (it != saved.end() && !it->second.empty() && !now.empty() && it->second != now) {
       r.fail(
           "the map's " + m + " index was built with " + it->second + ", but this loop detector's " + m +
           " is " + now +
           ": the same keyframes would give another index (load it with that vocabulary, or another model)");
+    }
   }
   const uint64_t n = r.getCount("keyframes", 16);
   for (uint64_t k = 0; k < n; ++k) {

@@ -147,10 +147,11 @@ LoopVerification verifyLoop(const msg::KeyFrame& q, const msg::KeyFrame& c, cons
   const bool words_fit =
       query_words.size() == q.keypoints.size() && candidate_words.size() == c.keypoints.size();
   v.by_words = p.match_by_words && words_fit;
-  if (p.match_by_words && !words_fit && (!query_words.empty() || !candidate_words.empty()))
+  if (p.match_by_words && !words_fit && (!query_words.empty() || !candidate_words.empty())) {
     words_note = " (words not used: " + std::to_string(query_words.size()) + " and " +
                  std::to_string(candidate_words.size()) + " for " + std::to_string(q.keypoints.size()) +
                  " and " + std::to_string(c.keypoints.size()) + " keypoints)";
+  }
   const std::vector<std::pair<int, int>> pairs =
       descriptorPairs(q, c, p, v.by_words ? &query_words : nullptr, &candidate_words);
   v.matches = static_cast<int>(pairs.size());
@@ -174,9 +175,10 @@ LoopVerification verifyLoop(const msg::KeyFrame& q, const msg::KeyFrame& c, cons
   const RigidRansacResult rr = rigidRansac(a, b, p.ransac, hashCombine(p.seed, hashCombine(q.id, c.id)));
   v.first_inliers = rr.inliers;
   v.ransac_ms = lap();
-  if (!rr.ok)
+  if (!rr.ok) {
     return done(LoopRejection::kNoConsensus, matched + ", best consensus " + std::to_string(rr.inliers) +
                                                  " < " + std::to_string(p.ransac.min_inliers));
+  }
   std::vector<std::pair<int, int>> in;
   for (size_t i = 0; i < pairs.size(); ++i)
     if (rr.inlier[i]) in.push_back(pairs[i]);

@@ -10,9 +10,10 @@
 namespace binloop {
 
 void CorrectionHistory::begin(uint64_t sequence) {
-  if (sequence != applied() + 1)
+  if (sequence != applied() + 1) {
     throw std::invalid_argument("correction " + std::to_string(sequence) + " after " +
                                 std::to_string(applied()) + " applied: one between is missing");
+  }
   deltas_.emplace_back();
 }
 

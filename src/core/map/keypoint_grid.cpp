@@ -28,14 +28,16 @@ std::vector<int> KeypointGrid::near(float x, float y, float r, int min_level, in
   };
   const int x0 = cell(x - r, cols_), x1 = cell(x + r, cols_);
   const int y0 = cell(y - r, rows_), y1 = cell(y + r, rows_);
-  for (int cy = y0; cy <= y1; ++cy)
-    for (int cx = x0; cx <= x1; ++cx)
+  for (int cy = y0; cy <= y1; ++cy) {
+    for (int cx = x0; cx <= x1; ++cx) {
       for (int i : cells_[static_cast<size_t>(cy) * cols_ + cx]) {
         const msg::KeyPoint& k = kps_[i];
         if (min_level >= 0 && k.octave < min_level) continue;
         if (max_level >= 0 && k.octave > max_level) continue;
         if (std::abs(k.x - x) <= r && std::abs(k.y - y) <= r) out.push_back(i);
       }
+    }
+  }
   return out;
 }
 

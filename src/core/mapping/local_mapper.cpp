@@ -64,14 +64,17 @@ void LocalMapper::insert(const msg::KeyFrame& in) {
   if (const std::string bad = msg::keyframeShapeProblem(in); !bad.empty()) throw std::invalid_argument(bad);
   // Ids are never reused: one the map holds (or culled) comes from another tracking session (a tracker
   // restarted while mapping kept its map), and taking it would overwrite a keyframe or point others refer to.
-  if (map_.knows(in.id))
+  if (map_.knows(in.id)) {
     throw std::invalid_argument("keyframe " + std::to_string(in.id) +
                                 " is already in the map (its id was issued " +
                                 "again: a tracker restarted without mapping?); refused");
-  for (const msg::MapPoint& np : in.new_points)
-    if (np.id == kNoId || map_.points().count(np.id) || map_.wasFused(np.id))
+  }
+  for (const msg::MapPoint& np : in.new_points) {
+    if (np.id == kNoId || map_.points().count(np.id) || map_.wasFused(np.id)) {
       throw std::invalid_argument("keyframe " + std::to_string(in.id) + ": new map point " +
                                   std::to_string(np.id) + " is 0 or already in the map; refused");
+    }
+  }
   if (scales_.levels() == 0) scales_ = ScalePyramid(in.scale_factor, in.levels);
   camera_ = in.camera;
   // Made before a loop correction tracking had not heard of yet: it moves as its parent did.
@@ -188,9 +191,10 @@ std::vector<SlamKeyframeId> LocalMapper::neighbors(const KF& kf, int n) const {
 std::vector<MapPointId> LocalMapper::pointsOf(const std::vector<SlamKeyframeId>& keyframes) const {
   std::vector<MapPointId> out;
   std::unordered_set<MapPointId> seen;
-  for (SlamKeyframeId k : keyframes)
+  for (SlamKeyframeId k : keyframes) {
     for (MapPointId id : map_.keyframes().at(k).state.point_ids)
       if (id != kNoId && seen.insert(id).second) out.push_back(id);
+  }
   return out;
 }
 

@@ -30,13 +30,15 @@ LocalMapper::BaSetup LocalMapper::makeBaProblem(const std::vector<SlamKeyframeId
   };
   for (SlamKeyframeId k : free) addKf(k, false);
   b.free = b.problem.keyframes.size();
-  for (size_t i = 0; i < b.free; ++i)
-    for (MapPointId id : map_.keyframes().at(b.problem.keyframes[i].id).state.point_ids)
+  for (size_t i = 0; i < b.free; ++i) {
+    for (MapPointId id : map_.keyframes().at(b.problem.keyframes[i].id).state.point_ids) {
       if (id != kNoId && !pt_index.count(id)) {
         pt_index[id] = b.problem.points.size();
         b.problem.points.push_back({id, map_.points().at(id).state.p_w});
       }
-  for (const BaPoint& bp : b.problem.points)
+    }
+  }
+  for (const BaPoint& bp : b.problem.points) {
     for (const auto& [k, idx] : map_.points().at(bp.id).obs) {
       addKf(k, true);
       const KF& o = map_.keyframes().at(k);
@@ -48,6 +50,7 @@ LocalMapper::BaSetup LocalMapper::makeBaProblem(const std::vector<SlamKeyframeId
                                         scales_.inv_sigma2[kp.octave]});
       b.obs_of.emplace_back(bp.id, k);
     }
+  }
   return b;
 }
 
@@ -152,10 +155,11 @@ msg::LocalMapUpdatePtr LocalMapper::mergeGlobalBa(bool wait) {
   for (const BaRefinedKeyframe& rk : job->result.keyframes)
     delta[rk.id] = rk.T_c_w.inverse() * start.keyframes[rk.index].T_c_w;
   std::unordered_map<MapPointId, Eigen::Vector3d> placed;
-  for (size_t i = 0; i < job->result.points.size(); ++i)  // in the problem's order
+  for (size_t i = 0; i < job->result.points.size(); ++i) {  // in the problem's order
     if (auto p = map_.points().find(start.points[i].id);
         p != map_.points().end() && p->second.state.p_w == start.points[i].p_w)
       placed[start.points[i].id] = job->result.points[i].p_w;
+  }
   size_t added = 0;
   for (const auto& [id, kf] : map_.keyframes()) added += kf.seq > job->seq_at_start;
   moveMap(delta, &placed);

@@ -107,10 +107,11 @@ void LocalMapper::fuseInto(KF& t, const std::vector<MapPointId>& points, msg::Lo
       touched_.push_back(id);
     } else if (there != id) {
       // Keep the better-observed point (ORB-SLAM2).
-      if (map_.points().at(there).obs.size() >= mp.obs.size())
+      if (map_.points().at(there).obs.size() >= mp.obs.size()) {
         replacePoint(id, there, u);
-      else
+      } else {
         replacePoint(there, id, u);
+      }
     }
   }
 }

@@ -81,9 +81,10 @@ void LocalMapper::load(StateReader& r) {
     kf.keypoints = readKeyPoints(r);
     kf.descriptors = r.getArray<Desc256>("keyframe descriptors");
     kf.weights = readCounts<SlamKeyframeId>(r, "covisibility weights");
-    if (kf.keypoints.size() != kf.descriptors.size() || kf.keypoints.size() != kf.state.point_ids.size())
+    if (kf.keypoints.size() != kf.descriptors.size() || kf.keypoints.size() != kf.state.point_ids.size()) {
       r.fail("keyframe " + std::to_string(kf.state.id) +
              ": keypoints, descriptors and point ids differ in number");
+    }
     kf.grid = KeypointGrid(kf.keypoints, camera_.width, camera_.height);
   }
   const uint64_t pts = r.getCount("map points", 100);

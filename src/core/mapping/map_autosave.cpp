@@ -47,9 +47,10 @@ std::unique_ptr<LocalMapper> MapAutosave::resume(const LocalMapperParams& p, std
   std::error_code ec;
   if (!std::filesystem::exists(path_, ec)) return none("no autosave at " + path_);
   try {
-    if (stateFileMapId(path_, kStage) != map_id_)
+    if (stateFileMapId(path_, kStage) != map_id_) {
       return none("the autosave at " + path_ + " is another graph's (not session '" + session_ +
                   "'): not resumed, and overwritten at the next save");
+    }
     auto m = std::make_unique<LocalMapper>(p);
     loadStateFile(*m, path_, kStage);
     m->resumeAfterRestart();

@@ -58,25 +58,30 @@ void checkInput(const StereoCamera& camera, const BaProblem& pb, const LocalBaPa
   checkPositive(kWho, "chi2_stereo", p.chi2_stereo);
   checkPositive(kWho, "huber_delta_mono", p.huber_delta_mono);
   checkPositive(kWho, "huber_delta_stereo", p.huber_delta_stereo);
-  for (size_t i = 0; i < pb.keyframes.size(); ++i)
+  for (size_t i = 0; i < pb.keyframes.size(); ++i) {
     checkPose(kWho, pb.keyframes[i].T_c_w,
               "keyframe " + std::to_string(i) + " (id " + std::to_string(pb.keyframes[i].id) + ") T_c_w");
-  for (size_t i = 0; i < pb.points.size(); ++i)
-    if (!pb.points[i].p_w.allFinite())
+  }
+  for (size_t i = 0; i < pb.points.size(); ++i) {
+    if (!pb.points[i].p_w.allFinite()) {
       fail(kWho,
            "point " + std::to_string(i) + " (id " + std::to_string(pb.points[i].id) + ") is not finite");
+    }
+  }
   checkUniqueIds(pb.keyframes, "keyframe");
   checkUniqueIds(pb.points, "point");
   bool any_stereo = false;
   for (size_t i = 0; i < pb.observations.size(); ++i) {
     const BaObservation& o = pb.observations[i];
     const std::string name = "observation " + std::to_string(i);
-    if (o.keyframe >= pb.keyframes.size())
+    if (o.keyframe >= pb.keyframes.size()) {
       fail(kWho, name + ": keyframe index " + std::to_string(o.keyframe) + " out of range (" +
                      std::to_string(pb.keyframes.size()) + " keyframes)");
-    if (o.point >= pb.points.size())
+    }
+    if (o.point >= pb.points.size()) {
       fail(kWho, name + ": point index " + std::to_string(o.point) + " out of range (" +
                      std::to_string(pb.points.size()) + " points)");
+    }
     checkObservation(kWho, name, nullptr, o.uv, o.u_right, o.inv_sigma2);
     any_stereo |= o.u_right >= 0;
   }

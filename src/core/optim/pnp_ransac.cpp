@@ -34,10 +34,11 @@ Pose3 toPose(const cv::Mat& rvec, const cv::Mat& tvec) {
 PnpRansacResult solvePnpRansac(const std::vector<Eigen::Vector3d>& p_w,
                                const std::vector<Eigen::Vector2d>& uv, const std::vector<double>& inv_sigma2,
                                const StereoCamera& cam, const PnpRansacParams& params, uint64_t seed) {
-  if (p_w.size() != uv.size() || (!inv_sigma2.empty() && inv_sigma2.size() != uv.size()))
+  if (p_w.size() != uv.size() || (!inv_sigma2.empty() && inv_sigma2.size() != uv.size())) {
     throw std::invalid_argument("solvePnpRansac: " + std::to_string(p_w.size()) + " points, " +
                                 std::to_string(uv.size()) + " pixels, " + std::to_string(inv_sigma2.size()) +
                                 " weights");
+  }
   PnpRansacResult best;
   const int n = static_cast<int>(p_w.size());
   if (n < 4 || n < params.min_inliers) return best;
@@ -87,11 +88,12 @@ PnpRansacResult solvePnpRansac(const std::vector<Eigen::Vector3d>& p_w,
   // Refine on the inliers (iterative, from the sample's pose), then classify again.
   std::vector<cv::Point3d> Pi;
   std::vector<cv::Point2d> pi;
-  for (int i = 0; i < n; ++i)
+  for (int i = 0; i < n; ++i) {
     if (best.inlier[i]) {
       Pi.emplace_back(p_w[i].x(), p_w[i].y(), p_w[i].z());
       pi.emplace_back(uv[i].x(), uv[i].y());
     }
+  }
   cv::Mat R(3, 3, CV_64F), rvec, tvec(3, 1, CV_64F);
   for (int i = 0; i < 3; ++i) {
     for (int j = 0; j < 3; ++j) R.at<double>(i, j) = best.T_c_w.linear()(i, j);

@@ -69,9 +69,10 @@ PoseGraphResult optimizePoseGraph(const std::vector<PoseGraphNode>& nodes,
   std::vector<ceres::ResidualBlockId> blocks;
   std::vector<RelativePoseCost*> costs;
   for (const PoseGraphEdge& e : edges) {
-    if (e.i >= nodes.size() || e.j >= nodes.size() || e.i == e.j)
+    if (e.i >= nodes.size() || e.j >= nodes.size() || e.i == e.j) {
       throw std::invalid_argument("pose graph: edge " + std::to_string(e.i) + "-" + std::to_string(e.j) +
                                   " of " + std::to_string(nodes.size()) + " nodes");
+    }
     auto* c = new RelativePoseCost;
     c->R0i = nodes[e.i].T_c_w.linear();
     c->t0i = nodes[e.i].T_c_w.translation();
@@ -86,9 +87,10 @@ PoseGraphResult optimizePoseGraph(const std::vector<PoseGraphNode>& nodes,
     blocks.push_back(problem.AddResidualBlock(new ceres::AutoDiffCostFunction<RelativePoseCost, 6, 6, 6>(c),
                                               loss, xi[e.i].data(), xi[e.j].data()));
   }
-  for (size_t n = 0; n < nodes.size(); ++n)
+  for (size_t n = 0; n < nodes.size(); ++n) {
     if (problem.HasParameterBlock(xi[n].data()) && nodes[n].fixed)
       problem.SetParameterBlockConstant(xi[n].data());
+  }
 
   PoseGraphResult r;
   auto edgeChi2 = [&](size_t k) {

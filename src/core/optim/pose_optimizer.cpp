@@ -22,12 +22,14 @@ using Term = ObservationTerm<StereoPoseOnlyCost::CostFunction, MonoPoseOnlyCost:
 void checkInput(const StereoCamera& camera, const Pose3& T_c_w, const std::vector<PoseObservation>& obs,
                 const PoseOptimizerParams& p) {
   if (p.rounds < 1) fail(kWho, "parameter rounds must be >= 1 (got " + std::to_string(p.rounds) + ")");
-  if (p.iterations_per_round < 1)
+  if (p.iterations_per_round < 1) {
     fail(kWho,
          "parameter iterations_per_round must be >= 1 (got " + std::to_string(p.iterations_per_round) + ")");
-  if (p.max_solve_observations < 0 || (p.max_solve_observations > 0 && p.max_solve_observations < 3))
+  }
+  if (p.max_solve_observations < 0 || (p.max_solve_observations > 0 && p.max_solve_observations < 3)) {
     fail(kWho, "parameter max_solve_observations must be 0 (all) or >= 3 (got " +
                    std::to_string(p.max_solve_observations) + ")");
+  }
   if (p.robust_rounds < 0)
     fail(kWho, "parameter robust_rounds must be >= 0 (got " + std::to_string(p.robust_rounds) + ")");
   checkPositive(kWho, "chi2_mono", p.chi2_mono);

@@ -31,14 +31,15 @@ std::vector<std::string> fields(const std::string& line) {
   bool in = false;
   for (size_t i = 0; i < line.size(); ++i) {
     const char c = line[i];
-    if (in && c == '"' && i + 1 < line.size() && line[i + 1] == '"')
+    if (in && c == '"' && i + 1 < line.size() && line[i + 1] == '"') {
       f.back() += '"', ++i;
-    else if (c == '"')
+    } else if (c == '"') {
       in = !in;
-    else if (c == ',' && !in)
+    } else if (c == ',' && !in) {
       f.emplace_back();
-    else
+    } else {
       f.back() += c;
+    }
   }
   return f;
 }
@@ -70,9 +71,10 @@ void row(std::ostream& o, const msg::LoopCandidates* q, const msg::LoopClosure* 
          double switch_ms, const std::vector<Pose3>* gt) {
   if (q) {
     std::string cands;
-    for (size_t i = 0; i < q->candidates.size() && i < 5; ++i)
+    for (size_t i = 0; i < q->candidates.size() && i < 5; ++i) {
       cands += (i ? " " : "") + std::to_string(counterOf(q->candidates[i].id)) + ":" +
                std::to_string(q->candidates[i].score);
+    }
     o << counterOf(q->query) << "," << q->query_frame << "," << q->model << "," << q->shadow << ","
       << q->status << "," << quoted(cands) << "," << q->consistency << ","
       << (q->accepted == kNoId ? std::string() : std::to_string(counterOf(q->accepted))) << ",";
@@ -136,9 +138,10 @@ std::vector<LoggedLoop> readLoopLog(const std::string& path) {
   while (std::getline(in, line)) {
     ++n;
     const std::vector<std::string> f = fields(line);
-    if (f.size() != fields_expected)
+    if (f.size() != fields_expected) {
       throw dataError(path, static_cast<int>(n),
                       std::to_string(f.size()) + " fields, expected " + std::to_string(fields_expected));
+    }
     if (f[8].empty()) continue;  // no closure on this row
     LoggedLoop l;
     try {

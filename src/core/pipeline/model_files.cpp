@@ -16,12 +16,13 @@ LoopDetector::ModelFactory modelFileFactory(const std::string& dir, const OrbSla
     RecognizerOptions ro = options;
     ro.model_file = (std::filesystem::path(dir) / (name + ".bin")).string();
     // The one model the package cannot ship: say how to make it rather than only that it is missing.
-    if (name == "hbow" && !std::filesystem::exists(ro.model_file))
+    if (name == "hbow" && !std::filesystem::exists(ro.model_file)) {
       throw PlaceError(
           ro.model_file +
           ": not found: the k=10, L=6 hbow vocabulary (26 MB) is not shipped; "
           "vocab/make_vocab.sh hbow makes it (about 6 minutes, from KITTI route 08's poses), or use a "
           "shipped model (hmvlad, vlad, vladpq, fabmap)");
+    }
     return makePlaceRecognizer(name, ro);
   };
 }
@@ -47,10 +48,11 @@ std::vector<std::string> shadowModelNames(const std::string& spec, const std::st
   if (spec == "all") {
     for (const std::string& n : known) {
       if (n == active) continue;
-      if (std::filesystem::exists(std::filesystem::path(dir) / (n + ".bin")))
+      if (std::filesystem::exists(std::filesystem::path(dir) / (n + ".bin"))) {
         out.push_back(n);
-      else if (skipped)
+      } else if (skipped) {
         skipped->push_back(n);
+      }
     }
     return out;
   }

@@ -189,9 +189,10 @@ void checkIntegerLiterals(const std::string& path) {
     size_t i = (!value.empty() && (value[0] == '-' || value[0] == '+')) ? 1 : 0;
     if (i == value.size() || value.find_first_not_of("0123456789", i) != std::string::npos) continue;
     if (std::stold(value) > std::numeric_limits<int>::max() ||
-        std::stold(value) < std::numeric_limits<int>::min())
+        std::stold(value) < std::numeric_limits<int>::min()) {
       throw ConfigError(path + ": " + section + "." + key + " = " + value + " is out of range (at most " +
                         std::to_string(std::numeric_limits<int>::max()) + ")");
+    }
   }
 }
 
@@ -199,16 +200,18 @@ void checkIntegerLiterals(const std::string& path) {
 void setFromYaml(const Setting& s, const cv::FileNode& v, const std::string& where) {
   if (!v.isInt() && !v.isReal()) throw ConfigError(where + " must be a number");
   const double x = v.real();
-  if (!std::isfinite(x) || x < s.min)
+  if (!std::isfinite(x) || x < s.min) {
     throw ConfigError(where + " = " + std::to_string(x) + " is out of range (at least " +
                       std::to_string(s.min) + ")");
+  }
   const bool binary =
       s.kind == Setting::kBool || s.kind == Setting::kSubPixelFit || s.kind == Setting::kPattern;
   if ((s.kind == Setting::kInt || binary) && x != std::floor(x))
     throw ConfigError(where + " must be a whole number");
-  if (s.kind == Setting::kInt && x > std::numeric_limits<int>::max())
+  if (s.kind == Setting::kInt && x > std::numeric_limits<int>::max()) {
     throw ConfigError(where + " = " + std::to_string(x) + " is out of range (at most " +
                       std::to_string(std::numeric_limits<int>::max()) + ")");
+  }
   if (binary && x > 1) throw ConfigError(where + " must be 0 or 1");
   switch (s.kind) {
     case Setting::kInt:
@@ -249,10 +252,11 @@ SlamConfig loadSlamConfig(const std::string& path) {
   SlamConfig c;
   auto settings = settingsOf(c);
   const cv::FileNode root = fs.root();
-  if (!root.isMap())
+  if (!root.isMap()) {
     throw ConfigError(
         path +
         ": expected sections (orb, stereo, tracking, recovery, mapping, loop_detection, loop_closing)");
+  }
   for (const std::string& section : root.keys()) {
     auto sec = settings.find(section);
     if (sec == settings.end()) {

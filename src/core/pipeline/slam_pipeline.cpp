@@ -34,10 +34,11 @@ SlamPipeline::SlamPipeline(const StereoCamera& cam, const TrackerParams& tp, con
     mapping_thread_ = std::thread([this] {
       while (auto in = mapping_inbox_.pop()) map(*in);
     });
-    if (detector_)
+    if (detector_) {
       loop_thread_ = std::thread([this] {
         while (auto in = loop_inbox_.pop()) searchLoops(*in);
       });
+    }
   }
 }
 
@@ -53,7 +54,7 @@ void SlamPipeline::forEachStage(Self& self, F&& f) {
 
 std::vector<std::string> SlamPipeline::stageNames() const {
   std::vector<std::string> stages;
-  forEachStage(*this, [&](const char* name, const auto&) { stages.push_back(name); });
+  forEachStage(*this, [&](const char* name, const auto&) { stages.emplace_back(name); });
   return stages;
 }
 
@@ -68,10 +69,11 @@ uint64_t SlamPipeline::saveMap(const std::string& directory) const {
 
 uint64_t SlamPipeline::loadMap(const std::string& directory) {
   requireDirectory(directory);
-  if (detector_ && !std::filesystem::exists(stageStatePath(directory, "loop_detector")))
+  if (detector_ && !std::filesystem::exists(stageStatePath(directory, "loop_detector"))) {
     throw dataError(directory, 0,
                     "the map has no loop_detector.state (saved without loop closing): load it with "
                     "loop closing off (--detector none)");
+  }
   const uint64_t map_id = checkMapFolder(directory, stageNames());
   forEachStage(*this, [&](const char* name, auto& stage) {
     loadStateFile(stage, stageStatePath(directory, name), name);
@@ -90,10 +92,11 @@ void SlamPipeline::addExternalLoop(SlamKeyframeId query, SlamKeyframeId match, c
   if (!closer_) throw PlaceError("loop closing is off: no external loop can be added");
   LoopInput in;
   in.external = ExternalLoop{query, match, source};
-  if (mode_ == PipelineMode::kLockStep)
+  if (mode_ == PipelineMode::kLockStep) {
     searchLoops(in);
-  else
+  } else {
     loop_inbox_.push(in);
+  }
 }
 
 void SlamPipeline::sendCorrection(const msg::CorrectionPtr& c) {
@@ -111,10 +114,11 @@ void SlamPipeline::sendCorrection(const msg::CorrectionPtr& c) {
 void SlamPipeline::sendMapUpdate(const msg::LocalMapUpdatePtr& u, bool loop_thread_running) {
   updates_.push(u);
   if (!closer_) return;
-  if (mode_ == PipelineMode::kThreaded && loop_thread_running)
+  if (mode_ == PipelineMode::kThreaded && loop_thread_running) {
     loop_inbox_.push({nullptr, u, std::nullopt});
-  else
+  } else {
     closer_->apply(*u);  // what it would send again is ignored here: in one process no correction is lost
+  }
 }
 
 void SlamPipeline::mergeGlobalBa(bool wait, bool loop_thread_running) {
@@ -138,10 +142,11 @@ void SlamPipeline::map(const MappingInput& in) {
   updates_.push(out.update);
   --pending_;
   if (!detector_) return;
-  if (mode_ == PipelineMode::kLockStep)
+  if (mode_ == PipelineMode::kLockStep) {
     searchLoops({out.refined, out.update, std::nullopt});
-  else
+  } else {
     loop_inbox_.push({out.refined, out.update, std::nullopt});
+  }
 }
 
 void SlamPipeline::searchLoops(const LoopInput& in) {

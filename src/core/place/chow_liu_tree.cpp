@@ -33,9 +33,10 @@ ChowLiuTree ChowLiuTree::learn(const std::vector<std::vector<uint32_t>>& images,
   for (size_t im = 0; im < images.size(); ++im) {
     const auto& w = images[im];
     for (size_t i = 0; i < w.size(); ++i) {
-      if (w[i] >= words)
+      if (w[i] >= words) {
         throw PlaceError("training image names word " + std::to_string(w[i]) + " of " +
                          std::to_string(words));
+      }
       count[w[i]]++;
       for (size_t j = i + 1; j < w.size(); ++j) pair[at(w[i], w[j])]++;
     }

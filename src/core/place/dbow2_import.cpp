@@ -29,9 +29,10 @@ Desc256 parseDescriptorBytes(const char* s, const std::string& where, char** res
   char* end = nullptr;
   for (int i = 0; i < 32; ++i) {
     const long v = std::strtol(s, &end, 10);
-    if (end == s || v < 0 || v > 255)
+    if (end == s || v < 0 || v > 255) {
       throw PlaceError(where + ": descriptor needs 32 byte values (0-255), found " + std::to_string(i) +
                        " (is this a 256-bit ORB vocabulary?)");
+    }
     bytes[i] = static_cast<uint8_t>(v);
     s = end;
   }
@@ -63,9 +64,10 @@ VocabularyTree importDbow2Yaml(const std::string& path) {
   std::vector<VocabularyTree::InputNode> in(nodes.size() + 1, {0, Desc256{}, false, 0.f});
   for (const auto& n : nodes) {
     const int id = static_cast<int>(n["nodeId"]);
-    if (id <= 0 || id >= static_cast<int>(in.size()))
+    if (id <= 0 || id >= static_cast<int>(in.size())) {
       throw PlaceError(path + ": node id " + std::to_string(id) + " out of range 1.." +
                        std::to_string(in.size() - 1));
+    }
     in[id].parent = static_cast<uint32_t>(static_cast<int>(n["parentId"]));
     in[id].weight = static_cast<float>(static_cast<double>(n["weight"]));
     const std::string desc = static_cast<std::string>(n["descriptor"]);

@@ -1,8 +1,11 @@
 #include "binloop/place/descriptor_block.h"
 
-// GCC 12's own AVX-512 headers trip -Wmaybe-uninitialized (their _mm512_undefined_* placeholders).
+// GCC 12's own AVX-512 headers trip -Wmaybe-uninitialized (their _mm512_undefined_* placeholders); clang
+// (clang-tidy) has no such warning.
 #pragma GCC diagnostic push
+#if defined(__GNUC__) && !defined(__clang__)
 #pragma GCC diagnostic ignored "-Wmaybe-uninitialized"
+#endif
 #include <immintrin.h>
 
 #include <limits>
@@ -54,10 +57,11 @@ __attribute__((target("avx512f,avx512vpopcntdq"))) DescriptorBlock::Nearest near
   _mm512_store_si512(lanes + 8, m2);
   uint64_t first = std::numeric_limits<uint64_t>::max(), second = first;
   for (uint64_t v : lanes) {
-    if (v < first)
+    if (v < first) {
       second = first, first = v;
-    else if (v < second)
+    } else if (v < second) {
       second = v;
+    }
   }
   return unpack(first, second);
 }
@@ -86,15 +90,15 @@ DescriptorBlock::Nearest DescriptorBlock::nearest(const Desc256& q) const {
 DescriptorBlock::Nearest DescriptorBlock::nearestPortable(const Desc256& q) const {
   uint64_t first = std::numeric_limits<uint64_t>::max(), second = first;
   for (size_t k = 0; k < size(); ++k) {
-    const uint64_t d = static_cast<uint64_t>(
-        __builtin_popcountll(q.w[0] ^ words_[0][k]) + __builtin_popcountll(q.w[1] ^ words_[1][k]) +
-        __builtin_popcountll(q.w[2] ^ words_[2][k]) + __builtin_popcountll(q.w[3] ^ words_[3][k]));
-    const uint64_t v = pack(d, k);
+    const int d = __builtin_popcountll(q.w[0] ^ words_[0][k]) + __builtin_popcountll(q.w[1] ^ words_[1][k]) +
+                  __builtin_popcountll(q.w[2] ^ words_[2][k]) + __builtin_popcountll(q.w[3] ^ words_[3][k]);
+    const uint64_t v = pack(static_cast<uint64_t>(d), k);
     if (v < second) {
-      if (v < first)
+      if (v < first) {
         second = first, first = v;
-      else
+      } else {
         second = v;
+      }
     }
   }
   return unpack(first, second);

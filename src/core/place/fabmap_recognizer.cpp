@@ -39,9 +39,10 @@ FabmapModel FabmapModel::load(const std::string& path) {
     m.samples.emplace_back(ids.begin() + offsets[i], ids.begin() + offsets[i + 1]);
   }
   r.expectEnd();
-  if (m.tree->words() != m.vocabulary->size())
+  if (m.tree->words() != m.vocabulary->size()) {
     throw PlaceError(path + ": Chow-Liu tree has " + std::to_string(m.tree->words()) + " words, vocabulary " +
                      std::to_string(m.vocabulary->size()));
+  }
   return m;
 }
 
@@ -72,7 +73,7 @@ FabmapRecognizer::FabmapRecognizer(FabmapModel model) : m_(std::move(model)) {
   };
   for (uint32_t i = 0; i < n; ++i) {
     const double marg = m_.tree->marginal(i);
-    for (int zq = 0; zq < 2; ++zq)
+    for (int zq = 0; zq < 2; ++zq) {
       for (int zp = 0; zp < 2; ++zp) {
         const double cond1 = m_.tree->conditional(i, zp);
         const double pz_zp = zq ? cond1 : 1 - cond1, pnz_zp = 1 - pz_zp;
@@ -93,13 +94,14 @@ FabmapRecognizer::FabmapRecognizer(FabmapModel model) : m_(std::move(model)) {
         const double avg = given_e[1] * marg + given_e[0] * (1 - marg);
         log_avg_[i][zq * 2 + zp] = static_cast<float>(std::log(std::max(avg, 1e-300)));
       }
+    }
   }
   inverted_.resize(n);
 }
 
 FabmapRecognizer::QueryTables FabmapRecognizer::tables(const std::vector<uint32_t>& query) const {
   const uint32_t n = m_.tree->words();
-  std::vector<char> z(n, 0);
+  std::vector<uint8_t> z(n, 0);
   for (uint32_t w : query) z[w] = 1;
   QueryTables t;
   t.delta.resize(n);
@@ -181,6 +183,8 @@ QueryResult FabmapRecognizer::querySignature(const SlotScope& scope) const {
   t = std::chrono::steady_clock::now();
   const QueryTables tab = tables(q);
   std::vector<double> loglik;  // references, then pre-candidates, then the new place
+  loglik.reserve(refs.size());
+
   for (Slot k : refs) loglik.push_back(placeLogLik(tab, words_[k]));
   for (Slot k : pre) loglik.push_back(placeLogLik(tab, words_[k]));
   const size_t places = loglik.size();

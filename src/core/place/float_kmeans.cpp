@@ -44,8 +44,8 @@ FloatKMeansResult floatKMeans(const std::vector<float>& data, int dims, int k, u
     while (d2[pick] == 0) pick = (pick + 1) % n;
     c.insert(c.end(), row(pick), row(pick) + dims);
     ++have;
-    for (size_t i = 0; i < n; ++i)
-      d2[i] = std::min<double>(d2[i], squaredDistance(row(i), &c[(have - 1) * dims], dims));
+    const float* newest = &c[static_cast<size_t>(have - 1) * dims];
+    for (size_t i = 0; i < n; ++i) d2[i] = std::min<double>(d2[i], squaredDistance(row(i), newest, dims));
   }
   std::vector<uint32_t> assign(n, UINT32_MAX);
   std::vector<double> sum(static_cast<size_t>(have) * dims);
@@ -62,9 +62,10 @@ FloatKMeansResult floatKMeans(const std::vector<float>& data, int dims, int k, u
       for (int j = 0; j < dims; ++j) sum[a * dims + j] += row(i)[j];
     }
     if (!changed && it > 0) break;
-    for (int a = 0; a < have; ++a)
+    for (int a = 0; a < have; ++a) {
       if (count[a])
         for (int j = 0; j < dims; ++j) c[a * dims + j] = static_cast<float>(sum[a * dims + j] / count[a]);
+    }
   }
   std::fill(count.begin(), count.end(), 0);
   for (size_t i = 0; i < n; ++i) count[assign[i] = nearestFloatCentre(row(i), c.data(), have, dims)]++;
@@ -75,7 +76,8 @@ FloatKMeansResult floatKMeans(const std::vector<float>& data, int dims, int k, u
       continue;
     }
     remap[a] = static_cast<uint32_t>(r.k++);
-    r.centres.insert(r.centres.end(), &c[a * dims], &c[a * dims] + dims);
+    r.centres.insert(r.centres.end(), &c[static_cast<size_t>(a) * dims],
+                     &c[static_cast<size_t>(a) * dims] + dims);
   }
   r.assignment.resize(n);
   for (size_t i = 0; i < n; ++i) r.assignment[i] = remap[assign[i]];

@@ -94,9 +94,10 @@ QueryResult HbowRecognizer::querySignature(const SlotScope& scope) const {
   const uint32_t min_common = static_cast<uint32_t>(0.8f * max_common);
   if (scope.max_ranked > 0) {
     std::vector<Candidate> all;
-    for (Slot k : touched)
+    for (Slot k : touched) {
       if (!scope.excluded[k])
         all.push_back({idAt(k), score[k], scoreConfidence(score[k], min_score, ranking().score_floor)});
+    }
     keepRanked(r, std::move(all), scope.max_ranked);
   }
   if (sharing == 0) {

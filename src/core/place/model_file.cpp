@@ -47,21 +47,24 @@ const char* const kTypeNames[] = {"", "hbow", "fabmap", "vlad", "hmvlad", "vladp
 // Throws for a bad magic, a short file or an unknown version.
 ModelHeader decodeHeader(const std::string& path, const uint8_t* file, size_t size, uint64_t* payload,
                          uint64_t* checksum) {
-  if (size == 0 || std::memcmp(file, kMagic, std::min<size_t>(size, 8)) != 0)
+  if (size == 0 || std::memcmp(file, kMagic, std::min<size_t>(size, 8)) != 0) {
     throw PlaceError(path +
                      ": not a binloop model file (bad magic; DBoW2 vocabularies are converted with "
                      "'binloop train hbow --import <file>')");
-  if (size < kHeaderBytes)
+  }
+  if (size < kHeaderBytes) {
     throw PlaceError(path + ": truncated model file (" + std::to_string(size) +
                      " bytes, the header alone is 128)");
+  }
   HeaderCodec c;
   std::memcpy(c.bytes, file, kHeaderBytes);
   c.pos = 8;
   ModelHeader h;
   h.version = c.get<uint32_t>();
-  if (h.version < 1 || h.version > ModelHeader::kVersion)
+  if (h.version < 1 || h.version > ModelHeader::kVersion) {
     throw PlaceError(path + ": model file version " + std::to_string(h.version) +
                      ", this build reads versions 1 to " + std::to_string(ModelHeader::kVersion));
+  }
   h.type = static_cast<ModelType>(c.get<uint32_t>());
   h.descriptor_bits = c.get<uint32_t>();
   h.weighting = static_cast<Weighting>(c.get<uint32_t>());
@@ -90,9 +93,10 @@ ModelHeader decodeHeader(const std::string& path, const uint8_t* file, size_t si
 }
 
 void checkDescriptorBits(const std::string& path, const ModelHeader& h) {
-  if (h.descriptor_bits != 256)
+  if (h.descriptor_bits != 256) {
     throw PlaceError(path + ": vocabulary of " + std::to_string(h.descriptor_bits) +
                      "-bit descriptors; binloop uses 256-bit ORB descriptors");
+  }
 }
 
 }  // namespace
@@ -135,11 +139,12 @@ void checkModelExtractor(const std::string& path, const ModelHeader& h, const Ex
   const std::string what = path + ": trained on descriptors of " + h.extractor.describe() +
                            ", but they will come from " + c.expected.describe() +
                            " (differ: " + h.extractor.differences(c.expected) + ")";
-  if (!c.force)
+  if (!c.force) {
     throw PlaceError(what +
                      "; a vocabulary only fits descriptors like those it was trained on: retrain it with "
                      "these settings, or use it anyway with " +
                      c.force_hint);
+  }
   warn(what + "; used anyway (" + c.force_hint + ")");
 }
 
@@ -238,9 +243,10 @@ ModelReader::ModelReader(const std::string& path) : path_(path), storage_(std::m
   uint64_t payload = 0, checksum = 0;
   header_ = decodeHeader(path, file_, size, &payload, &checksum);
   version_ = header_.version;
-  if (size != kHeaderBytes + payload)
+  if (size != kHeaderBytes + payload) {
     throw PlaceError(path + ": truncated model file: header promises " +
                      std::to_string(kHeaderBytes + payload) + " bytes, file has " + std::to_string(size));
+  }
   const uint64_t computed =
       version_ == 1 ? hashBytes(file_ + kHeaderBytes, payload) : checksum64(file_ + kHeaderBytes, payload);
   if (computed != checksum) throw PlaceError(path + ": corrupt model file (payload checksum differs)");
@@ -270,9 +276,10 @@ std::string modelIdentity(const ModelHeader& h) {
 }
 
 void ModelReader::expectType(ModelType t) const {
-  if (header_.type != t)
+  if (header_.type != t) {
     throw PlaceError(path_ + ": holds a " + modelTypeName(header_.type) + " model, expected " +
                      modelTypeName(t));
+  }
 }
 
 const uint8_t* ModelReader::next(const char* tag4, uint32_t elem_size, uint64_t* count) {
@@ -283,9 +290,10 @@ const uint8_t* ModelReader::next(const char* tag4, uint32_t elem_size, uint64_t*
   std::memcpy(&es, file_ + pos_ + 4, 4);
   std::memcpy(count, file_ + pos_ + 8, 8);
   if (tag != want) throw PlaceError(path_ + ": expected section '" + want + "', found '" + tag + "'");
-  if (es != elem_size)
+  if (es != elem_size) {
     throw PlaceError(path_ + ": section '" + want + "' has " + std::to_string(es) +
                      "-byte elements, expected " + std::to_string(elem_size));
+  }
   const size_t data_at = version_ == 1 ? pos_ + 16 : alignUp(pos_ + 16, kSectionAlign);
   const uint64_t bytes = es * *count;
   if (*count > file_size_ || data_at + bytes > file_size_)

@@ -46,11 +46,12 @@ PqCodebooks PqCodebooks::train(const std::vector<std::vector<float>>& vlads, int
       sub.insert(sub.end(), &v[static_cast<size_t>(w) * dims], &v[static_cast<size_t>(w) * dims] + dims);
     }
     FloatKMeansResult km = floatKMeans(sub, dims, m, hashCombine(seed, w), 25);
-    if (km.k < m)
+    if (km.k < m) {
       throw PlaceError("degenerate PQ codebook for word " + std::to_string(w) + ": " + std::to_string(km.k) +
                        " distinct centroids of " + std::to_string(m) + " from " +
                        std::to_string(vlads.size()) +
                        " training images (train on more images or lower --pq-codes)");
+    }
     pq.codebooks_.insert(pq.codebooks_.end(), km.centres.begin(), km.centres.end());
   }
   // Stored as 16-bit steps (below): round now so that a trained model and the same model loaded from its
@@ -66,18 +67,22 @@ PqCodebooks PqCodebooks::train(const std::vector<std::vector<float>>& vlads, int
 
 void PqCodebooks::buildTable() {
   sdc_table_.resize(static_cast<size_t>(words_) * m_ * m_);
-  for (int w = 0; w < words_; ++w)
-    for (int a = 0; a < m_; ++a)
-      for (int b = 0; b < m_; ++b)
+  for (int w = 0; w < words_; ++w) {
+    for (int a = 0; a < m_; ++a) {
+      for (int b = 0; b < m_; ++b) {
         sdc_table_[(static_cast<size_t>(w) * m_ + a) * m_ + b] =
             squaredDistance(centroid(w, a), centroid(w, b), dims_);
+      }
+    }
+  }
 }
 
 PqCodes PqCodebooks::encode(const std::vector<float>& vlad) const {
   PqCodes c(words_);
-  for (int w = 0; w < words_; ++w)
+  for (int w = 0; w < words_; ++w) {
     c[w] = static_cast<uint16_t>(
         nearestFloatCentre(&vlad[static_cast<size_t>(w) * dims_], centroid(w, 0), m_, dims_));
+  }
   return c;
 }
 
@@ -119,18 +124,20 @@ PqCodebooks PqCodebooks::read(ModelReader& r) {
     pq.scales_ = r.section<float>("QSCL");
     const std::vector<int16_t> steps = r.section<int16_t>("QC16");
     const size_t per_word = static_cast<size_t>(pq.m_) * pq.dims_;
-    if (pq.scales_.size() != static_cast<size_t>(pq.words_) || steps.size() != per_word * pq.words_)
+    if (pq.scales_.size() != static_cast<size_t>(pq.words_) || steps.size() != per_word * pq.words_) {
       throw PlaceError(r.path() + ": PQ codebooks hold " + std::to_string(steps.size()) + " values and " +
                        std::to_string(pq.scales_.size()) + " scales, expected " +
                        std::to_string(per_word * pq.words_) + " and " + std::to_string(pq.words_));
+    }
     pq.codebooks_.resize(steps.size());
     for (size_t i = 0; i < steps.size(); ++i)
       pq.codebooks_[i] = static_cast<float>(steps[i]) * pq.scales_[i / per_word];
   }
-  if (pq.m_ < 1 || pq.codebooks_.size() != static_cast<size_t>(pq.words_) * pq.m_ * pq.dims_)
+  if (pq.m_ < 1 || pq.codebooks_.size() != static_cast<size_t>(pq.words_) * pq.m_ * pq.dims_) {
     throw PlaceError(r.path() + ": PQ codebooks hold " + std::to_string(pq.codebooks_.size()) +
                      " floats, expected " +
                      std::to_string(static_cast<size_t>(pq.words_) * pq.m_ * pq.dims_));
+  }
   if (pq.scales_.empty())
     pq.scales_ = fixedPointScales(pq.codebooks_, pq.words_, static_cast<size_t>(pq.m_) * pq.dims_);
   pq.buildTable();

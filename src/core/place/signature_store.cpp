@@ -9,9 +9,10 @@ namespace binloop {
 void SignatureStore::push(const BinarySignature& s) {
   if (s.empty()) throw PlaceError("signature store: empty signature");
   if (words_ == 0) words_ = s.size();
-  if (s.size() != words_)
+  if (s.size() != words_) {
     throw PlaceError("signature store: a signature of " + std::to_string(s.size()) + " words among ones of " +
                      std::to_string(words_));
+  }
   data_.insert(data_.end(), s.begin(), s.end());
 }
 

@@ -29,9 +29,10 @@ BinarySignature binarizeSigns(const std::vector<float>& v) {
 std::vector<char> emptyWords(const std::vector<float>& v, int dims) {
   std::vector<char> empty;
   if (dims < 1) return empty;
-  for (size_t first = 0; first + dims <= v.size(); first += dims)
+  for (size_t first = 0; first + dims <= v.size(); first += dims) {
     empty.push_back(
         std::all_of(v.begin() + first, v.begin() + first + dims, [](float e) { return e == 0.f; }));
+  }
   return empty;
 }
 
@@ -150,21 +151,24 @@ VladVocabulary VladVocabulary::train(const std::vector<Descriptors>& images, con
   size_t total = 0;
   for (const auto& im : images) total += im.size();
   const size_t min_needed = static_cast<size_t>(std::pow(p.k, p.levels)) * 20;
-  if (total < min_needed)
+  if (total < min_needed) {
     throw PlaceError("too few descriptors to train a VLAD vocabulary of " + std::to_string(p.k) + "^" +
                      std::to_string(p.levels) + " words: " + std::to_string(total) + " (need " +
                      std::to_string(min_needed) + ")");
+  }
   // Even sampling keeps every image represented and the result independent of thread timing.
   const size_t stride =
       std::max<size_t>(1, (total + p.max_training_descriptors - 1) / p.max_training_descriptors);
   std::vector<float> data;
   size_t seen = 0;
-  for (const auto& im : images)
-    for (const auto& d : im)
+  for (const auto& im : images) {
+    for (const auto& d : im) {
       if (seen++ % stride == 0) {
         data.resize(data.size() + kD);
         expandBits(d, &data[data.size() - kD]);
       }
+    }
+  }
   VladVocabulary v;
   v.params_ = p;
   v.first_child_.push_back(0);
@@ -186,11 +190,12 @@ VladVocabulary VladVocabulary::train(const std::vector<Descriptors>& images, con
         sub.insert(sub.end(), &data[static_cast<size_t>(r) * kD], &data[static_cast<size_t>(r) * kD] + kD);
       FloatKMeansResult km =
           floatKMeans(sub, kD, p.k, hashCombine(p.seed, pend.slot * 131 + l), p.max_iterations);
-      if (km.k < p.k)
+      if (km.k < p.k) {
         throw PlaceError("degenerate VLAD vocabulary: a node at level " + std::to_string(l + 1) +
                          " split into " + std::to_string(km.k) + " clusters instead of " +
                          std::to_string(p.k) + " (" + std::to_string(km.dropped_empty) +
                          " empty); use more or more varied training images");
+      }
       const auto first = static_cast<uint32_t>(v.centres_.size() / kD);
       v.first_child_[pend.slot] = first;
       v.child_count_[pend.slot] = static_cast<uint32_t>(km.k);
@@ -232,9 +237,10 @@ void VladVocabulary::write(ModelWriter& w) const {
 VladVocabulary VladVocabulary::read(ModelReader& r) {
   VladVocabulary v;
   const auto par = r.section<float>("VPAR");
-  if (par.size() != 4)
+  if (par.size() != 4) {
     throw PlaceError(r.path() + ": VLAD parameter section has " + std::to_string(par.size()) +
                      " values, expected 4");
+  }
   v.params_.alpha = par[0];
   v.params_.pca_dims = static_cast<int>(par[1]);
   v.params_.k = static_cast<int>(par[2]);

@@ -32,9 +32,10 @@ VocabularyTree VocabularyTree::train(const std::vector<Descriptors>& images, con
   Descriptors data;
   for (const auto& im : images) data.insert(data.end(), im.begin(), im.end());
   const size_t min_needed = static_cast<size_t>(p.k) * 10;
-  if (data.size() < min_needed)
+  if (data.size() < min_needed) {
     throw PlaceError("too few descriptors to train a k=" + std::to_string(p.k) + " vocabulary tree: " +
                      std::to_string(data.size()) + " (need at least " + std::to_string(min_needed) + ")");
+  }
   VocabularyTree t;
   t.k_ = p.k;
   t.levels_ = p.levels;
@@ -72,10 +73,11 @@ VocabularyTree VocabularyTree::train(const std::vector<Descriptors>& images, con
       o->first_child.push_back(0);
       o->child_count.push_back(0);
       // A cluster of one descriptor cannot be split further: it stays a leaf above the bottom level.
-      if (cur.depth + 1 < p.levels && members[c].size() > 1)
+      if (cur.depth + 1 < p.levels && members[c].size() > 1) {
         queue.push_back({first + static_cast<uint32_t>(c), cur.depth + 1, std::move(members[c])});
-      else
+      } else {
         done_work += members[c].size() * static_cast<size_t>(p.levels - cur.depth - 1);
+      }
     }
     done_work += cur.idx.size();
     if (progress) progress(done_work, total_work);
@@ -84,9 +86,10 @@ VocabularyTree VocabularyTree::train(const std::vector<Descriptors>& images, con
   o->weight.assign(std::count(o->child_count.begin() + 1, o->child_count.end(), 0u), 1.0f);
   const auto owned = o;
   t.adopt(std::move(o));
-  if (t.words() < static_cast<size_t>(p.k))
+  if (t.words() < static_cast<size_t>(p.k)) {
     throw PlaceError("degenerate vocabulary: only " + std::to_string(t.words()) + " distinct words from " +
                      std::to_string(data.size()) + " descriptors");
+  }
   owned->weight = t.computeIdf(images);
   t.weight_ = {owned->weight.data(), owned->weight.size()};
   return t;
@@ -95,20 +98,22 @@ VocabularyTree VocabularyTree::train(const std::vector<Descriptors>& images, con
 void VocabularyTree::indexWords() {
   node_word_.assign(desc_.size, UINT32_MAX);
   word_node_.clear();
-  for (uint32_t n = 1; n < desc_.size; ++n)
+  for (uint32_t n = 1; n < desc_.size; ++n) {
     if (child_count_[n] == 0) {
       node_word_[n] = static_cast<uint32_t>(word_node_.size());
       word_node_.push_back(n);
     }
+  }
 }
 
 std::vector<float> VocabularyTree::computeIdf(const std::vector<Descriptors>& images) const {
   std::vector<uint32_t> df(words(), 0), last_seen(words(), UINT32_MAX);
-  for (uint32_t im = 0; im < images.size(); ++im)
+  for (uint32_t im = 0; im < images.size(); ++im) {
     for (const auto& d : images[im]) {
       const uint32_t w = wordOf(d);
       if (last_seen[w] != im) last_seen[w] = im, df[w]++;
     }
+  }
   std::vector<float> weight(words());
   const double n = static_cast<double>(std::max<size_t>(1, images.size()));
   for (size_t w = 0; w < words(); ++w) {
@@ -122,9 +127,10 @@ VocabularyTree VocabularyTree::fromNodes(int k, int levels, Weighting w, const s
   if (in.empty()) throw PlaceError("vocabulary has no nodes");
   std::vector<std::vector<uint32_t>> children(in.size());
   for (uint32_t i = 1; i < in.size(); ++i) {
-    if (in[i].parent >= in.size() || in[i].parent == i)
+    if (in[i].parent >= in.size() || in[i].parent == i) {
       throw PlaceError("vocabulary node " + std::to_string(i) + " has an invalid parent " +
                        std::to_string(in[i].parent));
+    }
     children[in[i].parent].push_back(i);
   }
   VocabularyTree t;
@@ -138,9 +144,10 @@ VocabularyTree VocabularyTree::fromNodes(int k, int levels, Weighting w, const s
   o->child_count.push_back(0);
   for (size_t pos = 0; pos < order.size(); ++pos) {
     const auto& ch = children[order[pos]];
-    if (ch.size() > 0 && in[order[pos]].is_leaf && pos != 0)
+    if (ch.size() > 0 && in[order[pos]].is_leaf && pos != 0) {
       throw PlaceError("vocabulary node " + std::to_string(order[pos]) +
                        " is marked as a word but has children");
+    }
     o->first_child[pos] = static_cast<uint32_t>(order.size());
     o->child_count[pos] = static_cast<uint32_t>(ch.size());
     for (uint32_t c : ch) {
@@ -151,9 +158,10 @@ VocabularyTree VocabularyTree::fromNodes(int k, int levels, Weighting w, const s
     }
     if (order.size() > in.size()) throw PlaceError("vocabulary nodes form a cycle");
   }
-  if (order.size() != in.size())
+  if (order.size() != in.size()) {
     throw PlaceError("vocabulary has " + std::to_string(in.size() - order.size()) +
                      " nodes not reachable from the root");
+  }
   for (uint32_t n = 1; n < o->desc.size(); ++n)
     if (o->child_count[n] == 0) o->weight.push_back(in[order[n]].weight);
   t.adopt(std::move(o));
@@ -263,13 +271,15 @@ VocabularyTree VocabularyTree::read(ModelReader& r) {
   const size_t n = t.desc_.size;
   if (n == 0 || t.first_child_.size != n || t.child_count_.size != n)
     throw PlaceError(r.path() + ": vocabulary tree sections disagree on the node count");
-  for (size_t i = 0; i < n; ++i)
+  for (size_t i = 0; i < n; ++i) {
     if (t.child_count_[i] && (t.first_child_[i] <= i || t.first_child_[i] + t.child_count_[i] > n))
       throw PlaceError(r.path() + ": vocabulary tree node " + std::to_string(i) + " points outside the tree");
+  }
   t.indexWords();
-  if (t.weight_.size != t.words())
+  if (t.weight_.size != t.words()) {
     throw PlaceError(r.path() + ": " + std::to_string(t.weight_.size) + " word weights for " +
                      std::to_string(t.words()) + " words");
+  }
   return t;
 }
 

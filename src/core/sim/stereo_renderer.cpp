@@ -83,14 +83,16 @@ std::vector<StereoFrame> renderFrames(StereoRenderer& renderer, const std::vecto
 void renderSequence(StereoRenderer& renderer, const SequenceJob& job,
                     const std::function<void(size_t, size_t)>& progress) {
   if (job.route.empty()) throw std::invalid_argument("renderSequence: empty route");
-  if (job.times.size() != job.route.size())
+  if (job.times.size() != job.route.size()) {
     throw std::invalid_argument("renderSequence: " + std::to_string(job.times.size()) + " times for " +
                                 std::to_string(job.route.size()) + " poses");
+  }
   if (job.step == 0) throw std::invalid_argument("renderSequence: step must be >= 1");
-  if (job.start > job.end || job.end >= job.route.size())
+  if (job.start > job.end || job.end >= job.route.size()) {
     throw std::invalid_argument("renderSequence: frames " + std::to_string(job.start) + ".." +
                                 std::to_string(job.end) + " are outside the route's 0.." +
                                 std::to_string(job.route.size() - 1));
+  }
   const fs::path out(job.out_dir);
   fs::create_directories(out / "image_0");
   fs::create_directories(out / "image_1");

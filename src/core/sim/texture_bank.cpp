@@ -62,16 +62,18 @@ void paintWindows(cv::Mat& wall, HashRng& rng) {
   const int frame = 3 + rng.below(5);
   const double glass = rng.uniform(0.25, 0.55);
   const int frame_value = rng.chance(0.5) ? 210 : 50;
-  for (int j = 0; j < ny; ++j)
+  for (int j = 0; j < ny; ++j) {
     for (int i = 0; i < nx; ++i) {
       if (rng.chance(0.08)) continue;  // a blank bay now and then
       const cv::Rect r(i * cw + (cw - ww) / 2, j * ch + (ch - wh) / 2, ww, wh);
       wall(r).convertTo(wall(r), CV_8U, glass, 10);
       cv::rectangle(wall, r, cv::Scalar(frame_value), frame);
-      if (rng.chance(0.5))
+      if (rng.chance(0.5)) {
         cv::line(wall, {r.x + r.width / 2, r.y}, {r.x + r.width / 2, r.y + r.height}, cv::Scalar(frame_value),
                  std::max(2, frame / 2));
+      }
     }
+  }
 }
 
 }  // namespace
@@ -103,12 +105,13 @@ TextureBank TextureBank::build(const std::vector<std::string>& photo_paths, uint
     cv::Mat img = cv::imread(p, cv::IMREAD_GRAYSCALE);
     if (img.empty() || img.cols < 64 || img.rows < 64) continue;
     const std::string name = std::filesystem::path(p).filename().string();
-    if (name == "gravel.png")
+    if (name == "gravel.png") {
       gravel = img;
-    else if (name == "grass.png")
+    } else if (name == "grass.png") {
       grass = img;
-    else if (name == "brick.png")
+    } else if (name == "brick.png") {
       brick = img;
+    }
     photos.push_back(img);  // ground photos serve as façade material too
   }
   TextureBank bank;
@@ -129,9 +132,10 @@ TextureBank TextureBank::build(const std::vector<std::string>& photo_paths, uint
     paintWindows(wall, rng);
     bank.facades.push_back(add(wall));
   }
-  for (int i = 0; i < n_facades / 3; ++i)
+  for (int i = 0; i < n_facades / 3; ++i) {
     bank.walls.push_back(
         add(normalizeContrast(material(i, 0.2, 0.6), rng.uniform(90, 170), rng.uniform(20, 40))));
+  }
   for (int i = 0; i < 12; ++i) {
     cv::Mat body = normalizeContrast(material(i, 0.1, 0.4), rng.uniform(50, 180), rng.uniform(15, 30));
     // A dark window band across the upper part, the way car sides look.

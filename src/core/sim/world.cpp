@@ -164,9 +164,10 @@ struct Builder {
       if (rng.chance(prm.car_probability)) {
         const Eigen::Vector3d c = ground + r * (kerb - 1.0);
         const Vec2 f = xz(dirs[i]) * 2.2;
-        if (routeDistance(xz(c) + f) > 3.2 && routeDistance(xz(c) - f) > 3.2 && routeDistance(xz(c)) > 3.2)
+        if (routeDistance(xz(c) + f) > 3.2 && routeDistance(xz(c) - f) > 3.2 && routeDistance(xz(c)) > 3.2) {
           box(c, dirs[i], 4.2, 1.8, rng.uniform(1.4, 1.7),
               bank.cars[rng.below(static_cast<int>(bank.cars.size()))], rng, 90.0f, 90.0f);
+        }
       }
       if (rng.chance(prm.tree_probability)) {
         const Eigen::Vector3d c = ground + r * (kerb + prm.pavement_width_m + rng.uniform(0.5, 2.0));
@@ -195,9 +196,9 @@ std::vector<Eigen::Vector3d> resampledRoute(const std::vector<Pose3>& route_T_w_
   for (const auto& T : route_T_w_c) {
     const Eigen::Vector3d p = T.translation();
     while ((p - route.back()).norm() >= kStep)
-      route.push_back(route.back() + (p - route.back()).normalized() * kStep);
+      route.emplace_back(route.back() + (p - route.back()).normalized() * kStep);
   }
-  if (route.size() < 3) route.push_back(route_T_w_c.back().translation() + Eigen::Vector3d(0, 0, kStep));
+  if (route.size() < 3) route.emplace_back(route_T_w_c.back().translation() + Eigen::Vector3d(0, 0, kStep));
   return route;
 }
 
@@ -277,11 +278,12 @@ World World::build(const std::vector<Pose3>& route_T_w_c, TextureBank bank, cons
   w.material_.create(mh, mw, CV_8U);
   const float road = static_cast<float>(params.road_half_width_m / w.mcell_);
   const float pave = static_cast<float>((params.road_half_width_m + params.pavement_width_m) / w.mcell_);
-  for (int r = 0; r < mh; ++r)
+  for (int r = 0; r < mh; ++r) {
     for (int c = 0; c < mw; ++c) {
       const float d = dist.at<float>(r, c);
       w.material_.at<uint8_t>(r, c) = d < road ? 0 : (d < pave ? 1 : 2);
     }
+  }
   return w;
 }
 
@@ -308,7 +310,7 @@ int World::nearestRouteSample(double x, double z) const {
   const int cx = static_cast<int>((x - gx0_) / kRouteCell), cz = static_cast<int>((z - gz0_) / kRouteCell);
   int best = -1;
   double best_d = 1e18;
-  for (int dz = -1; dz <= 1; ++dz)
+  for (int dz = -1; dz <= 1; ++dz) {
     for (int dx = -1; dx <= 1; ++dx) {
       const int gx = cx + dx, gz = cz + dz;
       if (gx < 0 || gz < 0 || gx >= rw || gz >= rows) continue;
@@ -320,6 +322,7 @@ int World::nearestRouteSample(double x, double z) const {
         }
       }
     }
+  }
   return best;
 }
 
@@ -330,9 +333,10 @@ void World::quadsNear(double x, double z, double radius, std::vector<int>* out) 
   const int cx1 = std::min(gw_ - 1, static_cast<int>((x + r - gx0_) / cell_));
   const int cz0 = std::max(0, static_cast<int>((z - r - gz0_) / cell_));
   const int cz1 = std::min(gh_ - 1, static_cast<int>((z + r - gz0_) / cell_));
-  for (int cz = cz0; cz <= cz1; ++cz)
+  for (int cz = cz0; cz <= cz1; ++cz) {
     for (int cx = cx0; cx <= cx1; ++cx)
       for (int k : grid_[static_cast<size_t>(cz) * gw_ + cx]) out->push_back(k);
+  }
 }
 
 void World::groundPlane(const Pose3& T_w_c, Eigen::Vector3d* n, double* d) const {

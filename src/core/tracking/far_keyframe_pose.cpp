@@ -17,9 +17,10 @@ bool agrees(const StereoCamera& cam, const FarMatch& m, const Pose3& T_w_c, cons
   if (reprojectionChi2(cam, T_c_w, m.p_w, m.keypoint, static_cast<float>(m.inv_sigma2), &in_front) <= chi2)
     return true;
   const Eigen::Vector3d x_w = T_w_c * x_c;
-  for (const KeyframeSighting& s : m.sightings)
+  for (const KeyframeSighting& s : m.sightings) {
     if (reprojectionChi2(cam, s.T_c_w, x_w, s.keypoint, static_cast<float>(s.inv_sigma2), &in_front) > chi2)
       return false;
+  }
   return true;
 }
 

@@ -29,21 +29,25 @@ void Frame::clearMatches() {
 FrameBuilder::FrameBuilder(const StereoCamera& cam, const OrbSlamParams& orb, const StereoMatchParams& stereo)
     : cam_(cam), extractor_(orb), stereo_(stereo), scales_(orb.scale_factor, orb.levels) {
   if (!(cam.fx > 0) || !(cam.fy > 0) || !(cam.baseline_m > 0) || !std::isfinite(cam.cx) ||
-      !std::isfinite(cam.cy) || cam.width <= 0 || cam.height <= 0)
+      !std::isfinite(cam.cy) || cam.width <= 0 || cam.height <= 0) {
     throw std::invalid_argument("camera: fx, fy and baseline must be positive numbers and the size known (" +
                                 cam.describe() + ")");
+  }
 }
 
 Frame FrameBuilder::build(const StereoFrame& in) const {
-  if (in.left.empty() || in.right.empty())
+  if (in.left.empty() || in.right.empty()) {
     throw DataError("frame " + std::to_string(in.index) + ": empty " + (in.left.empty() ? "left" : "right") +
                     " image");
-  if (in.left.size() != in.right.size())
+  }
+  if (in.left.size() != in.right.size()) {
     throw DataError("frame " + std::to_string(in.index) + ": left image is " + sizeText(in.left) +
                     " but right is " + sizeText(in.right));
-  if (in.left.cols != cam_.width || in.left.rows != cam_.height)
+  }
+  if (in.left.cols != cam_.width || in.left.rows != cam_.height) {
     throw DataError("frame " + std::to_string(in.index) + ": image is " + sizeText(in.left) +
                     ", calibration says " + std::to_string(cam_.width) + "x" + std::to_string(cam_.height));
+  }
   if (in.left.type() != CV_8UC1 || in.right.type() != CV_8UC1)
     throw DataError("frame " + std::to_string(in.index) + ": images must be 8-bit grey (mono8)");
 

@@ -86,11 +86,12 @@ int matchFromLastFrame(Frame& cur, const Frame& last,
   int n = static_cast<int>(matched_kp.size());
   if (p.check_rotation) {
     const std::vector<uint8_t> keep = rotationConsistent(diffs);
-    for (size_t k = 0; k < matched_kp.size(); ++k)
+    for (size_t k = 0; k < matched_kp.size(); ++k) {
       if (!keep[k]) {
         cur.points[matched_kp[k]] = kNoId;
         --n;
       }
+    }
   }
   return n;
 }

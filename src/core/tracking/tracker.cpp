@@ -129,10 +129,11 @@ Tracker::Prediction Tracker::predict(const Frame& f) const {
   p.T_w_c = p.hinted        ? hint_->T_w_c
             : p.from_motion ? orthonormalized(p.last_pose * scaledMotion(velocity_, p.dt / velocity_dt_))
                             : p.last_pose;
-  if (p.hinted)
+  if (p.hinted) {
     p.reach = MotionReach(p.T_w_c.translation(), hint_->radius_m, 0, 0);
-  else if (p.from_motion)
+  } else if (p.from_motion) {
     p.reach = MotionReach(p.T_w_c.translation(), p_.recovery_min_gate_m, p_.recovery_max_accel_mps2, p.dt);
+  }
   return p;
 }
 
@@ -151,12 +152,13 @@ bool Tracker::trackInMap(Frame& f, int mapping_queue, Output* out) {
     tf.state = state_;
     tf.problem = "lost: " + std::to_string(inliers_) + " inliers";
     const MotionReach& reach = pred.reach;
-    if (reach.nearestRefusedM() >= 0)
+    if (reach.nearestRefusedM() >= 0) {
       tf.problem +=
           "; a pose " + fixedDecimals(reach.nearestRefusedM(), 1) + " m from the " +
           (pred.hinted ? std::string("pose hint")
                        : "motion model's prediction after " + fixedDecimals(reach.dtS(), 1) + " s") +
           " was rejected (at most " + fixedDecimals(reach.radiusM(), 1) + " m)";
+    }
     tf.T_w_c = pred.T_w_c;  // not what a failed attempt left in f
     return false;
   }
@@ -332,10 +334,11 @@ void matchPointsByDescriptor(Frame& f, const std::vector<const msg::MapPoint*>& 
     int best = 256, second = 256, best_j = -1;
     for (size_t j = 0; j < f.size(); ++j) {
       const int d = hamming(mp->descriptor, f.descriptors[j]);
-      if (d < best)
+      if (d < best) {
         second = best, best = d, best_j = static_cast<int>(j);
-      else if (d < second)
+      } else if (d < second) {
         second = d;
+      }
     }
     if (best_j < 0 || best > 64 || best > 0.8 * second || f.points[best_j] != kNoId) continue;
     f.points[best_j] = mp->id;
@@ -482,9 +485,10 @@ bool Tracker::relocalize(Frame& f, MotionReach& reach, bool hinted) {
     tries = keyframe_db_->candidates(f.descriptors, static_cast<size_t>(p_.reloc_keyframes),
                                      [this](SlamKeyframeId k) {
                                        std::vector<SlamKeyframeId> n;
-                                       if (const msg::KeyframeState* kf = map_.keyframe(k))
+                                       if (const msg::KeyframeState* kf = map_.keyframe(k)) {
                                          for (const auto& e : kf->covisible)
                                            if (n.size() < 10) n.push_back(e.id);
+                                       }
                                        return n;
                                      });
   } else {
@@ -535,6 +539,8 @@ void Tracker::updateLocalKeyframes(const Frame& f) {
   }
   if (count.empty()) return;  // keep the previous local map
   std::vector<std::pair<int, SlamKeyframeId>> ranked;
+  ranked.reserve(count.size());
+
   for (const auto& [k, c] : count) ranked.emplace_back(c, k);
   // Most shared points first; ties by id so that the order never depends on the hash map's.
   std::sort(ranked.begin(), ranked.end(), [](const auto& a, const auto& b) {
@@ -579,18 +585,21 @@ bool Tracker::needKeyframe(const Frame& f, int mapping_queue) const {
   const size_t min_obs =
       std::min<size_t>(kfs <= 2 ? 2 : 3, static_cast<size_t>(p_.keyframe_ref_min_observers));
   int ref_matches = 0;
-  if (const msg::KeyframeState* ref = map_.keyframe(reference_))
-    for (MapPointId id : ref->point_ids)
+  if (const msg::KeyframeState* ref = map_.keyframe(reference_)) {
+    for (MapPointId id : ref->point_ids) {
       if (id != kNoId && map_.resolve(id) != kNoId && map_.observers(map_.resolve(id)).size() >= min_obs)
         ++ref_matches;
+    }
+  }
   int tracked_close = 0, untracked_close = 0;
   for (size_t i = 0; i < f.size(); ++i) {
     const float d = f.keypoints[i].depth;
     if (d <= 0 || !isCloseDepth(d, cam_, p_.stereo)) continue;
-    if (f.points[i] != kNoId && !f.outlier[i])
+    if (f.points[i] != kNoId && !f.outlier[i]) {
       ++tracked_close;
-    else
+    } else {
       ++untracked_close;
+    }
   }
   const bool need_close =
       tracked_close < p_.keyframe_close_tracked_max && untracked_close > p_.keyframe_close_untracked_min;

@@ -24,9 +24,10 @@ void Tracker::load(StateReader& r) {
   if (state_ != msg::TrackingState::kNotInitialized)
     r.fail("tracking has started already; a map loads into a new tracker");
   const StereoCamera cam = readCamera(r);
-  if (!(cam == cam_))
+  if (!(cam == cam_)) {
     r.fail("the map was made with another camera:\n" + cam.describe() + "\nthis tracker has\n" +
            cam_.describe());
+  }
   std::string extractor = r.getString("extractor");
   // Maps saved before the BRIEF pattern became a setting (2026-11-25) name the Gaussian tests "binloop ORB
   // (": the same descriptors as "binloop ORB with the Gaussian BRIEF pattern (".
@@ -34,9 +35,10 @@ void Tracker::load(StateReader& r) {
   if (extractor.rfind(old_name, 0) == 0)
     extractor = "binloop ORB with the Gaussian BRIEF pattern (" + extractor.substr(old_name.size());
   const std::string mine = extractorSettings(p_.orb, 0).describe();
-  if (extractor != mine)
+  if (extractor != mine) {
     r.fail("the map's descriptors come from " + extractor + ", but this tracker extracts with " + mine +
            ": they would not match (use the orb settings the map was made with)");
+  }
   keyframe_ids_.restore(r.get<uint64_t>("keyframe ids issued"));
   point_ids_.restore(r.get<uint64_t>("point ids issued"));
   corrections_seen_ = r.get<uint64_t>("corrections applied");
@@ -45,9 +47,10 @@ void Tracker::load(StateReader& r) {
   if (has_index) {
     const std::string voc = r.getString("relocalisation vocabulary");
     if (keyframe_db_) {
-      if (!voc.empty() && !p_.vocabulary_identity.empty() && voc != p_.vocabulary_identity)
+      if (!voc.empty() && !p_.vocabulary_identity.empty() && voc != p_.vocabulary_identity) {
         r.fail("the map's relocalisation index was made with " + voc + ", but this tracker's vocabulary is " +
                p_.vocabulary_identity + " (load the map with the vocabulary it was made with)");
+      }
       keyframe_db_->load(r);
     } else {
       KeyframeDatabase(nullptr).load(r);  // read past it: relocalisation then tries the most recent keyframes

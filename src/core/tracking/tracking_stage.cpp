@@ -7,7 +7,7 @@ namespace binloop {
 TrackingStage::TrackingStage(TrackerParams params, std::optional<StereoCamera> camera,
                              double keyframe_timeout_s, size_t resend_window)
     : params_(std::move(params)),
-      fixed_camera_(std::move(camera)),
+      fixed_camera_(camera),
       resend_window_(resend_window),
       in_flight_(keyframe_timeout_s) {
   if (fixed_camera_) tracker_ = freshTracker(*fixed_camera_);

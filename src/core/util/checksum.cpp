@@ -13,12 +13,13 @@ uint64_t checksum64(const void* data, size_t n) {
   const auto* p = static_cast<const uint8_t*>(data);
   uint64_t lane[4] = {kP1 + kP2, kP2, 0, 0 - kP1};
   size_t i = 0;
-  for (; i + 32 <= n; i += 32)
+  for (; i + 32 <= n; i += 32) {
     for (int l = 0; l < 4; ++l) {
       uint64_t w;
-      std::memcpy(&w, p + i + 8 * l, 8);
+      std::memcpy(&w, p + i + 8 * static_cast<size_t>(l), 8);
       lane[l] = rotl(lane[l] + w * kP2, 31) * kP1;
     }
+  }
   uint64_t h = n;
   for (int l = 0; l < 4; ++l) h = splitmix64(h ^ lane[l]);
   uint64_t tail[4] = {0, 0, 0, 0};

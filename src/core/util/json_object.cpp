@@ -57,7 +57,8 @@ JsonObject& JsonObject::addRaw(const std::string& key, const std::string& json) 
 
 std::string JsonObject::str(int depth) const {
   const bool lines = depth == 0 || multiline_;
-  const std::string pad(2 * (depth + 1), ' '), close_pad(2 * depth, ' ');
+  const std::string pad(2 * static_cast<size_t>(depth + 1), ' '),
+      close_pad(2 * static_cast<size_t>(depth), ' ');
   std::string out = "{";
   for (size_t i = 0; i < fields_.size(); ++i) {
     out += i ? (lines ? ",\n" : ", ") : (lines ? "\n" : "");
