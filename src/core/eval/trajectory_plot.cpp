@@ -99,6 +99,19 @@ void drawGrid(cv::Mat& img, ToPixel px, const std::array<double, 4>& box, double
   }
 }
 
+// The box around every path's poses on the ground (x0, x1, z0, z1); -1..1 when there are none.
+std::array<double, 4> pathBounds(const std::vector<PlotPath>& paths) {
+  double x0 = 1e300, x1 = -1e300, z0 = 1e300, z1 = -1e300;
+  for (const auto& p : paths) {
+    for (const auto& T : *p.poses) {
+      x0 = std::min(x0, T.translation().x()), x1 = std::max(x1, T.translation().x());
+      z0 = std::min(z0, T.translation().z()), z1 = std::max(z1, T.translation().z());
+    }
+  }
+  if (x0 > x1) return {-1, 1, -1, 1};  // nothing to draw
+  return {x0, x1, z0, z1};
+}
+
 // The top view both plots share: `paths` (the first is the ground truth: drawn under the rest, its first
 // pose marked as the start) with equal axis scales, a grid, a scale bar, and a header of the title, the
 // `notes` lines and a legend that wraps onto more rows when the labels do not fit one.
@@ -114,8 +127,7 @@ void writeTopView(const std::string& path, const std::string& title, const std::
   // Header layout first: its height sets where the plot area starts.
   std::vector<LegendEntry> legend;
   using Key = LegendEntry::Key;
-  legend.reserve(paths.size());
-
+  legend.reserve(paths.size() + 2);
   for (const auto& p : paths) legend.push_back({p.label, Key::line, p.colour, p.thickness, {}});
   legend.push_back({"start", Key::start, c_start, 0, {}});
   legend.push_back({"end", Key::end, grey, 2, {}});
@@ -130,14 +142,7 @@ void writeTopView(const std::string& path, const std::string& title, const std::
   cv::Mat img(h, w, CV_8UC3, cv::Scalar(255, 255, 255));
 
   // Equal scales: the box around all paths (x right, z up), padded, fitted into the plot area.
-  double x0 = 1e300, x1 = -1e300, z0 = 1e300, z1 = -1e300;
-  for (const auto& p : paths) {
-    for (const auto& T : *p.poses) {
-      x0 = std::min(x0, T.translation().x()), x1 = std::max(x1, T.translation().x());
-      z0 = std::min(z0, T.translation().z()), z1 = std::max(z1, T.translation().z());
-    }
-  }
-  if (x0 > x1) x0 = z0 = -1, x1 = z1 = 1;  // nothing to draw
+  const auto [x0, x1, z0, z1] = pathBounds(paths);
   const double span = std::max({x1 - x0, z1 - z0, 1.0});
   const double pad = 0.04 * span, pw = w - l - r, ph = h - t - b;
   const double s = std::min(pw / (x1 - x0 + 2 * pad), ph / (z1 - z0 + 2 * pad));  // pixels per metre

@@ -190,6 +190,20 @@ struct Builder {
   }
 };
 
+// The direction of travel on the ground at each route sample (over 3 samples each way).
+std::vector<Eigen::Vector3d> groundDirections(const std::vector<Eigen::Vector3d>& route) {
+  const size_t n = route.size();
+  std::vector<Eigen::Vector3d> dirs;
+  dirs.reserve(n);
+  for (size_t i = 0; i < n; ++i) {
+    const size_t i0 = i >= 3 ? i - 3 : 0, i1 = std::min(n - 1, i + 3);
+    Eigen::Vector3d d = route[i1] - route[i0];
+    d.y() = 0;
+    dirs.push_back(d.norm() > 1e-9 ? d.normalized() : Eigen::Vector3d(0, 0, 1));
+  }
+  return dirs;
+}
+
 // The route resampled every kStep metres of travel (at least three samples).
 std::vector<Eigen::Vector3d> resampledRoute(const std::vector<Pose3>& route_T_w_c) {
   std::vector<Eigen::Vector3d> route{route_T_w_c.front().translation()};
@@ -214,12 +228,7 @@ World World::build(const std::vector<Pose3>& route_T_w_c, TextureBank bank, cons
 
   w.route_ = resampledRoute(route_T_w_c);
   const size_t n = w.route_.size();
-  for (size_t i = 0; i < n; ++i) {
-    const size_t i0 = i >= 3 ? i - 3 : 0, i1 = std::min(n - 1, i + 3);
-    Eigen::Vector3d d = w.route_[i1] - w.route_[i0];
-    d.y() = 0;
-    w.route_dir_.push_back(d.norm() > 1e-9 ? d.normalized() : Eigen::Vector3d(0, 0, 1));
-  }
+  w.route_dir_ = groundDirections(w.route_);
 
   // Bounds and the route-sample grid.
   double x0 = 1e18, z0 = 1e18, x1 = -1e18, z1 = -1e18;
