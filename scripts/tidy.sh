@@ -22,16 +22,33 @@ else
   # Changed since the baseline: committed, staged, in the tree, or new.
   mapfile -t changed < <({ git diff --name-only "$base" -- src/core include/binloop
                            git ls-files --others --exclude-standard -- src/core include/binloop; } | sort -u)
-  declare -A pick=()
+  declare -A pick=() headers=()
   for f in "${changed[@]}"; do
     [ -f "$f" ] || continue
     case "$f" in
       src/core/*.cpp) pick["$f"]=1 ;;
-      include/binloop/*.h|src/core/*.h)
-        inc="${f#include/}"; inc="${inc#src/core/}"
-        while read -r user; do pick["$user"]=1; done < <(grep -rlF "\"$inc\"" src/core --include='*.cpp')
-        ;;
+      include/binloop/*.h|src/core/*.h) headers["$f"]=1 ;;
     esac
+  done
+  includedAs() {  # how sources name a header: by its path below include/, or (src/core's own) by file name
+    case "$1" in include/*) echo "${1#include/}" ;; *) basename "$1" ;; esac
+  }
+  # A changed header reaches every source that includes it, directly or through other headers.
+  mapfile -t all_headers < <(find include/binloop src/core -name '*.h' | sort)
+  grown=1
+  while [ "$grown" = 1 ]; do
+    grown=0
+    for h in "${all_headers[@]}"; do
+      [ -n "${headers[$h]:-}" ] && continue
+      for c in "${!headers[@]}"; do
+        inc=$(includedAs "$c")
+        if grep -qF "\"$inc\"" "$h"; then headers["$h"]=1 grown=1; break; fi
+      done
+    done
+  done
+  for c in "${!headers[@]}"; do
+    inc=$(includedAs "$c")
+    while read -r user; do pick["$user"]=1; done < <(grep -rlF "\"$inc\"" src/core --include='*.cpp')
   done
   mapfile -t files < <(printf '%s\n' "${!pick[@]}" | sed '/^$/d' | sort)
 fi

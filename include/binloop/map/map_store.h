@@ -7,9 +7,7 @@
 // (MapReplica). docs/decisions.md says why the observations are not shared too.
 //
 // Threads: none of its own; whoever holds one guards it.
-#include <type_traits>
 #include <unordered_map>
-#include <vector>
 
 #include "binloop/io/state_file.h"
 #include "binloop/map/ancestors.h"
