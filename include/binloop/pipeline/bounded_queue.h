@@ -1,6 +1,8 @@
 #pragma once
 // A blocking queue of bounded length between two stage threads: a full queue makes the producer wait,
 // which is the back-pressure the nodelets get from their subscriber queues.
+//
+// Threads: every member may be called from any thread at any time (one mutex guards the queue).
 #include <condition_variable>
 #include <deque>
 #include <mutex>

@@ -184,7 +184,6 @@ QueryResult FabmapRecognizer::querySignature(const SlotScope& scope) const {
   const QueryTables tab = tables(q);
   std::vector<double> loglik;  // references, then pre-candidates, then the new place
   loglik.reserve(refs.size());
-
   for (Slot k : refs) loglik.push_back(placeLogLik(tab, words_[k]));
   for (Slot k : pre) loglik.push_back(placeLogLik(tab, words_[k]));
   const size_t places = loglik.size();

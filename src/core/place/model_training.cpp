@@ -40,7 +40,6 @@ void saveFabmapModel(const std::vector<Descriptors>& images, const TrainOptions&
   m.vocabulary = std::make_shared<FlatVocabulary>(FlatVocabulary::train(images, fp, progress));
   std::vector<std::vector<uint32_t>> presence;
   presence.reserve(images.size());
-
   for (const auto& im : images) presence.push_back(m.vocabulary->presence(im));
   m.tree = std::make_shared<ChowLiuTree>(
       ChowLiuTree::learn(presence, static_cast<uint32_t>(m.vocabulary->size()), 0.5, progress));

@@ -540,7 +540,6 @@ void Tracker::updateLocalKeyframes(const Frame& f) {
   if (count.empty()) return;  // keep the previous local map
   std::vector<std::pair<int, SlamKeyframeId>> ranked;
   ranked.reserve(count.size());
-
   for (const auto& [k, c] : count) ranked.emplace_back(c, k);
   // Most shared points first; ties by id so that the order never depends on the hash map's.
   std::sort(ranked.begin(), ranked.end(), [](const auto& a, const auto& b) {
