@@ -6,7 +6,7 @@
 #   - the nodelets stay thin: every onInit at most 40 lines, src/nodelets/tracking_nodelet.cpp at most 200;
 #   - clang-tidy (the checks .clang-tidy names, every warning an error) on the core's sources changed since
 #     the commit in scripts/tidy_baseline, whose whole core was clean, and on the core sources that include a
-#     header changed since (tidying the whole core takes 10-15 minutes on 2 cores: docs/decisions.md).
+#     header changed since (the whole core takes about 6 minutes on 2 cores: docs/decisions.md).
 # Warnings are errors in the test builds (BINLOOP_WERROR, set by scripts/test.sh).
 #   scripts/lint.sh             check
 #   scripts/lint.sh --fix       reformat in place first
