@@ -6,11 +6,20 @@
 // with the new-place evidence, mean-field (3.18) or sampled (3.19), a uniform prior with `p_new` on the
 // new place, and smoothing sigma (3.20). Candidates are keyframes whose posterior beats every reference's.
 //
+// A candidate's `confidence`, which ranks it against other queries' candidates, is its log-likelihood
+// ratio against the new-place evidence, log p(Z|L) - log p(Z|new), in nats. The posterior cannot rank
+// across queries: it saturates at ~1 for the best place and its size follows how many places passed the
+// gate. The likelihood ratio says how much better the place explains the query than an unseen place does
+// (docs/loop_models.md, "Ranking loops"). The closest keyframes by L2 beyond the gate are ranked too
+// (never passed), so that a query whose references are closer than its loop still names its best guess.
+//
 // p(z|e, z_parent) depends on four binary states per word, so it is tabulated once per model; a query
 // then costs one pass over the vocabulary plus one pass over the words of each evaluated keyframe.
 #include <array>
 #include <memory>
 #include <unordered_map>
+#include <utility>
+#include <vector>
 
 #include "binloop/place/chow_liu_tree.h"
 #include "binloop/place/flat_vocabulary.h"
@@ -63,8 +72,16 @@ class FabmapRecognizer : public PlaceRecognizer {
     std::vector<float> delta;  // per word: term(seen) - term(not seen)
     double avg = 0;            // mean-field new place
   };
+  // Keyframes beyond the L2 gate whose likelihood is evaluated for ranking: the closest ones by L2.
+  static constexpr size_t kRankedBeyondGate = 20;
   QueryTables tables(const std::vector<uint32_t>& query) const;
   static double placeLogLik(const QueryTables& t, const std::vector<uint32_t>& place);
+  /// log p(Z | new place): the training samples' mean likelihood (3.19), or the mean-field place (3.18).
+  double newPlaceLogLik(const QueryTables& t) const;
+  void rankBeyondGate(QueryResult& r, const QueryTables& t, double new_place,
+                      std::vector<std::pair<double, Slot>> beyond) const;
+  /// Smoothed posterior over `loglik`'s places and, last, the new place.
+  std::vector<double> posterior(const std::vector<double>& loglik, double new_place) const;
 };
 
 }  // namespace binloop

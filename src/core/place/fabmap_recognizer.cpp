@@ -148,69 +148,80 @@ size_t FabmapRecognizer::indexBytesPerKeyframe() const {
   return n * (sizeof(uint32_t) + sizeof(KeyframeId)) / words_.size();  // presence list + inverted entries
 }
 
+double FabmapRecognizer::newPlaceLogLik(const QueryTables& t) const {
+  if (!m_.params.sampled_evidence || m_.samples.empty()) return t.avg;
+  std::vector<double> s;
+  s.reserve(m_.samples.size());
+  for (const auto& smp : m_.samples) s.push_back(placeLogLik(t, smp));
+  return logSumExp(s) - std::log(double(s.size()));
+}
+
+void FabmapRecognizer::rankBeyondGate(QueryResult& r, const QueryTables& t, double new_place,
+                                      std::vector<std::pair<double, Slot>> beyond) const {
+  const size_t n = std::min(beyond.size(), kRankedBeyondGate);
+  std::partial_sort(beyond.begin(), beyond.begin() + static_cast<std::ptrdiff_t>(n), beyond.end());
+  for (size_t i = 0; i < n; ++i) {
+    const Slot k = beyond[i].second;
+    offer(r, {idAt(k), 0.0, placeLogLik(t, words_[k]) - new_place}, false);
+  }
+}
+
 QueryResult FabmapRecognizer::querySignature(const SlotScope& scope) const {
   QueryResult r;
-  const Slot id = scope.query;
-  const auto& q = words_[id];
+  const auto& q = words_[scope.query];
   auto t = std::chrono::steady_clock::now();
   SlotCounter common(words_.size());
   for (uint32_t w : q) common.add(inverted_[w]);
-  const std::vector<Slot>& touched = common.touched();  // the query itself too; scope.excluded drops it
   auto l2 = [&](Slot k) {
     return std::sqrt(std::max(0.0, 2.0 - 2.0 * common[k] / std::sqrt(double(q.size()) * words_[k].size())));
   };
   const std::vector<Slot>& refs = scope.reference;
-  double min_l2 = std::numeric_limits<double>::max();
-  for (Slot k : refs) min_l2 = std::min(min_l2, l2(k));
   if (refs.empty()) {
     r.status = QueryStatus::kNoReference;
     r.detail = "no reference keyframe in the database";
     return r;
   }
+  double min_l2 = std::numeric_limits<double>::max();
+  for (Slot k : refs) min_l2 = std::min(min_l2, l2(k));
   std::vector<Slot> pre;
-  for (Slot k : touched)
-    if (!scope.excluded[k] && l2(k) < min_l2 + m_.params.l2_offset) pre.push_back(k);
+  std::vector<std::pair<double, Slot>> beyond;  // outside the gate: ranked, never passed
+  for (Slot k : common.touched()) {             // the query itself too; scope.excluded drops it
+    if (scope.excluded[k]) continue;
+    const double d = l2(k);
+    if (d < min_l2 + m_.params.l2_offset) {
+      pre.push_back(k);
+    } else {
+      beyond.emplace_back(d, k);
+    }
+  }
   r.timings.push_back({"l2_prefilter", msSince(t)});
-  // Unlike the other models, nothing stands as the best rejected here: a place outside the L2 gate has no
-  // posterior (it was never in the location prior), and ranking one anyway brought false loops to the top.
+
+  t = std::chrono::steady_clock::now();
+  const QueryTables tab = tables(q);
+  const double new_place = newPlaceLogLik(tab);
+  rankBeyondGate(r, tab, new_place, std::move(beyond));
   if (pre.empty()) {
     r.status = QueryStatus::kNoPreCandidates;
     r.detail =
         "no keyframe within L2 " + std::to_string(min_l2) + " + " + std::to_string(m_.params.l2_offset);
     return r;
   }
-
-  t = std::chrono::steady_clock::now();
-  const QueryTables tab = tables(q);
-  std::vector<double> loglik;  // references, then pre-candidates, then the new place
-  loglik.reserve(refs.size());
+  std::vector<double> loglik;  // references, then pre-candidates
+  loglik.reserve(refs.size() + pre.size());
   for (Slot k : refs) loglik.push_back(placeLogLik(tab, words_[k]));
   for (Slot k : pre) loglik.push_back(placeLogLik(tab, words_[k]));
-  const size_t places = loglik.size();
-  double new_place = tab.avg;
-  if (m_.params.sampled_evidence && !m_.samples.empty()) {
-    std::vector<double> s;
-    for (const auto& smp : m_.samples) s.push_back(placeLogLik(tab, smp));
-    new_place = logSumExp(s) - std::log(double(s.size()));
-  }
   r.timings.push_back({"likelihood", msSince(t)});
 
   t = std::chrono::steady_clock::now();
-  std::vector<double> logpost(places + 1);
-  const double log_prior_place = std::log((1 - m_.params.p_new) / places);
-  for (size_t i = 0; i < places; ++i) logpost[i] = loglik[i] + log_prior_place;
-  logpost[places] = new_place + std::log(m_.params.p_new);
-  const double norm = logSumExp(logpost);
-  std::vector<double> post(places + 1);
-  for (size_t i = 0; i <= places; ++i)
-    post[i] = m_.params.sigma * std::exp(logpost[i] - norm) + (1 - m_.params.sigma) / (places + 1);
+  const std::vector<double> post = posterior(loglik, new_place);
+  const size_t places = loglik.size();
   double bar = 0;
   for (size_t i = 0; i < refs.size(); ++i) bar = std::max(bar, post[i]);
   r.threshold = bar;
   std::vector<Candidate> all;
   for (size_t j = 0; j < pre.size(); ++j) {
     const double p = post[refs.size() + j];
-    const Candidate c{idAt(pre[j]), p, p / std::max(bar, 1e-300)};
+    const Candidate c{idAt(pre[j]), p, loglik[refs.size() + j] - new_place};
     offer(r, c, p > bar);
     if (scope.max_ranked) all.push_back(c);
   }
@@ -224,6 +235,20 @@ QueryResult FabmapRecognizer::querySignature(const SlotScope& scope) const {
   r.detail = detail.str();
   r.status = r.candidates.empty() ? QueryStatus::kBelowReference : QueryStatus::kFound;
   return r;
+}
+
+std::vector<double> FabmapRecognizer::posterior(const std::vector<double>& loglik, double new_place) const {
+  const size_t places = loglik.size();
+  std::vector<double> logpost(places + 1);
+  const double log_prior_place = std::log((1 - m_.params.p_new) / double(places));
+  for (size_t i = 0; i < places; ++i) logpost[i] = loglik[i] + log_prior_place;
+  logpost[places] = new_place + std::log(m_.params.p_new);
+  const double norm = logSumExp(logpost);
+  std::vector<double> post(places + 1);
+  for (size_t i = 0; i <= places; ++i) {
+    post[i] = m_.params.sigma * std::exp(logpost[i] - norm) + (1 - m_.params.sigma) / double(places + 1);
+  }
+  return post;
 }
 
 }  // namespace binloop

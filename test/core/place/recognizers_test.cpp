@@ -164,6 +164,39 @@ TEST(Fabmap, FastLikelihoodEqualsTheDirectSum) {
               rec.logLikelihoodDirect(voc->presence(rec.descriptors(2)), voc->presence(training[1])), 1e-3);
 }
 
+// A query whose reference is another view of the same place (a camera standing still, two shots of one
+// scene) cannot pass its bar, but its loop is still the best guess it names, and that guess must outrank a
+// new place's guess: fabmap ranks by the likelihood ratio against the new-place evidence, which does not
+// depend on the references, and ranks keyframes beyond its L2 gate too (docs/loop_models.md).
+TEST(Fabmap, NamesItsLoopBehindACloserReferenceAndRanksItAboveANewPlace) {
+  TempDir dir;
+  TrainOptions o;
+  o.words = 400;
+  o.fabmap_samples = 30;
+  trainModel(ModelType::kFabmap, randomPlaces(100, 60, 300), o, dir / "f.bin");
+  FabmapRecognizer rec(FabmapModel::load(dir / "f.bin"));
+  KeyframeId id = 0;
+  for (int p = 0; p < 12; ++p) rec.add(id++, revisit(randomPlace(7, p), 1000 + p, 2, 0.95));
+  const KeyframeId twin = id++, loop = id++, ref_new = id++, fresh = id++;
+  const Descriptors at_place5 = revisit(randomPlace(7, 5), 51, 2, 0.8);
+  rec.add(twin, revisit(at_place5, 50, 1, 0.98));
+  rec.add(loop, at_place5);
+  rec.add(ref_new, randomPlace(7, 40));
+  rec.add(fresh, randomPlace(7, 41));
+
+  const QueryResult at_loop = rec.query(loop, {{twin}, {}});
+  EXPECT_TRUE(at_loop.candidates.empty()) << at_loop.detail;  // the twin explains it best
+  ASSERT_TRUE(at_loop.has_best_rejected) << at_loop.detail;
+  EXPECT_EQ(at_loop.best_rejected.id, KeyframeId(5)) << at_loop.detail;
+  EXPECT_GT(at_loop.best_rejected.confidence, 0.0);  // likelier under place 5 than under a new place
+
+  const QueryResult at_new = rec.query(fresh, {{ref_new}, {}});
+  const Candidate* guess = at_new.best();
+  if (guess) {
+    EXPECT_GT(at_loop.best_rejected.confidence, guess->confidence) << at_new.detail;
+  }
+}
+
 // hbow's bar never drops below its floor: a query whose reference shares nothing with it (open ground, sky)
 // must not pass every keyframe with a huge score/bar ratio.
 TEST(Hbow, BarNeverDropsBelowTheFloor) {
