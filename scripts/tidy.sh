@@ -30,26 +30,29 @@ else
       include/binloop/*.h|src/core/*.h) headers["$f"]=1 ;;
     esac
   done
-  includedAs() {  # how sources name a header: by its path below include/, or (src/core's own) by file name
-    case "$1" in include/*) echo "${1#include/}" ;; *) basename "$1" ;; esac
-  }
-  # A changed header reaches every source that includes it, directly or through other headers.
-  mapfile -t all_headers < <(find include/binloop src/core -name '*.h' | sort)
-  grown=1
-  while [ "$grown" = 1 ]; do
-    grown=0
-    for h in "${all_headers[@]}"; do
-      [ -n "${headers[$h]:-}" ] && continue
-      for c in "${!headers[@]}"; do
-        inc=$(includedAs "$c")
-        if grep -qF "\"$inc\"" "$h"; then headers["$h"]=1 grown=1; break; fi
-      done
+  includedAs() {  # how sources name headers: by the path below include/, or (src/core's own) by file name
+    local h
+    for h in "$@"; do
+      case "$h" in include/*) echo "\"${h#include/}\"" ;; *) echo "\"$(basename "$h")\"" ;; esac
     done
+  }
+  # A changed header reaches every source that includes it, directly or through other headers: each round
+  # adds the headers that include one already in the set (one grep a round).
+  names=$(mktemp)
+  while [ "${#headers[@]}" -gt 0 ]; do
+    includedAs "${!headers[@]}" >"$names"
+    mapfile -t others < <(find include/binloop src/core -name '*.h' | sort |
+                          while read -r h; do [ -n "${headers[$h]:-}" ] || echo "$h"; done)
+    [ "${#others[@]}" -gt 0 ] || break
+    mapfile -t grew < <(grep -lF -f "$names" "${others[@]}")
+    [ "${#grew[@]}" -gt 0 ] || break
+    for h in "${grew[@]}"; do headers["$h"]=1; done
   done
-  for c in "${!headers[@]}"; do
-    inc=$(includedAs "$c")
-    while read -r user; do pick["$user"]=1; done < <(grep -rlF "\"$inc\"" src/core --include='*.cpp')
-  done
+  if [ "${#headers[@]}" -gt 0 ]; then
+    includedAs "${!headers[@]}" >"$names"
+    while read -r user; do pick["$user"]=1; done < <(grep -rlF -f "$names" src/core --include='*.cpp')
+  fi
+  rm -f "$names"
   mapfile -t files < <(printf '%s\n' "${!pick[@]}" | sed '/^$/d' | sort)
 fi
 if [ "${#files[@]}" -eq 0 ]; then

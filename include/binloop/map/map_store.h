@@ -56,7 +56,20 @@ class MapStore {
   }
   const Fusions& fusions() const { return fusions_; }
 
-  /// A keyframe culled from the map (its record erased by the holder) stays known by its place in the tree.
+  /// Erases a held keyframe, which stays known by its place in the tree: its parent and its pose relative
+  /// to it (identity when the parent is not held). The holder unlinks it from its points and neighbours
+  /// first.
+  void cull(SlamKeyframeId id) {
+    const auto it = keyframes_.find(id);
+    if (it == keyframes_.end()) return;
+    const auto& kf = keyframeStateOf(it->second);
+    const auto parent = keyframes_.find(kf.parent);
+    culled_[id] = {kf.parent, parent == keyframes_.end()
+                                  ? Pose3::Identity()
+                                  : Pose3(keyframeStateOf(parent->second).T_w_c.inverse() * kf.T_w_c)};
+    keyframes_.erase(it);
+  }
+  /// Records `id` as culled without erasing anything: a tree built by hand (tests) or from a record.
   void recordCulled(SlamKeyframeId id, SlamKeyframeId parent, const Pose3& T_parent_kf) {
     culled_[id] = {parent, T_parent_kf};
   }

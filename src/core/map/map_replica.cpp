@@ -65,13 +65,8 @@ void MapReplica::removePoint(MapPointId id) {
 void MapReplica::removeKeyframe(SlamKeyframeId id) {
   auto it = map_.keyframes().find(id);
   if (it == map_.keyframes().end()) return;
-  const auto parent = map_.keyframes().find(it->second.parent);
-  map_.recordCulled(id, it->second.parent,
-                    parent == map_.keyframes().end()
-                        ? Pose3::Identity()
-                        : Pose3(parent->second.T_w_c.inverse() * it->second.T_w_c));
   unlinkKeyframe(it->second);
-  map_.keyframes().erase(it);
+  map_.cull(id);
 }
 
 void MapReplica::fuse(MapPointId removed, MapPointId kept) {

@@ -22,10 +22,7 @@ void LocalMapper::removeKeyframe(SlamKeyframeId id) {
   // parent is the simplest choice that keeps the tree connected).
   for (auto& [k, o] : map_.keyframes())
     if (o.state.parent == id) o.state.parent = kf.state.parent;
-  auto parent = map_.keyframes().find(kf.state.parent);
-  if (parent != map_.keyframes().end())
-    map_.recordCulled(id, kf.state.parent, parent->second.state.T_w_c.inverse() * kf.state.T_w_c);
-  map_.keyframes().erase(id);
+  map_.cull(id);
 }
 
 void LocalMapper::cullKeyframes(KF& kf, msg::LocalMapUpdate& u) {

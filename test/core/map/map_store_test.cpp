@@ -40,17 +40,20 @@ TEST(MapStore, AnIdResolvesThroughEveryFusionToAHeldPoint) {
   EXPECT_EQ(s.resolve(999), kNoId);
 }
 
-// K1 <- K2 <- K3 <- K4 with K2 and K3 culled: K4 climbs through both to K1; the culled keep their parent.
+// K1 <- K2 <- K3 <- K4 with K2 and K3 culled: K4 climbs through both to K1; the culled keep their parent
+// and their pose relative to it while the parent is held (K2's), identity once it is not (K3's).
 TEST(MapStore, TheTreeIsClimbedThroughCulledKeyframes) {
   Store s;
   addKeyframe(s, K1, kNoId, 0);
   addKeyframe(s, K2, K1, 1);
-  addKeyframe(s, K3, K2, 2);
+  addKeyframe(s, K3, K2, 2.5);
   addKeyframe(s, K4, K3, 3);
-  s.recordCulled(K2, K1, Pose3(Eigen::Translation3d(1, 0, 0)));
-  s.keyframes().erase(K2);
-  s.recordCulled(K3, K2, Pose3(Eigen::Translation3d(1, 0, 0)));
-  s.keyframes().erase(K3);
+  s.cull(K2);
+  s.cull(K3);
+  s.cull(99);  // never held: nothing happens
+  EXPECT_EQ(s.keyframes().size(), 2u);
+  EXPECT_TRUE(s.culled(K2)->T_parent_kf.isApprox(Pose3(Eigen::Translation3d(1, 0, 0))));
+  EXPECT_TRUE(s.culled(K3)->T_parent_kf.isApprox(Pose3::Identity()));
   EXPECT_TRUE(s.knows(K2));
   EXPECT_FALSE(s.knows(99));
   EXPECT_EQ(s.parentOf(K4), K3);
