@@ -34,7 +34,8 @@ class HbowRecognizer : public PlaceRecognizer {
  private:
   std::vector<Slot> scoreAll(const BowVector& q, std::vector<uint32_t>* common,
                              std::vector<double>* score) const;
-  void accumulateGroups(const std::vector<Slot>& scored, const std::vector<double>& passed, double min_score,
+  double background(const std::vector<double>& score, const std::vector<char>& excluded) const;
+  void accumulateGroups(const std::vector<Slot>& scored, const std::vector<double>& passed, double rank_bar,
                         QueryResult* r) const;
   std::shared_ptr<const VocabularyTree> voc_;
   double min_bar_;

@@ -16,6 +16,11 @@ struct RankingParams {
   // hbow: L1 score (TF-IDF, k=10 L=6 vocabularies). 0.03 since ORB's learned pattern (0.02 before): R@100P
   // 06 0.934 -> 0.967, 05 0.612 -> 0.662, real_tune 0.731 -> 0.769; held-out 00 0.326 -> 0.669.
   double score_floor = 0.03;
+  // hbow: nor lower than the score this share of the database stays below. A query that shares as much
+  // with a tenth of the keyframes as with its best match is generic (a featureless wall, a repeated
+  // facade), and its tiny reference score would otherwise rank its guess high. 0.9: real_heldout 0.833 ->
+  // 0.933; rendered 06, 05, 00 and real_tune unchanged (docs/results/2026-11-27-fabmap-ranking.md).
+  double score_background_quantile = 0.9;
   double distance_cap = 0.35;  // vlad, hmvlad, vladpq: fraction of the signature's bits
 };
 

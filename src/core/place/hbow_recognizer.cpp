@@ -44,6 +44,21 @@ size_t HbowRecognizer::indexBytesPerKeyframe() const {
   return entries * (sizeof(BowEntry) + sizeof(Posting)) / bows_.size();
 }
 
+// The score `ranking().score_background_quantile` of the keyframes outside the scope stay below (those
+// sharing no word score 0): the level a match must stand out from to rank high.
+double HbowRecognizer::background(const std::vector<double>& score, const std::vector<char>& excluded) const {
+  std::vector<double> v;
+  v.reserve(score.size());
+  for (size_t k = 0; k < score.size(); ++k) {
+    if (!excluded[k]) v.push_back(score[k]);
+  }
+  if (v.empty()) return 0;
+  const auto nth = v.begin() + static_cast<std::ptrdiff_t>(ranking().score_background_quantile *
+                                                           static_cast<double>(v.size() - 1));
+  std::nth_element(v.begin(), nth, v.end());
+  return *nth;
+}
+
 // One pass over the query's inverted lists gives every keyframe's common-word count and its L1 score:
 // DBoW2's score 1 - |a - b|_1 / 2 of L1-normalised vectors is sum over common words of
 // (|a_w| + |b_w| - |a_w - b_w|) / 2, and words that only one vector has add nothing. Returns the keyframes
@@ -92,11 +107,12 @@ QueryResult HbowRecognizer::querySignature(const SlotScope& scope) const {
     max_common = std::max(max_common, common[k]);
   }
   const uint32_t min_common = static_cast<uint32_t>(0.8f * max_common);
+  const double rank_bar = std::max(min_score, background(score, scope.excluded));
+  auto confidence = [&](double s) { return scoreConfidence(s, rank_bar, ranking().score_floor); };
   if (scope.max_ranked > 0) {
     std::vector<Candidate> all;
     for (Slot k : touched) {
-      if (!scope.excluded[k])
-        all.push_back({idAt(k), score[k], scoreConfidence(score[k], min_score, ranking().score_floor)});
+      if (!scope.excluded[k]) all.push_back({idAt(k), score[k], confidence(score[k])});
     }
     keepRanked(r, std::move(all), scope.max_ranked);
   }
@@ -112,7 +128,7 @@ QueryResult HbowRecognizer::querySignature(const SlotScope& scope) const {
     if (common[k] > min_common && score[k] >= min_score) {
       scored.push_back(k);
     } else {
-      offer(r, {idAt(k), score[k], scoreConfidence(score[k], min_score, ranking().score_floor)}, false);
+      offer(r, {idAt(k), score[k], confidence(score[k])}, false);
     }
   }
   // Only keyframes that reached the bar take part in group accumulation (-1: did not).
@@ -130,7 +146,7 @@ QueryResult HbowRecognizer::querySignature(const SlotScope& scope) const {
     return r;
   }
 
-  accumulateGroups(scored, passed, min_score, &r);
+  accumulateGroups(scored, passed, rank_bar, &r);
   r.status = QueryStatus::kFound;
   return r;
 }
@@ -138,7 +154,7 @@ QueryResult HbowRecognizer::querySignature(const SlotScope& scope) const {
 // Groups of covisible keyframes that reached the bar (DBoW2's islands): each scored keyframe with its group's
 // passed scores summed; groups within 75 % of the best give their best keyframe as a candidate.
 void HbowRecognizer::accumulateGroups(const std::vector<Slot>& scored, const std::vector<double>& passed,
-                                      double min_score, QueryResult* r) const {
+                                      double rank_bar, QueryResult* r) const {
   const auto t = std::chrono::steady_clock::now();
   struct Group {
     double acc, best;
@@ -166,7 +182,7 @@ void HbowRecognizer::accumulateGroups(const std::vector<Slot>& scored, const std
     if (std::find(seen.begin(), seen.end(), g.best_slot) != seen.end()) continue;
     seen.push_back(g.best_slot);
     r->candidates.push_back(
-        {idAt(g.best_slot), g.acc, scoreConfidence(g.best, min_score, ranking().score_floor)});
+        {idAt(g.best_slot), g.acc, scoreConfidence(g.best, rank_bar, ranking().score_floor)});
   }
   r->timings.push_back({"group", msSince(t)});
 }

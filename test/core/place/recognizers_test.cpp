@@ -226,6 +226,40 @@ TEST(Hbow, BarNeverDropsBelowTheFloor) {
   }
 }
 
+// A generic view (a repeated facade: what it shows, a tenth of the database shows too) whose reference
+// shares nothing with it must not outrank a distinctive revisit: hbow's ranking bar never counts as lower
+// than what the top tenth of the database scores (RankingParams::score_background_quantile).
+TEST(Hbow, AGenericViewRanksBelowADistinctiveRevisit) {
+  TempDir dir;
+  TrainOptions o;
+  o.k = 8;
+  o.levels = 5;
+  trainModel(ModelType::kHbow, randomPlaces(100, 60, 300), o, dir / "h.bin");
+  HbowRecognizer rec(HbowRecognizer::loadVocabulary(dir / "h.bin"), 0.005);
+  const Descriptors facade = randomPlace(9, 0, 150);
+  auto withFacade = [&](Descriptors d) {
+    const Descriptors f = revisit(facade, d.size(), 2, 0.9);
+    d.insert(d.end(), f.begin(), f.end());
+    return d;
+  };
+  KeyframeId id = 0;
+  for (int p = 0; p < 20; ++p)
+    rec.add(id++, p % 5 == 0 ? withFacade(randomPlace(7, p, 150)) : randomPlace(7, p));
+  const KeyframeId ref_generic = id++, generic = id++, ref_revisit = id++, revisit3 = id++;
+  rec.add(ref_generic, Descriptors(50, Desc256{}));  // featureless: shares nothing
+  rec.add(generic, withFacade(randomPlace(7, 40, 150)));
+  rec.add(ref_revisit, revisit(randomPlace(7, 3), 60, 4, 0.3));  // a neighbour seeing part of the view
+  rec.add(revisit3, revisit(randomPlace(7, 3), 61, 4, 0.6));
+
+  const QueryResult g = rec.query(generic, {{ref_generic}, {}}), r = rec.query(revisit3, {{ref_revisit}, {}});
+  ASSERT_NE(r.best(), nullptr) << r.detail;
+  EXPECT_EQ(r.best()->id, 3u) << r.detail;
+  ASSERT_NE(g.best(), nullptr) << g.detail;
+  EXPECT_EQ(g.best()->id % 5, 0u) << g.detail;  // it does match a facade keyframe...
+  EXPECT_GT(r.best()->confidence, g.best()->confidence)
+      << "revisit: " << r.detail << "; generic: " << g.detail;
+}
+
 // A revisit's VLAD can be closer to the query than the neighbour that sets the bar and still share fewer
 // (word, code) pairs with it: the neighbour sees the same view, the revisit only a part of it. With the
 // thesis' pre-filter (at least as many pairs as the best reference) such revisits never reach the distance
