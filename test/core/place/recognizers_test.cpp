@@ -25,6 +25,18 @@ std::vector<Descriptors> randomPlaces(uint64_t seed, int places, int per_place) 
   return training;
 }
 
+/// Model `m` trained as every model here is (60 random places of 300 descriptors) into `path`.
+std::string trainOnRandomPlaces(const std::string& m, const std::string& path) {
+  TrainOptions o;
+  o.words = 400;
+  o.fabmap_samples = 30;
+  // Deep enough that unrelated places share few words, as with a real k=10 L=6 vocabulary.
+  if (m == "hbow") o.k = 8, o.levels = 5;
+  if (m == "vladpq") o.pq_codes = 8;
+  trainModel(modelTypeFromName(m), randomPlaces(100, 60, 300), o, path);
+  return path;
+}
+
 class Recognizers : public ::testing::TestWithParam<std::string> {
  protected:
   static void SetUpTestSuite() { dir_ = new TempDir; }
@@ -33,17 +45,8 @@ class Recognizers : public ::testing::TestWithParam<std::string> {
   /// trains only the model it needs.
   static std::string modelFile(const std::string& m) {
     const std::string f = *dir_ / (m + ".bin");
-    if (std::filesystem::exists(f)) return f;
-    const std::vector<Descriptors> training = randomPlaces(100, 60, 300);
     // The journey's places are drawn from the training distribution but not the training images.
-    TrainOptions o;
-    o.words = 400;
-    o.fabmap_samples = 30;
-    // Deep enough that unrelated places share few words, as with a real k=10 L=6 vocabulary.
-    if (m == "hbow") o.k = 8, o.levels = 5;
-    if (m == "vladpq") o.pq_codes = 8;
-    trainModel(modelTypeFromName(m), training, o, f);
-    return f;
+    return std::filesystem::exists(f) ? f : trainOnRandomPlaces(m, f);
   }
   std::unique_ptr<PlaceRecognizer> make() const {
     return makePlaceRecognizer(GetParam(), {modelFile(GetParam())});
@@ -170,11 +173,7 @@ TEST(Fabmap, FastLikelihoodEqualsTheDirectSum) {
 // depend on the references, and ranks keyframes beyond its L2 gate too (docs/loop_models.md).
 TEST(Fabmap, NamesItsLoopBehindACloserReferenceAndRanksItAboveANewPlace) {
   TempDir dir;
-  TrainOptions o;
-  o.words = 400;
-  o.fabmap_samples = 30;
-  trainModel(ModelType::kFabmap, randomPlaces(100, 60, 300), o, dir / "f.bin");
-  FabmapRecognizer rec(FabmapModel::load(dir / "f.bin"));
+  FabmapRecognizer rec(FabmapModel::load(trainOnRandomPlaces("fabmap", dir / "f.bin")));
   KeyframeId id = 0;
   for (int p = 0; p < 12; ++p) rec.add(id++, revisit(randomPlace(7, p), 1000 + p, 2, 0.95));
   const KeyframeId twin = id++, loop = id++, ref_new = id++, fresh = id++;
@@ -231,11 +230,7 @@ TEST(Hbow, BarNeverDropsBelowTheFloor) {
 // than what the top tenth of the database scores (RankingParams::score_background_quantile).
 TEST(Hbow, AGenericViewRanksBelowADistinctiveRevisit) {
   TempDir dir;
-  TrainOptions o;
-  o.k = 8;
-  o.levels = 5;
-  trainModel(ModelType::kHbow, randomPlaces(100, 60, 300), o, dir / "h.bin");
-  HbowRecognizer rec(HbowRecognizer::loadVocabulary(dir / "h.bin"), 0.005);
+  HbowRecognizer rec(HbowRecognizer::loadVocabulary(trainOnRandomPlaces("hbow", dir / "h.bin")), 0.005);
   const Descriptors facade = randomPlace(9, 0, 150);
   auto withFacade = [&](Descriptors d) {
     const Descriptors f = revisit(facade, d.size(), 2, 0.9);
