@@ -11,10 +11,15 @@ source "$(dirname "${BASH_SOURCE[0]}")/env.sh"
 what="${1:-all}"
 mkdir -p "$BINLOOP_WS/src" "$BINLOOP_CORE_BUILD"
 
+# Both builds compile the core library from the same sources; through ccache the catkin build takes the
+# core build's objects (its extra ROS defines change nothing the core preprocesses): 15 s instead of ~2 min.
+launcher=()
+if command -v ccache >/dev/null; then launcher=(-DCMAKE_CXX_COMPILER_LAUNCHER=ccache); fi
+
 configure_core() {
   # Warnings are errors in the project's own builds (cmake/binloop_core.cmake, BINLOOP_WERROR).
   cmake -S "$BINLOOP_ROOT/cmake/core_only" -B "$BINLOOP_CORE_BUILD" -DCMAKE_BUILD_TYPE=Release -DBINLOOP_WERROR=ON \
-    -DCMAKE_EXPORT_COMPILE_COMMANDS=ON >/dev/null
+    -DCMAKE_EXPORT_COMPILE_COMMANDS=ON "${launcher[@]}" >/dev/null
 }
 if [ "$what" = --configure-core ]; then
   configure_core
@@ -32,7 +37,7 @@ if [ "$what" = all ] || [ "$what" = --ros ]; then
   ln -sfn "$BINLOOP_ROOT" "$BINLOOP_WS/src/binloop"
   cd "$BINLOOP_WS"
   catkin_make -j"$BINLOOP_JOBS" -DCMAKE_BUILD_TYPE=Release -DPYTHON_EXECUTABLE=/usr/bin/python3 \
-    -DCATKIN_ENABLE_TESTING=ON -DBINLOOP_WERROR=ON
+    -DCATKIN_ENABLE_TESTING=ON -DBINLOOP_WERROR=ON "${launcher[@]}"
   # Test binaries too, so that `scripts/test.sh` only runs them.
   catkin_make -j"$BINLOOP_JOBS" tests
 fi

@@ -6,6 +6,8 @@ set -euo pipefail
 PACKAGES=(
   # build tools and ROS 1 as Debian ships it (no /opt/ros, nothing to source)
   build-essential cmake pkg-config clang-format clang-tidy catkin ros-base-dev ros-message-generation
+  # the core is compiled by both builds (ROS-free and catkin): the second takes the first's objects
+  ccache
   libnodelet-dev libnodeletlib-dev pluginlib-dev libtf2-ros-dev libtf2-eigen-dev
   librosbag-dev python3-rosbag python3-rospy python3-geometry-msgs python3-diagnostic-msgs libdynamic-reconfigure-config-init-mutex-dev python3-dynamic-reconfigure
   libcv-bridge-dev libimage-transport-dev libmessage-filters-dev
