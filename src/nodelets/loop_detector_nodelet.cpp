@@ -67,7 +67,8 @@ void LoopDetectorNodelet::onInit() {
   try {
     requireKnownParams(
         pnh, {"config", "vocab_dir", "force_extractor", "method", "consistency", "max_reference",
-              "ignore_recent", "hbow_min_bar", "fabmap_l2_offset", "vladpq_shared_slack", "shadow"});
+              "ignore_recent", "hbow_min_bar", "fabmap_l2_offset", "vladpq_shared_slack",
+              "vlad_reference_rank", "shadow"});
     config_ = slamConfigFrom(pnh);
   } catch (const std::exception& e) {
     NODELET_FATAL("binloop/LoopDetector: %s", e.what());
@@ -98,6 +99,8 @@ void LoopDetectorNodelet::defaultRulesFromConfig(ros::NodeHandle& pnh) const {
   if (!pnh.hasParam("fabmap_l2_offset")) pnh.setParam("fabmap_l2_offset", config_.models.fabmap_l2_offset);
   if (!pnh.hasParam("vladpq_shared_slack"))
     pnh.setParam("vladpq_shared_slack", config_.models.vladpq_shared_slack);
+  if (!pnh.hasParam("vlad_reference_rank"))
+    pnh.setParam("vlad_reference_rank", config_.models.vlad_reference_rank);
 }
 
 // The stage's part in the graph-wide map services (stage_services.h).
@@ -161,6 +164,7 @@ void LoopDetectorNodelet::onReconfigure(binloop::LoopDetectorConfig& c, uint32_t
   options.hbow_min_bar = c.hbow_min_bar;
   options.fabmap_l2_offset = c.fabmap_l2_offset;
   options.vladpq_shared_slack = c.vladpq_shared_slack;
+  options.vlad_reference_rank = c.vlad_reference_rank;
   auto make = binloop::modelFileFactory(vocab_dir_, config_.tracker.orb, force_, options);
   try {
     std::vector<std::string> skipped;

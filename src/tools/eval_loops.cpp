@@ -73,6 +73,10 @@ int main(int argc, char** argv) {
               "vladpq's pre-filter passes keyframes sharing this many (word, code) pairs fewer than the best "
               "reference",
               "1")
+      .option("vlad-reference-rank",
+              "vlad's and hmvlad's bar is the distance to this closest reference (1: the closest; beyond "
+              "--reference: the farthest)",
+              "3")
       .option("rank-floor", "ranking: an L1-score bar (hbow) counts as at least this", "0.03")
       .option("rank-cap",
               "ranking: a distance bar (vlad, hmvlad, vladpq) counts as at most this fraction of the bits",
@@ -224,6 +228,7 @@ int main(int argc, char** argv) {
       ro.fabmap_l2_offset = args.number("fabmap-l2-offset");
       ro.hbow_min_bar = args.number("hbow-min-bar");
       ro.vladpq_shared_slack = static_cast<int>(args.integer("vladpq-slack"));
+      ro.vlad_reference_rank = static_cast<int>(args.integer("vlad-reference-rank"));
       ro.ranking.score_floor = args.number("rank-floor");
       ro.ranking.distance_cap = args.number("rank-cap");
       auto rec = makePlaceRecognizer(name, ro);

@@ -1,7 +1,8 @@
 #pragma once
 // `hmvlad` (thesis 4.2 and "Loop closure detection with HMVLAD"): one binarized VLAD per level of a
-// vocabulary tree. The short (first-level) signature rejects: only keyframes closer than every reference
-// keyframe in short bits go on. The long (last-level) signature verifies the same way.
+// vocabulary tree. The short (first-level) signature rejects: only keyframes closer in short bits than the
+// `reference_rank`-th closest reference keyframe (the thesis: the closest, rank 1) go on. The long
+// (last-level) signature verifies the same way.
 #include <memory>
 
 #include "binloop/place/place_recognizer.h"
@@ -12,7 +13,8 @@ namespace binloop {
 
 class HmvladRecognizer : public PlaceRecognizer {
  public:
-  explicit HmvladRecognizer(std::shared_ptr<const VladVocabulary> voc);
+  /// Throws PlaceError without a vocabulary of 2+ levels or for a reference rank below 1.
+  explicit HmvladRecognizer(std::shared_ptr<const VladVocabulary> voc, int reference_rank = 1);
   std::string name() const override { return "hmvlad"; }
   size_t indexBytesPerKeyframe() const override;
 
@@ -23,6 +25,7 @@ class HmvladRecognizer : public PlaceRecognizer {
  private:
   std::shared_ptr<const VladVocabulary> voc_;
   SignatureStore short_, long_;  // per slot
+  int reference_rank_;
 };
 
 }  // namespace binloop

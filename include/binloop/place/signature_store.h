@@ -33,7 +33,9 @@ class SignatureStore {
   size_t words_ = 0;
 };
 
-/// Smallest Hamming distance from stored signature `q` to those of the reference slots, or -1.
-int closestReference(const SignatureStore& sigs, size_t q, const std::vector<uint32_t>& ref_slots);
+/// The `rank`-th smallest Hamming distance from stored signature `q` to those of the reference slots (1:
+/// the closest; a rank beyond the references counts as the farthest), or -1 without references. Throws
+/// PlaceError for a rank below 1.
+int referenceBar(const SignatureStore& sigs, size_t q, const std::vector<uint32_t>& ref_slots, int rank);
 
 }  // namespace binloop

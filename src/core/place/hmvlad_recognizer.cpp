@@ -9,8 +9,10 @@
 
 namespace binloop {
 
-HmvladRecognizer::HmvladRecognizer(std::shared_ptr<const VladVocabulary> voc) : voc_(std::move(voc)) {
+HmvladRecognizer::HmvladRecognizer(std::shared_ptr<const VladVocabulary> voc, int reference_rank)
+    : voc_(std::move(voc)), reference_rank_(reference_rank) {
   if (!voc_) throw PlaceError("hmvlad: no vocabulary");
+  if (reference_rank_ < 1) throw PlaceError("hmvlad: reference rank must be at least 1");
   if (voc_->levels() < 2) throw PlaceError("hmvlad needs a vocabulary of at least 2 levels, this one has 1");
 }
 
@@ -32,8 +34,8 @@ QueryResult HmvladRecognizer::querySignature(const SlotScope& scope) const {
   const uint64_t* ql = long_[scope.query];
   auto t = std::chrono::steady_clock::now();
   const size_t refs = scope.reference.size();
-  const int bar_short = closestReference(short_, scope.query, scope.reference);
-  const int bar_long = closestReference(long_, scope.query, scope.reference);
+  const int bar_short = referenceBar(short_, scope.query, scope.reference, reference_rank_);
+  const int bar_long = referenceBar(long_, scope.query, scope.reference, reference_rank_);
   const double cap = ranking().distance_cap * static_cast<double>(long_.words() * 64);
   r.threshold = bar_long;
   r.timings.push_back({"reference", msSince(t)});

@@ -20,9 +20,11 @@ std::unique_ptr<PlaceRecognizer> make(ModelType type, const RecognizerOptions& o
     case ModelType::kHbow:
       return std::make_unique<HbowRecognizer>(HbowRecognizer::loadVocabulary(o.model_file), o.hbow_min_bar);
     case ModelType::kVlad:
-      return std::make_unique<VladRecognizer>(VladRecognizer::loadVocabulary(o.model_file, type));
+      return std::make_unique<VladRecognizer>(VladRecognizer::loadVocabulary(o.model_file, type),
+                                              o.vlad_reference_rank);
     case ModelType::kHmvlad:
-      return std::make_unique<HmvladRecognizer>(VladRecognizer::loadVocabulary(o.model_file, type));
+      return std::make_unique<HmvladRecognizer>(VladRecognizer::loadVocabulary(o.model_file, type),
+                                                o.vlad_reference_rank);
     case ModelType::kVladPq:
       return std::make_unique<VladPqRecognizer>(VladPqModel::load(o.model_file), PqVerify::kHamming,
                                                 o.vladpq_shared_slack);

@@ -1,5 +1,6 @@
 #include "binloop/place/signature_store.h"
 
+#include <algorithm>
 #include <string>
 
 #include "binloop/place/place_error.h"
@@ -16,13 +17,15 @@ void SignatureStore::push(const BinarySignature& s) {
   data_.insert(data_.end(), s.begin(), s.end());
 }
 
-int closestReference(const SignatureStore& sigs, size_t q, const std::vector<uint32_t>& ref_slots) {
-  int best = -1;
-  for (uint32_t k : ref_slots) {
-    const int d = sigs.distance(sigs[q], k);
-    if (best < 0 || d < best) best = d;
-  }
-  return best;
+int referenceBar(const SignatureStore& sigs, size_t q, const std::vector<uint32_t>& ref_slots, int rank) {
+  if (rank < 1) throw PlaceError("reference rank " + std::to_string(rank) + ": must be at least 1");
+  if (ref_slots.empty()) return -1;
+  std::vector<int> d;
+  d.reserve(ref_slots.size());
+  for (uint32_t k : ref_slots) d.push_back(sigs.distance(sigs[q], k));
+  const auto nth = d.begin() + std::min<std::ptrdiff_t>(rank, static_cast<std::ptrdiff_t>(d.size())) - 1;
+  std::nth_element(d.begin(), nth, d.end());
+  return *nth;
 }
 
 }  // namespace binloop

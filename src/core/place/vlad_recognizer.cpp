@@ -7,8 +7,10 @@
 
 namespace binloop {
 
-VladRecognizer::VladRecognizer(std::shared_ptr<const VladVocabulary> voc) : voc_(std::move(voc)) {
+VladRecognizer::VladRecognizer(std::shared_ptr<const VladVocabulary> voc, int reference_rank)
+    : voc_(std::move(voc)), reference_rank_(reference_rank) {
   if (!voc_) throw PlaceError("vlad: no vocabulary");
+  if (reference_rank_ < 1) throw PlaceError("vlad: reference rank must be at least 1");
 }
 
 std::shared_ptr<const VladVocabulary> VladRecognizer::loadVocabulary(const std::string& path,
@@ -31,7 +33,7 @@ QueryResult VladRecognizer::querySignature(const SlotScope& scope) const {
   const uint64_t* q = sigs_[scope.query];
   auto t = std::chrono::steady_clock::now();
   const size_t refs = scope.reference.size();
-  const int bar = closestReference(sigs_, scope.query, scope.reference);
+  const int bar = referenceBar(sigs_, scope.query, scope.reference, reference_rank_);
   const double cap = ranking().distance_cap * static_cast<double>(sigs_.words() * 64);
   r.threshold = bar;
   r.timings.push_back({"reference", msSince(t)});

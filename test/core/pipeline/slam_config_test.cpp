@@ -95,12 +95,16 @@ TEST(SlamConfig, KeysGivenOverrideTheRestKeepDefaults) {
 TEST(SlamConfig, ModelThresholdsAreLoopDetectionKeys) {
   TempDir dir;
   const SlamConfig c = loadSlamConfig(configFile(
-      dir, "loop_detection:\n  vladpq_shared_slack: 2\n  hbow_min_bar: 0.01\n  fabmap_l2_offset: 0.1\n"));
+      dir, "loop_detection:\n  vladpq_shared_slack: 2\n  hbow_min_bar: 0.01\n  fabmap_l2_offset: 0.1\n"
+           "  vlad_reference_rank: 1\n"));
   EXPECT_EQ(c.models.vladpq_shared_slack, 2);
+  EXPECT_EQ(c.models.vlad_reference_rank, 1);
   EXPECT_DOUBLE_EQ(c.models.hbow_min_bar, 0.01);
   EXPECT_DOUBLE_EQ(c.models.fabmap_l2_offset, 0.1);
   EXPECT_EQ(c.detector.consistency, SlamConfig{}.detector.consistency);
   EXPECT_THROW(loadSlamConfig(configFile(dir, "loop_detection:\n  vladpq_shared_slack: -1\n", "neg.yaml")),
+               ConfigError);
+  EXPECT_THROW(loadSlamConfig(configFile(dir, "loop_detection:\n  vlad_reference_rank: 0\n", "zero.yaml")),
                ConfigError);
 }
 

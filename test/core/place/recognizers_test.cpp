@@ -288,3 +288,43 @@ TEST(VladPq, SlackLetsRevisitsSharingFewerPairsThanTheReferenceThrough) {
   EXPECT_GE(found[1], found[0] + 2) << "slack 0 found " << found[0] << " of 24, slack 1 " << found[1];
   EXPECT_THROW(VladPqRecognizer(model, PqVerify::kHamming, -1), PlaceError);
 }
+
+// vlad's and hmvlad's bar with `vlad_reference_rank`: a revisit of an old place, less alike than the
+// query's twin among its references but more than the other two, passes the third closest reference's
+// bar and not the closest's (the thesis' bar; rendered 00 lost a revisit crossing the first lap to it).
+TEST(Vlad, ABarFromTheThirdClosestReferenceLetsALessAlikeRevisitThrough) {
+  for (const std::string m : {"vlad", "hmvlad"}) {
+    TempDir dir;
+    const std::string file = trainOnRandomPlaces(m, dir / (m + ".bin"));
+    for (int rank : {1, 3}) {
+      RecognizerOptions o;
+      o.model_file = file;
+      o.vlad_reference_rank = rank;
+      auto rec = makePlaceRecognizer(m, o);
+      KeyframeId id = 0;
+      for (int p = 0; p < 24; ++p) rec->add(id++, randomPlace(7, p));
+      int found = 0;
+      for (int p = 0; p < 24; ++p) {
+        const Descriptors q = revisit(randomPlace(7, p), 60 + p, 8, 0.6);
+        const KeyframeId twin = id++, other1 = id++, other2 = id++, query = id++;
+        rec->add(twin, revisit(q, 90 + p, 2, 0.95));
+        rec->add(other1, randomPlace(9, p));
+        rec->add(other2, randomPlace(10, p));
+        rec->add(query, q);
+        const QueryResult r = rec->query(query, {{twin, other1, other2}, {}});
+        if (r.status != QueryStatus::kFound) continue;
+        ++found;
+        EXPECT_EQ(r.candidates.front().id, KeyframeId(p)) << m << " rank " << rank << ": " << r.detail;
+      }
+      if (rank == 1) {
+        EXPECT_LE(found, 2) << m << ": the closest reference's bar let " << found << " of 24 through";
+      } else {
+        EXPECT_GE(found, 20) << m << ": the third closest's bar let " << found << " of 24 through";
+      }
+    }
+    RecognizerOptions zero;
+    zero.model_file = file;
+    zero.vlad_reference_rank = 0;
+    EXPECT_THROW_WITH(makePlaceRecognizer(m, zero), PlaceError, "reference rank must be at least 1");
+  }
+}

@@ -18,8 +18,21 @@ TEST(SignatureStore, DistancesAreThoseOfTheSignaturesPushed) {
   EXPECT_EQ(s.distance(s[0], 1), 9);
   EXPECT_EQ(s.distance(s[1], 2), 64 - 8 + 1);
   EXPECT_EQ(s.distance(s[2], 2), 0);
-  EXPECT_EQ(closestReference(s, 0, {1, 2}), 9);
-  EXPECT_EQ(closestReference(s, 0, {}), -1);
+}
+
+// The bar of vlad and hmvlad: the rank-th closest reference, the farthest when there are fewer.
+TEST(SignatureStore, TheReferenceBarIsTheDistanceOfTheRankThClosest) {
+  SignatureStore s;
+  s.push({0x0});
+  s.push({0xFF});    // 8 bits from slot 0
+  s.push({0x1});     // 1
+  s.push({0xFFFF});  // 16
+  EXPECT_EQ(referenceBar(s, 0, {1, 2, 3}, 1), 1);
+  EXPECT_EQ(referenceBar(s, 0, {1, 2, 3}, 2), 8);
+  EXPECT_EQ(referenceBar(s, 0, {1, 2, 3}, 3), 16);
+  EXPECT_EQ(referenceBar(s, 0, {1, 2}, 3), 8);
+  EXPECT_EQ(referenceBar(s, 0, {}, 3), -1);
+  EXPECT_THROW_WITH(referenceBar(s, 0, {1}, 0), PlaceError, "reference rank 0: must be at least 1");
 }
 
 TEST(SignatureStore, SignatureOfAnotherLengthIsRefused) {
