@@ -65,10 +65,9 @@ void LoopDetectorNodelet::onInit() {
   ros::NodeHandle& nh = getNodeHandle();
   ros::NodeHandle& pnh = getPrivateNodeHandle();
   try {
-    requireKnownParams(
-        pnh, {"config", "vocab_dir", "force_extractor", "method", "consistency", "max_reference",
-              "ignore_recent", "hbow_min_bar", "fabmap_l2_offset", "vladpq_shared_slack",
-              "vlad_reference_rank", "shadow"});
+    requireKnownParams(pnh, {"config", "vocab_dir", "force_extractor", "method", "consistency",
+                             "max_reference", "ignore_recent", "hbow_min_bar", "fabmap_l2_offset",
+                             "vladpq_shared_slack", "vlad_reference_rank", "shadow"});
     config_ = slamConfigFrom(pnh);
   } catch (const std::exception& e) {
     NODELET_FATAL("binloop/LoopDetector: %s", e.what());

@@ -579,9 +579,9 @@ TEST_F(LoopGraph, RestartedStagesGetTheMapAgainAndTheRevisitIsClosed) {
   std::string mapping_before, resumed, resent, lost_for_good;
   for (size_t i = 0; i < pairs.size(); ++i) {
     if (i == lap / 2 + 20) {  // 20 pairs after local mapping's restart; before tracking's clears its counts
-      ASSERT_TRUE(
-          waitFor(20, [&] { return !seen_.tracking("keyframes sent again (mapping restarted)").empty(); }))
-          << "tracking's diagnostics never said how many keyframes it sent again";
+      ASSERT_TRUE(waitFor(20, [&] {
+        return !seen_.tracking("keyframes sent again (mapping restarted)").empty();
+      })) << "tracking's diagnostics never said how many keyframes it sent again";
       resent = seen_.tracking("keyframes sent again (mapping restarted)");
       lost_for_good = seen_.tracking("keyframes mapping lost for good");
       resumed = statistics()["local_mapping/resumed_keyframes"];

@@ -94,9 +94,10 @@ TEST(SlamConfig, KeysGivenOverrideTheRestKeepDefaults) {
 // factory.
 TEST(SlamConfig, ModelThresholdsAreLoopDetectionKeys) {
   TempDir dir;
-  const SlamConfig c = loadSlamConfig(configFile(
-      dir, "loop_detection:\n  vladpq_shared_slack: 2\n  hbow_min_bar: 0.01\n  fabmap_l2_offset: 0.1\n"
-           "  vlad_reference_rank: 1\n"));
+  const SlamConfig c = loadSlamConfig(
+      configFile(dir,
+                 "loop_detection:\n  vladpq_shared_slack: 2\n  hbow_min_bar: 0.01\n  fabmap_l2_offset: 0.1\n"
+                 "  vlad_reference_rank: 1\n"));
   EXPECT_EQ(c.models.vladpq_shared_slack, 2);
   EXPECT_EQ(c.models.vlad_reference_rank, 1);
   EXPECT_DOUBLE_EQ(c.models.hbow_min_bar, 0.01);
