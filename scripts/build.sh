@@ -13,6 +13,7 @@ mkdir -p "$BINLOOP_WS/src" "$BINLOOP_CORE_BUILD"
 
 # Both builds compile the core library from the same sources; through ccache the catkin build takes the
 # core build's objects (its extra ROS defines change nothing the core preprocesses): 15 s instead of ~2 min.
+# Its cache is in the build folder (scripts/env.sh, CCACHE_DIR).
 launcher=()
 if command -v ccache >/dev/null; then launcher=(-DCMAKE_CXX_COMPILER_LAUNCHER=ccache); fi
 

@@ -6,3 +6,5 @@ BINLOOP_WS="$BINLOOP_BUILD/ws"
 BINLOOP_CORE_BUILD="$BINLOOP_BUILD/core"
 export PATH="/usr/bin:/bin:/usr/sbin:/sbin:$PATH"
 BINLOOP_JOBS="${BINLOOP_JOBS:-$(nproc)}"
+# ccache (scripts/build.sh) keeps its cache in the git-ignored build folder, writable wherever the build is.
+export CCACHE_DIR="${CCACHE_DIR:-$BINLOOP_BUILD/ccache}"
