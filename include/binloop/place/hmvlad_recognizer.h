@@ -14,7 +14,7 @@ namespace binloop {
 class HmvladRecognizer : public PlaceRecognizer {
  public:
   /// Throws PlaceError without a vocabulary of 2+ levels or for a reference rank below 1.
-  explicit HmvladRecognizer(std::shared_ptr<const VladVocabulary> voc, int reference_rank = 1);
+  explicit HmvladRecognizer(std::shared_ptr<const VladVocabulary> voc, int reference_rank);
   std::string name() const override { return "hmvlad"; }
   size_t indexBytesPerKeyframe() const override;
 

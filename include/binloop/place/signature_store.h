@@ -6,6 +6,7 @@
 // in eval-loops, where the queries follow one another).
 #include <cstddef>
 #include <cstdint>
+#include <string>
 #include <vector>
 
 #include "binloop/place/vlad_vocabulary.h"
@@ -33,9 +34,13 @@ class SignatureStore {
   size_t words_ = 0;
 };
 
+/// `rank` when it is at least 1 (the closest reference); otherwise throws PlaceError naming `model`. The
+/// recognizers that take a rank check it once, when they are built.
+int checkedReferenceRank(int rank, const std::string& model);
+
 /// The `rank`-th smallest Hamming distance from stored signature `q` to those of the reference slots (1:
-/// the closest; a rank beyond the references counts as the farthest), or -1 without references. Throws
-/// PlaceError for a rank below 1.
+/// the closest; a rank beyond the references counts as the farthest), or -1 without references. `rank`
+/// is at least 1 (checkedReferenceRank).
 int referenceBar(const SignatureStore& sigs, size_t q, const std::vector<uint32_t>& ref_slots, int rank);
 
 }  // namespace binloop

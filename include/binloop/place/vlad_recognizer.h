@@ -14,7 +14,7 @@ namespace binloop {
 class VladRecognizer : public PlaceRecognizer {
  public:
   /// Throws PlaceError without a vocabulary or for a reference rank below 1.
-  explicit VladRecognizer(std::shared_ptr<const VladVocabulary> voc, int reference_rank = 1);
+  explicit VladRecognizer(std::shared_ptr<const VladVocabulary> voc, int reference_rank);
   static std::shared_ptr<const VladVocabulary> loadVocabulary(const std::string& path, ModelType type);
   std::string name() const override { return "vlad"; }
   size_t indexBytesPerKeyframe() const override;

@@ -27,7 +27,7 @@ class VladPqRecognizer : public PlaceRecognizer {
  public:
   /// `shared_slack`: a pre-candidate may share this many (word, code) pairs fewer than the best reference
   /// (never fewer than one). Throws PlaceError when it is negative.
-  explicit VladPqRecognizer(VladPqModel model, PqVerify verify = PqVerify::kHamming, int shared_slack = 0);
+  VladPqRecognizer(VladPqModel model, PqVerify verify, int shared_slack);
   std::string name() const override { return "vladpq"; }
   size_t indexBytesPerKeyframe() const override;
 

@@ -10,9 +10,8 @@
 namespace binloop {
 
 HmvladRecognizer::HmvladRecognizer(std::shared_ptr<const VladVocabulary> voc, int reference_rank)
-    : voc_(std::move(voc)), reference_rank_(reference_rank) {
+    : voc_(std::move(voc)), reference_rank_(checkedReferenceRank(reference_rank, "hmvlad")) {
   if (!voc_) throw PlaceError("hmvlad: no vocabulary");
-  if (reference_rank_ < 1) throw PlaceError("hmvlad: reference rank must be at least 1");
   if (voc_->levels() < 2) throw PlaceError("hmvlad needs a vocabulary of at least 2 levels, this one has 1");
 }
 
@@ -79,8 +78,8 @@ QueryResult HmvladRecognizer::querySignature(const SlotScope& scope) const {
   }
   r.timings.push_back({"long_verify", msSince(t)});
   std::ostringstream detail;
-  detail << "bars " << bar_short << "/" << bar_long << " bits (short/long) from " << refs
-         << " reference keyframes; " << pre.size() << " pass the short signature, " << r.candidates.size()
+  detail << "bars " << bar_short << "/" << bar_long << " bits (short/long; reference rank " << reference_rank_
+         << " of " << refs << "); " << pre.size() << " pass the short signature, " << r.candidates.size()
          << " the long";
   r.detail = detail.str();
   r.status = pre.empty()            ? QueryStatus::kNoPreCandidates

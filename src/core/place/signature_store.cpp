@@ -17,8 +17,12 @@ void SignatureStore::push(const BinarySignature& s) {
   data_.insert(data_.end(), s.begin(), s.end());
 }
 
+int checkedReferenceRank(int rank, const std::string& model) {
+  if (rank < 1) throw PlaceError(model + ": reference rank " + std::to_string(rank) + ", must be at least 1");
+  return rank;
+}
+
 int referenceBar(const SignatureStore& sigs, size_t q, const std::vector<uint32_t>& ref_slots, int rank) {
-  if (rank < 1) throw PlaceError("reference rank " + std::to_string(rank) + ": must be at least 1");
   if (ref_slots.empty()) return -1;
   std::vector<int> d;
   d.reserve(ref_slots.size());

@@ -8,9 +8,8 @@
 namespace binloop {
 
 VladRecognizer::VladRecognizer(std::shared_ptr<const VladVocabulary> voc, int reference_rank)
-    : voc_(std::move(voc)), reference_rank_(reference_rank) {
+    : voc_(std::move(voc)), reference_rank_(checkedReferenceRank(reference_rank, "vlad")) {
   if (!voc_) throw PlaceError("vlad: no vocabulary");
-  if (reference_rank_ < 1) throw PlaceError("vlad: reference rank must be at least 1");
 }
 
 std::shared_ptr<const VladVocabulary> VladRecognizer::loadVocabulary(const std::string& path,
@@ -50,8 +49,8 @@ QueryResult VladRecognizer::querySignature(const SlotScope& scope) const {
   if (scope.max_ranked) keepRanked(r, std::move(all), scope.max_ranked);
   r.timings.push_back({"scan", msSince(t)});
   std::ostringstream detail;
-  detail << "bar " << bar << " bits from " << refs << " reference keyframes; " << r.candidates.size()
-         << " closer";
+  detail << "bar " << bar << " bits (reference rank " << reference_rank_ << " of " << refs << "); "
+         << r.candidates.size() << " closer";
   r.detail = detail.str();
   r.status = !refs                  ? QueryStatus::kNoReference
              : r.candidates.empty() ? QueryStatus::kBelowReference

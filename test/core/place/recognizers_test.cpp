@@ -325,6 +325,6 @@ TEST(Vlad, ABarFromTheThirdClosestReferenceLetsALessAlikeRevisitThrough) {
     RecognizerOptions zero;
     zero.model_file = file;
     zero.vlad_reference_rank = 0;
-    EXPECT_THROW_WITH(makePlaceRecognizer(m, zero), PlaceError, "reference rank must be at least 1");
+    EXPECT_THROW_WITH(makePlaceRecognizer(m, zero), PlaceError, "reference rank 0, must be at least 1");
   }
 }

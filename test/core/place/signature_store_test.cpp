@@ -32,7 +32,9 @@ TEST(SignatureStore, TheReferenceBarIsTheDistanceOfTheRankThClosest) {
   EXPECT_EQ(referenceBar(s, 0, {1, 2, 3}, 3), 16);
   EXPECT_EQ(referenceBar(s, 0, {1, 2}, 3), 8);
   EXPECT_EQ(referenceBar(s, 0, {}, 3), -1);
-  EXPECT_THROW_WITH(referenceBar(s, 0, {1}, 0), PlaceError, "reference rank 0: must be at least 1");
+  EXPECT_EQ(checkedReferenceRank(1, "vlad"), 1);
+  EXPECT_THROW_WITH(checkedReferenceRank(0, "hmvlad"), PlaceError,
+                    "hmvlad: reference rank 0, must be at least 1");
 }
 
 TEST(SignatureStore, SignatureOfAnotherLengthIsRefused) {
