@@ -19,7 +19,7 @@
 # Needs ../shared/data/kitti/poses/08.txt for the route; takes about 15 minutes on 2 cores.
 # The hbow files (21-27 MB) are too large to track and are made here; the other four are tracked.
 # `vocab/make_vocab.sh hbow` makes only the two hbow files (render of 08 plus about a minute of training).
-# `vocab/make_vocab.sh photos` makes only vocab/photos/.
+# `vocab/make_vocab.sh photos` makes only vocab/photos/, `vocab/make_vocab.sh kitti08` only vocab/kitti08/.
 # BINLOOP_TOOLS=<dir> runs the tools from <dir> instead of scripts/binloop (a build of the core alone).
 # BINLOOP_VOCAB_OUT=<dir> writes <dir>/kitti08 and <dir>/photos instead of vocab/ (to compare before replacing).
 set -euo pipefail
@@ -57,6 +57,7 @@ done
 if [ -n "$kitti_models" ] && [ "${1:-}" != hbow ]; then
   bl train hbow --images "$seq08" --every 8 --seed 1 --k 8 --levels 5 --out "$out/kitti08/hbow_k8l5.bin"
 fi
+[ "${1:-}" = kitti08 ] && exit 0
 stage="$work/photos"
 rm -rf "$stage" && mkdir -p "$stage"
 i=0

@@ -40,10 +40,11 @@ int main(int argc, char** argv) {
   return binloop::runTool("learn-pattern", [&] {
     if (!args.parse(argc, argv)) return 0;
     if (!args.has("out") || !args.has("images")) throw binloop::CliError("--images and --out are required");
-    const binloop::ExtractOptions eo = binloop::extractOptionsFrom(args);
-    if (eo.orb.pattern != binloop::BriefPatternKind::kGaussian)
+    if (args.has("pattern"))
       throw binloop::CliError(
           "--pattern does not apply: learn-pattern learns its own tests from the keypoints");
+    binloop::ExtractOptions eo = binloop::extractOptionsFrom(args);
+    eo.orb.pattern = binloop::BriefPatternKind::kGaussian;  // the keypoints and angles; the tests are learned
     const long every = args.integer("every"), keypoints = args.integer("keypoints");
     if (every < 1 || keypoints < 1) throw binloop::CliError("--every and --keypoints must be >= 1");
     std::vector<std::string> paths;

@@ -23,6 +23,14 @@ std::string kittiLeftPath(int i) {
 
 cv::Mat kittiLeft(int i) { return readGrayImage(kittiLeftPath(i)); }
 
+// learn-pattern samples with binloop's Gaussian extractor (its keypoints, angles and smoothed levels; the
+// tests are what it learns), whatever the SLAM's default tests are.
+OrbSlamExtractor gaussianExtractor() {
+  OrbSlamParams p;
+  p.pattern = BriefPatternKind::kGaussian;
+  return OrbSlamExtractor(p);
+}
+
 bool bit(const Desc256& d, int i) { return (d.w[i / 64] >> (i % 64)) & 1; }
 
 }  // namespace
@@ -43,7 +51,7 @@ TEST(BriefPattern, TestsStayInsideTheDiscAndAreDistinct) {
 // (mean |P(1) - 0.5| about 0.2 on such frames).
 TEST(BriefPatternLearning, LearnedTestsAreBalancedOnHeldOutFrames) {
   BINLOOP_REQUIRE_DATA(kittiLeftPath(10));  // frames 0-10 of the real sample
-  const OrbSlamExtractor ex;
+  const OrbSlamExtractor ex = gaussianExtractor();
   PatchSamples train, held_out;
   for (int i : {0, 2, 4, 6}) train.append(samplePatches(kittiLeft(i), ex, 1000, i));
   for (int i : {8, 10}) held_out.append(samplePatches(kittiLeft(i), ex, 100000, i));
@@ -71,8 +79,8 @@ TEST(BriefPatternLearning, LearnedTestsAreBalancedOnHeldOutFrames) {
 // samplePatches reads what the extractor reads: the Gaussian pattern's tests on the samples are the bits of
 // the extractor's descriptors with that pattern.
 TEST(BriefPatternLearning, SamplesGiveTheExtractorsBits) {
-  BINLOOP_REQUIRE_DATA(kittiLeftPath(10));  // frames 0-10 of the real sample
-  const OrbSlamExtractor ex;  // the default tests, binloop's Gaussian ones, which briefPattern() holds
+  BINLOOP_REQUIRE_DATA(kittiLeftPath(10));          // frames 0-10 of the real sample
+  const OrbSlamExtractor ex = gaussianExtractor();  // the tests briefPattern() holds
   const cv::Mat img = kittiLeft(0);
   const OrbFeatures f = ex.extract(img);
   const PatchSamples s = samplePatches(img, ex, 1000000, 1);
@@ -92,7 +100,7 @@ TEST(BriefPatternLearning, SamplesGiveTheExtractorsBits) {
 
 TEST(BriefPatternLearning, DeterministicBalancedAndDecorrelatedOnATinyInput) {
   BINLOOP_REQUIRE_DATA(kittiLeftPath(10));  // frames 0-10 of the real sample
-  const OrbSlamExtractor ex;
+  const OrbSlamExtractor ex = gaussianExtractor();
   PatchSamples s;
   for (int i : {0, 10}) s.append(samplePatches(kittiLeft(i)(cv::Rect(300, 0, 500, 376)).clone(), ex, 400, i));
   ASSERT_EQ(s.keypoints(), 800u);
