@@ -49,7 +49,7 @@ struct LocalMapperParams {
   int local_ba_max_keyframes = 30;  // optimised keyframes (the new one and its strongest neighbours)
   LocalBaParams ba;
   bool cull_keyframes = true;
-  // After a loop correction, a bundle adjustment of the whole map. Off by default
+  // After a loop correction, a bundle adjustment of the whole map. On by default
   // (docs/results/2026-11-26-slam-measurements.md, "Loop closing, measured": what it costs and gives).
   bool global_ba_after_loop = true;
   // Where it runs. False: on mapping's thread, before the corrected map goes to tracking (mapping waits;
