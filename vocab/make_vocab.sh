@@ -23,6 +23,13 @@
 # BINLOOP_TOOLS=<dir> runs the tools from <dir> instead of scripts/binloop (a build of the core alone).
 # BINLOOP_VOCAB_OUT=<dir> writes <dir>/kitti08 and <dir>/photos instead of vocab/ (to compare before replacing).
 set -euo pipefail
+case "${1:-}" in
+  "" | hbow | photos | kitti08) ;;
+  *)
+    echo "make_vocab.sh: unknown set '$1' (none for every set, or hbow, photos, kitti08)" >&2
+    exit 2
+    ;;
+esac
 source "$(dirname "$0")/../scripts/env.sh"
 cd "$BINLOOP_ROOT"
 bl() {

@@ -42,5 +42,8 @@ int checkedReferenceRank(int rank, const std::string& model);
 /// the closest; a rank beyond the references counts as the farthest), or -1 without references. `rank`
 /// is at least 1 (checkedReferenceRank).
 int referenceBar(const SignatureStore& sigs, size_t q, const std::vector<uint32_t>& ref_slots, int rank);
+/// Which reference set the bar, for a query's detail: "reference rank 3 of 10", or "the farthest of 2
+/// references (rank 3)" when there are fewer references than the rank.
+std::string referenceRankText(int rank, size_t references);
 
 }  // namespace binloop

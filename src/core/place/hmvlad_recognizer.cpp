@@ -78,9 +78,9 @@ QueryResult HmvladRecognizer::querySignature(const SlotScope& scope) const {
   }
   r.timings.push_back({"long_verify", msSince(t)});
   std::ostringstream detail;
-  detail << "bars " << bar_short << "/" << bar_long << " bits (short/long; reference rank " << reference_rank_
-         << " of " << refs << "); " << pre.size() << " pass the short signature, " << r.candidates.size()
-         << " the long";
+  detail << "bars " << bar_short << "/" << bar_long << " bits (short/long; "
+         << referenceRankText(reference_rank_, refs) << "); " << pre.size() << " pass the short signature, "
+         << r.candidates.size() << " the long";
   r.detail = detail.str();
   r.status = pre.empty()            ? QueryStatus::kNoPreCandidates
              : r.candidates.empty() ? QueryStatus::kBelowReference

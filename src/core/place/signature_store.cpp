@@ -22,6 +22,12 @@ int checkedReferenceRank(int rank, const std::string& model) {
   return rank;
 }
 
+std::string referenceRankText(int rank, size_t references) {
+  if (static_cast<size_t>(rank) <= references)
+    return "reference rank " + std::to_string(rank) + " of " + std::to_string(references);
+  return "the farthest of " + std::to_string(references) + " references (rank " + std::to_string(rank) + ")";
+}
+
 int referenceBar(const SignatureStore& sigs, size_t q, const std::vector<uint32_t>& ref_slots, int rank) {
   if (ref_slots.empty()) return -1;
   std::vector<int> d;

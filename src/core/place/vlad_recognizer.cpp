@@ -49,7 +49,7 @@ QueryResult VladRecognizer::querySignature(const SlotScope& scope) const {
   if (scope.max_ranked) keepRanked(r, std::move(all), scope.max_ranked);
   r.timings.push_back({"scan", msSince(t)});
   std::ostringstream detail;
-  detail << "bar " << bar << " bits (reference rank " << reference_rank_ << " of " << refs << "); "
+  detail << "bar " << bar << " bits (" << referenceRankText(reference_rank_, refs) << "); "
          << r.candidates.size() << " closer";
   r.detail = detail.str();
   r.status = !refs                  ? QueryStatus::kNoReference

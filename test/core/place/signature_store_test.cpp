@@ -37,6 +37,12 @@ TEST(SignatureStore, TheReferenceBarIsTheDistanceOfTheRankThClosest) {
                     "hmvlad: reference rank 0, must be at least 1");
 }
 
+TEST(SignatureStore, DetailSaysWhenTheFarthestReferenceSetTheBar) {
+  EXPECT_EQ(referenceRankText(3, 10), "reference rank 3 of 10");
+  EXPECT_EQ(referenceRankText(3, 3), "reference rank 3 of 3");
+  EXPECT_EQ(referenceRankText(3, 2), "the farthest of 2 references (rank 3)");
+}
+
 TEST(SignatureStore, SignatureOfAnotherLengthIsRefused) {
   SignatureStore s;
   s.push({1, 2, 3});
