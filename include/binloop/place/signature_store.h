@@ -4,6 +4,7 @@
 // block of its own and, once tracking and mapping had run between two queries, a cache miss of its own
 // (vlad on rendered 00 in the SLAM: 0.18 ms per query over 1400 signatures of 16 words, against 0.028 ms
 // in eval-loops, where the queries follow one another).
+#include <algorithm>
 #include <cstddef>
 #include <cstdint>
 #include <string>
@@ -38,9 +39,18 @@ class SignatureStore {
 /// recognizers that take a rank check it once, when they are built.
 int checkedReferenceRank(int rank, const std::string& model);
 
-/// The `rank`-th smallest Hamming distance from stored signature `q` to those of the reference slots (1:
-/// the closest; a rank beyond the references counts as the farthest), or -1 without references. `rank`
-/// is at least 1 (checkedReferenceRank).
+/// The `rank`-th smallest of `distances` (1: the smallest; a rank beyond their number counts as the
+/// largest). `rank` is at least 1 (checkedReferenceRank) and `distances` not empty.
+template <typename T>
+T rankedDistance(std::vector<T> distances, int rank) {
+  const auto nth =
+      distances.begin() + std::min<std::ptrdiff_t>(rank, static_cast<std::ptrdiff_t>(distances.size())) - 1;
+  std::nth_element(distances.begin(), nth, distances.end());
+  return *nth;
+}
+
+/// The `rank`-th smallest Hamming distance from stored signature `q` to those of the reference slots
+/// (rankedDistance), or -1 without references.
 int referenceBar(const SignatureStore& sigs, size_t q, const std::vector<uint32_t>& ref_slots, int rank);
 /// Which reference set the bar, for a query's detail: "reference rank 3 of 10", or "the farthest of 2
 /// references (rank 3)" when there are fewer references than the rank.

@@ -5,7 +5,7 @@
 // pre-candidates (the thesis asks for strictly more; with the thesis' 4 words the best reference usually
 // shares all 4, so strictly more would never pass, and even "as many" keeps out revisits the VLAD ranks
 // first — see ARCHITECTURE notes); they are verified like `vlad`, by binarized-VLAD Hamming distance below
-// the closest reference, or by SDC/ADC distance when chosen.
+// the third closest reference (`reference_rank`, as vlad's), or by SDC/ADC distance when chosen.
 #include <memory>
 
 #include "binloop/place/place_recognizer.h"
@@ -26,8 +26,10 @@ struct VladPqModel {
 class VladPqRecognizer : public PlaceRecognizer {
  public:
   /// `shared_slack`: a pre-candidate may share this many (word, code) pairs fewer than the best reference
-  /// (never fewer than one). Throws PlaceError when it is negative.
-  VladPqRecognizer(VladPqModel model, PqVerify verify, int shared_slack);
+  /// (never fewer than one). `reference_rank`: the verification bar is the distance to the rank-th closest
+  /// reference (1: the closest, the thesis'), as vlad's. Throws PlaceError when the slack is negative or the
+  /// rank below 1.
+  VladPqRecognizer(VladPqModel model, PqVerify verify, int shared_slack, int reference_rank);
   std::string name() const override { return "vladpq"; }
   size_t indexBytesPerKeyframe() const override;
 
@@ -39,6 +41,7 @@ class VladPqRecognizer : public PlaceRecognizer {
   VladPqModel model_;
   PqVerify verify_;
   uint32_t shared_slack_;
+  int reference_rank_;
   // Per slot:
   SignatureStore sigs_;
   std::vector<PqCodes> codes_;

@@ -27,7 +27,7 @@ std::unique_ptr<PlaceRecognizer> make(ModelType type, const RecognizerOptions& o
                                                 o.vlad_reference_rank);
     case ModelType::kVladPq:
       return std::make_unique<VladPqRecognizer>(VladPqModel::load(o.model_file), PqVerify::kHamming,
-                                                o.vladpq_shared_slack);
+                                                o.vladpq_shared_slack, o.vlad_reference_rank);
     case ModelType::kFabmap: {
       FabmapModel m = FabmapModel::load(o.model_file);
       m.params.l2_offset = o.fabmap_l2_offset;

@@ -33,9 +33,7 @@ int referenceBar(const SignatureStore& sigs, size_t q, const std::vector<uint32_
   std::vector<int> d;
   d.reserve(ref_slots.size());
   for (uint32_t k : ref_slots) d.push_back(sigs.distance(sigs[q], k));
-  const auto nth = d.begin() + std::min<std::ptrdiff_t>(rank, static_cast<std::ptrdiff_t>(d.size())) - 1;
-  std::nth_element(d.begin(), nth, d.end());
-  return *nth;
+  return rankedDistance(std::move(d), rank);
 }
 
 }  // namespace binloop

@@ -267,7 +267,7 @@ TEST(VladPq, SlackLetsRevisitsSharingFewerPairsThanTheReferenceThrough) {
   const auto model = VladPqModel::load(dir / "pq.bin");
   int found[2] = {0, 0};
   for (int slack : {0, 1}) {
-    VladPqRecognizer rec(model, PqVerify::kHamming, slack);
+    VladPqRecognizer rec(model, PqVerify::kHamming, slack, 1);
     KeyframeId id = 0;
     for (int p = 0; p < 24; ++p) rec.add(id++, randomPlace(7, p));
     for (int p = 0; p < 24; ++p) {
@@ -286,14 +286,15 @@ TEST(VladPq, SlackLetsRevisitsSharingFewerPairsThanTheReferenceThrough) {
   }
   EXPECT_GE(found[0], 10);  // the scene is not hopeless without the slack...
   EXPECT_GE(found[1], found[0] + 2) << "slack 0 found " << found[0] << " of 24, slack 1 " << found[1];
-  EXPECT_THROW(VladPqRecognizer(model, PqVerify::kHamming, -1), PlaceError);
+  EXPECT_THROW(VladPqRecognizer(model, PqVerify::kHamming, -1, 3), PlaceError);
+  EXPECT_THROW(VladPqRecognizer(model, PqVerify::kHamming, 1, 0), PlaceError);
 }
 
-// vlad's and hmvlad's bar with `vlad_reference_rank`: a revisit of an old place, less alike than the
+// The VLAD family's bar with `vlad_reference_rank`: a revisit of an old place, less alike than the
 // query's twin among its references but more than the other two, passes the third closest reference's
 // bar and not the closest's (the thesis' bar; rendered 00 lost a revisit crossing the first lap to it).
 TEST(Vlad, ABarFromTheThirdClosestReferenceLetsALessAlikeRevisitThrough) {
-  for (const std::string m : {"vlad", "hmvlad"}) {
+  for (const std::string m : {"vlad", "hmvlad", "vladpq"}) {
     TempDir dir;
     const std::string file = trainOnRandomPlaces(m, dir / (m + ".bin"));
     for (int rank : {1, 3}) {
@@ -303,7 +304,8 @@ TEST(Vlad, ABarFromTheThirdClosestReferenceLetsALessAlikeRevisitThrough) {
       auto rec = makePlaceRecognizer(m, o);
       KeyframeId id = 0;
       for (int p = 0; p < 24; ++p) rec->add(id++, randomPlace(7, p));
-      int found = 0;
+      int passed = 0, found = 0, first = 0;  // any keyframe, the revisit among them, the revisit first
+      std::vector<KeyframeId> earlier;  // the other revisits' keyframes: each query sees the old places only
       for (int p = 0; p < 24; ++p) {
         const Descriptors q = revisit(randomPlace(7, p), 60 + p, 8, 0.6);
         const KeyframeId twin = id++, other1 = id++, other2 = id++, query = id++;
@@ -311,15 +313,23 @@ TEST(Vlad, ABarFromTheThirdClosestReferenceLetsALessAlikeRevisitThrough) {
         rec->add(other1, randomPlace(9, p));
         rec->add(other2, randomPlace(10, p));
         rec->add(query, q);
-        const QueryResult r = rec->query(query, {{twin, other1, other2}, {}});
+        const QueryResult r = rec->query(query, {{twin, other1, other2}, earlier});
+        earlier.insert(earlier.end(), {twin, other1, other2, query});
         if (r.status != QueryStatus::kFound) continue;
-        ++found;
-        EXPECT_EQ(r.candidates.front().id, KeyframeId(p)) << m << " rank " << rank << ": " << r.detail;
+        ++passed;
+        const bool among = std::any_of(r.candidates.begin(), r.candidates.end(),
+                                       [&](const Candidate& c) { return c.id == KeyframeId(p); });
+        found += among;
+        first += r.candidates.front().id == KeyframeId(p);
       }
       if (rank == 1) {
-        EXPECT_LE(found, 2) << m << ": the closest reference's bar let " << found << " of 24 through";
+        EXPECT_LE(passed, 2) << m << ": the closest reference's bar let " << passed << " of 24 through";
       } else {
-        EXPECT_GE(found, 20) << m << ": the third closest's bar let " << found << " of 24 through";
+        // vlad and hmvlad find all 24, first each time. vladpq's pre-filter (shared (word, code) pairs)
+        // drops 4 of the 0.6-alike revisits for random places that share as many pairs by chance; what it
+        // proposes instead is for geometric verification to refuse.
+        EXPECT_GE(found, 18) << m << ": the third closest's bar let " << found << " of 24 through";
+        EXPECT_EQ(first, found) << m << ": the revisit ranked first " << first << " times of " << found;
       }
     }
     RecognizerOptions zero;
