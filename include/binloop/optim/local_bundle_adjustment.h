@@ -89,6 +89,12 @@ struct LocalBaResult {
   bool aborted = false;  // the abort flag stopped it (stage 2 then does not run)
 };
 
+/// Holds the oldest keyframe (lowest id) of every group of keyframes that shares points, directly or
+/// through others, and holds none: without it such a group has no gauge and drifts as the damping lets it.
+/// That happens to a map segment tracking started afresh after it was lost (Tracker, `restart_after_lost`)
+/// until a loop joins it to the rest. Returns how many keyframes it held.
+int holdEachUnanchoredGroup(BaProblem& problem);
+
 /// Refines the non-fixed keyframes and the points. `abort`, when given, is read at every iteration; once it
 /// is true the solve stops there. Throws std::invalid_argument on invalid input: an index out of range,
 /// duplicate ids, non-finite values, inv_sigma2 <= 0, fx or fy <= 0, a stereo observation with no baseline,

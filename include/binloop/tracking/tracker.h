@@ -45,6 +45,13 @@ struct TrackerParams {
   // tracked frame); farther, the frame stays lost. A road whose texture repeated every 8 m let rendered 06
   // relocalise 24 m and 40 m behind the truth after 10 and 20 missing frames, and the next keyframes then
   // mapped there.
+  // After this many frames lost in a row while the motion model still predicts, tracking starts again at
+  // its prediction: the frame becomes a keyframe with points from its own stereo, the first of a new map
+  // segment whose only tie to the old map is that prediction (its spanning-tree parent, in the pose graph)
+  // until a loop joins the two. After 20 missing frames (26-30 m) the map holds too little of the view to
+  // be found again from half the places of rendered 06, and without this tracking stayed lost for good.
+  // 0: stay lost until relocalised.
+  int restart_after_lost = 3;
   double recovery_min_gate_m = 1.0;
   double recovery_max_accel_mps2 = 5.0;
   int min_inliers = 30;  // a frame is tracked with at least this many inliers after the local map
@@ -208,6 +215,8 @@ class Tracker {
   std::vector<PoseObservation> observationsOf(Frame& f, std::vector<int>* index) const;
   void updateLocalKeyframes(const Frame& f);
   bool needKeyframe(const Frame& f, int mapping_queue) const;
+  /// Tracking's fresh start at the prediction (`restart_after_lost`), when its conditions hold.
+  bool restartAtPrediction(Frame& f, const Prediction& pred, Output* out);
   msg::KeyFramePtr makeKeyframe(Frame& f);
   Pose3 lastPose() const;
 
@@ -230,6 +239,7 @@ class Tracker {
   uint64_t last_keyframe_frame_ = 0;
   std::vector<SlamKeyframeId> local_keyframes_;
   int inliers_ = 0;
+  int lost_in_a_row_ = 0;
   uint64_t reloc_attempts_ = 0;
   uint64_t corrections_seen_ = 0;  // loop corrections applied (through local mapping's updates)
   std::unique_ptr<KeyframeDatabase> keyframe_db_;  // with a vocabulary only

@@ -51,6 +51,7 @@ LocalMapper::BaSetup LocalMapper::makeBaProblem(const std::vector<SlamKeyframeId
       b.obs_of.emplace_back(bp.id, k);
     }
   }
+  holdEachUnanchoredGroup(b.problem);
   return b;
 }
 

@@ -188,6 +188,41 @@ std::vector<Term> makeTerms(const ProjectionConstants& k, const BaProblem& pb, c
 
 }  // namespace
 
+int holdEachUnanchoredGroup(BaProblem& problem) {
+  const size_t n = problem.keyframes.size();
+  std::vector<size_t> root(n);
+  for (size_t i = 0; i < n; ++i) root[i] = i;
+  auto find = [&](size_t i) {
+    while (root[i] != i) i = root[i] = root[root[i]];
+    return i;
+  };
+  // Keyframes that see one point are in one group: each observation joins its keyframe to the point's
+  // first observer.
+  std::vector<size_t> first_seen(problem.points.size(), n);
+  for (const BaObservation& o : problem.observations) {
+    if (o.keyframe >= n || o.point >= first_seen.size()) continue;  // localBundleAdjustment names these
+    size_t& f = first_seen[o.point];
+    if (f == n) {
+      f = o.keyframe;
+    } else {
+      const size_t a = find(f), b = find(o.keyframe);
+      if (a == b) continue;
+      const bool a_older = problem.keyframes[a].id < problem.keyframes[b].id;
+      root[a_older ? b : a] = a_older ? a : b;  // each group's root is its oldest keyframe (lowest id)
+    }
+  }
+  std::vector<uint8_t> anchored(n, 0);
+  for (size_t i = 0; i < n; ++i)
+    if (problem.keyframes[i].fixed) anchored[find(i)] = 1;
+  int held = 0;
+  for (size_t i = 0; i < n; ++i) {
+    if (find(i) != i || anchored[i]) continue;
+    problem.keyframes[i].fixed = true;
+    ++held;
+  }
+  return held;
+}
+
 LocalBaResult localBundleAdjustment(const StereoCamera& camera, const BaProblem& pb,
                                     const LocalBaParams& params, std::atomic<bool>* abort) {
   const auto t0 = std::chrono::steady_clock::now();

@@ -52,6 +52,7 @@ Sections trackingSettings(TrackerParams& t) {
         {"local_map_radius", {S::kFloat, &t.local_map_radius, 0.1}},
         {"lost_radius", {S::kFloat, &t.lost_radius, 0.1}},
         {"predict_through_loss_s", {S::kDouble, &t.predict_through_loss_s, 0}},
+        {"restart_after_lost", {S::kInt, &t.restart_after_lost, 0}},
         {"recovery_min_gate_m", {S::kDouble, &t.recovery_min_gate_m, 0}},
         {"recovery_max_accel_mps2", {S::kDouble, &t.recovery_max_accel_mps2, 0}},
         {"min_inliers", {S::kInt, &t.min_inliers, 3}},

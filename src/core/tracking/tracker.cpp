@@ -147,6 +147,8 @@ bool Tracker::trackInMap(Frame& f, int mapping_queue, Output* out) {
   if (ok && p_.localize_only && !relocalized && inliers_ < p_.localize_relocalize_below)
     relocalized = relocalizeAsWell(f);
   if (pred.hinted && (ok || --hint_->frames_left <= 0)) hint_.reset();
+  lost_in_a_row_ = ok ? 0 : lost_in_a_row_ + 1;
+  if (!ok && restartAtPrediction(f, pred, out)) return true;
   if (!ok) {
     state_ = msg::TrackingState::kLost;
     tf.state = state_;
@@ -174,6 +176,28 @@ bool Tracker::trackInMap(Frame& f, int mapping_queue, Output* out) {
   velocity_dt_ = pred.dt > 0 ? pred.dt : 1;
   have_velocity_ = !relocalized;
   if (!p_.localize_only && needKeyframe(f, mapping_queue)) out->keyframe = makeKeyframe(f);
+  return true;
+}
+
+bool Tracker::restartAtPrediction(Frame& f, const Prediction& pred, Output* out) {
+  if (p_.restart_after_lost <= 0 || lost_in_a_row_ < p_.restart_after_lost || !pred.from_motion ||
+      pred.hinted || p_.localize_only || f.stereo_matches < p_.init_min_stereo)
+    return false;
+  const int lost = lost_in_a_row_;
+  f.clearMatches();
+  f.T_w_c = pred.T_w_c;
+  reference_ = last_ref_;  // the new keyframe's parent: the old map's keyframe the prediction came from
+  out->keyframe = makeKeyframe(f);
+  local_keyframes_ = {reference_};
+  inliers_ = 0;
+  lost_in_a_row_ = 0;
+  state_ = msg::TrackingState::kOk;
+  // The velocity stays: the car is still moving as it was predicted to.
+  msg::TrackedFrame& tf = out->frame;
+  tf.state = state_;
+  tf.problem = "lost for " + std::to_string(lost) + " frames: tracking started again at the motion model's " +
+               "prediction after " + fixedDecimals(pred.dt, 1) + " s, in a new map segment (keyframe " +
+               std::to_string(out->keyframe->id) + ") tied to the old one by that prediction alone";
   return true;
 }
 

@@ -229,6 +229,23 @@ TEST(LocalBundleAdjustment, FixedKeyframesDoNotMove) {
   EXPECT_LT(share_flagged(freed), 0.05);
 }
 
+// Two groups of keyframes that share no point: the one with a fixed keyframe keeps it as its only anchor,
+// the other gets its oldest keyframe (lowest id, wherever it stands in the list) held.
+TEST(LocalBundleAdjustment, EachGroupWithoutAnAnchorHoldsItsOldestKeyframe) {
+  BaProblem p;
+  for (uint64_t id : {7, 3, 5, 9, 4}) p.keyframes.push_back({id, Pose3::Identity(), false});
+  p.keyframes[0].fixed = true;  // keyframe 7 anchors the group {7, 3}
+  for (uint64_t i = 0; i < 3; ++i) p.points.push_back({i, Eigen::Vector3d(0, 0, 10)});
+  auto see = [&](size_t kf, size_t pt) { p.observations.push_back({kf, pt, {1, 1}, -1, 1}); };
+  see(0, 0), see(1, 0);             // 7 and 3 share point 0
+  see(2, 1), see(3, 1), see(3, 2);  // 5 and 9 share point 1; 9 sees point 2 too
+  see(4, 2);                        // and 4 shares point 2 with 9: {5, 9, 4}, the oldest is 4
+  EXPECT_EQ(holdEachUnanchoredGroup(p), 1);
+  const std::vector<bool> fixed{true, false, false, false, true};
+  for (size_t i = 0; i < fixed.size(); ++i) EXPECT_EQ(p.keyframes[i].fixed, fixed[i]) << "keyframe " << i;
+  EXPECT_EQ(holdEachUnanchoredGroup(p), 0) << "every group is anchored now";
+}
+
 TEST(LocalBundleAdjustment, BitIdenticalAcrossRuns) {
   const Window w = makeWindow(spec(600, 2));
   const LocalBaResult a = localBundleAdjustment(w.cam, w.problem),
