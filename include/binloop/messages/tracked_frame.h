@@ -25,7 +25,9 @@ struct TrackedFrame {
   // error in the world frame, then the rotation's about the world axes; all zero: unknown (not tracked).
   Matrix6d pose_covariance = Matrix6d::Zero();
   int features = 0, stereo_matches = 0, tracked_points = 0;
-  std::string problem;  // why the frame was not tracked (bad input, lost), empty otherwise
+  // Why the frame was not tracked (bad input, lost), or that tracking started again at the motion model's
+  // prediction (Tracker, restart_after_lost); empty otherwise.
+  std::string problem;
   double extract_ms = 0, stereo_ms = 0, track_ms = 0;
 };
 

@@ -143,7 +143,7 @@ struct RecognizerOptions {
   double fabmap_l2_offset = 0.05;  // see FabmapRecognizer
   double hbow_min_bar = 0.005;     // see HbowRecognizer
   int vladpq_shared_slack = 1;     // see VladPqRecognizer
-  int vlad_reference_rank = 3;     // see VladRecognizer, HmvladRecognizer
+  int vlad_reference_rank = 3;     // see VladRecognizer, HmvladRecognizer, VladPqRecognizer
   RankingParams ranking{};
   /// The extractor whose descriptors add() will get (extractor.expected; e.g.
   /// extractorSettings(OrbSlamParams) from features/orb_slam_extractor.h) and what to do when the model

@@ -40,18 +40,18 @@ struct TrackerParams {
   // because a frame was black, and on repetitive facades a pose found without any prior can be off by one
   // facade (rendered 06: 874 inliers 2.3 m from the truth).
   double predict_through_loss_s = 3.0;
+  // After this many frames lost in a row while the motion model still predicts, tracking starts again at
+  // its prediction: the frame becomes a keyframe with points from its own stereo, the first of a new map
+  // segment whose only tie to the old map is that prediction (its spanning-tree parent, in the pose graph)
+  // until a loop joins the two. After 20 missing frames (11-30 m) the map holds too little of the view to
+  // be found again from half the places of rendered 06, and without this tracking stayed lost for good.
+  // 0: stay lost until relocalised.
+  int restart_after_lost = 3;
   // A pose recovered while the motion model still predicts must be one the camera could have reached: within
   // recovery_min_gate_m + 1/2 a dt^2 of the prediction (a = recovery_max_accel_mps2, dt since the last
   // tracked frame); farther, the frame stays lost. A road whose texture repeated every 8 m let rendered 06
   // relocalise 24 m and 40 m behind the truth after 10 and 20 missing frames, and the next keyframes then
   // mapped there.
-  // After this many frames lost in a row while the motion model still predicts, tracking starts again at
-  // its prediction: the frame becomes a keyframe with points from its own stereo, the first of a new map
-  // segment whose only tie to the old map is that prediction (its spanning-tree parent, in the pose graph)
-  // until a loop joins the two. After 20 missing frames (26-30 m) the map holds too little of the view to
-  // be found again from half the places of rendered 06, and without this tracking stayed lost for good.
-  // 0: stay lost until relocalised.
-  int restart_after_lost = 3;
   double recovery_min_gate_m = 1.0;
   double recovery_max_accel_mps2 = 5.0;
   int min_inliers = 30;  // a frame is tracked with at least this many inliers after the local map
@@ -240,6 +240,7 @@ class Tracker {
   std::vector<SlamKeyframeId> local_keyframes_;
   int inliers_ = 0;
   int lost_in_a_row_ = 0;
+  bool restarted_ = false;  // restarted at a prediction, and no frame tracked since
   uint64_t reloc_attempts_ = 0;
   uint64_t corrections_seen_ = 0;  // loop corrections applied (through local mapping's updates)
   std::unique_ptr<KeyframeDatabase> keyframe_db_;  // with a vocabulary only

@@ -359,7 +359,13 @@ bool LoopCloser::correct(const std::vector<LoopEdge>& new_loops,
                          Output* out) {
   const auto t0 = std::chrono::steady_clock::now();
   std::vector<msg::KeyframeState> kfs;
-  for (SlamKeyframeId id : order_) kfs.push_back(states_.at(id));
+  for (SlamKeyframeId id : order_) {
+    kfs.push_back(states_.at(id));
+    // A keyframe with no covisible one (a map segment's first) is tied to the rest by its tree edge alone:
+    // a culled parent hands it to the nearest held ancestor rather than drop it.
+    msg::KeyframeState& k = kfs.back();
+    if (k.covisible.empty() && k.parent != kNoId && !states_.count(k.parent)) k.parent = standIn(k.parent);
+  }
   const std::vector<SlamKeyframeId> fixed{first_, new_loops.front().candidate};
   EssentialGraph g = buildEssentialGraph(kfs, loops_, new_loops.front(), fixed, p_.graph);
   // A confirmed held loop goes in as a second loop edge with its own measurement.

@@ -166,7 +166,12 @@ void LocalMapper::updateConnections(KF& kf) {
       (kf.state.parent == kNoId || !map_.keyframes().count(kf.state.parent) ||
        kf.state.parent == kf.state.id))
     kf.state.parent = kf.state.covisible.front().id;
-  if (kf.state.parent != kNoId && !map_.keyframes().count(kf.state.parent)) kf.state.parent = kNoId;
+  // A keyframe that shares no point (a map segment's first) keeps its tie through a culled parent's nearest
+  // held ancestor: it is its only one.
+  if (kf.state.parent != kNoId && !map_.keyframes().count(kf.state.parent)) {
+    kf.state.parent = map_.firstAncestor(kf.state.parent,
+                                         [this](SlamKeyframeId k) { return map_.keyframes().count(k) > 0; });
+  }
 }
 
 void LocalMapper::removePoint(MapPointId id) {

@@ -155,6 +155,10 @@ msg::LocalMapUpdatePtr LocalMapper::mergeGlobalBa(bool wait) {
   std::unordered_map<SlamKeyframeId, Pose3> delta;
   for (const BaRefinedKeyframe& rk : job->result.keyframes)
     delta[rk.id] = rk.T_c_w.inverse() * start.keyframes[rk.index].T_c_w;
+  // A held keyframe stays where it is, not where its ancestor's delta would carry it: a map segment's first
+  // keyframe (holdEachUnanchoredGroup) has its parent in the old map.
+  for (const BaKeyframe& k : start.keyframes)
+    if (k.fixed) delta.emplace(k.id, Pose3::Identity());
   std::unordered_map<MapPointId, Eigen::Vector3d> placed;
   for (size_t i = 0; i < job->result.points.size(); ++i) {  // in the problem's order
     if (auto p = map_.points().find(start.points[i].id);

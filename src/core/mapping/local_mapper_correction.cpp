@@ -50,9 +50,9 @@ msg::LocalMapUpdatePtr LocalMapper::apply(const msg::Correction& c) {
     u->points_fused_across_loop = static_cast<int>(u->fused.size());
   }
 
-  // Global BA (optional): every keyframe and point, the first keyframe held. In the background it runs on
-  // a copy and is merged later (mergeGlobalBa); otherwise here, before the update, so that tracking gets its
-  // result with the correction.
+  // Global BA (optional): every keyframe and point, the first keyframe held (and a map segment's first, by
+  // holdEachUnanchoredGroup, until a loop joins it). In the background it runs on a copy and is merged later
+  // (mergeGlobalBa); otherwise here, before the update, so that tracking gets its result with the correction.
   if (p_.global_ba_after_loop) {
     std::vector<SlamKeyframeId> all;
     for (SlamKeyframeId id : ids)

@@ -147,7 +147,9 @@ bool Tracker::trackInMap(Frame& f, int mapping_queue, Output* out) {
   if (ok && p_.localize_only && !relocalized && inliers_ < p_.localize_relocalize_below)
     relocalized = relocalizeAsWell(f);
   if (pred.hinted && (ok || --hint_->frames_left <= 0)) hint_.reset();
-  lost_in_a_row_ = ok ? 0 : lost_in_a_row_ + 1;
+  // Frames searched near a pose hint do not count: when the hint runs out, the operator's pose had its go.
+  lost_in_a_row_ = ok || pred.hinted ? 0 : lost_in_a_row_ + 1;
+  if (ok) restarted_ = false;
   if (!ok && restartAtPrediction(f, pred, out)) return true;
   if (!ok) {
     state_ = msg::TrackingState::kLost;
@@ -180,8 +182,10 @@ bool Tracker::trackInMap(Frame& f, int mapping_queue, Output* out) {
 }
 
 bool Tracker::restartAtPrediction(Frame& f, const Prediction& pred, Output* out) {
-  if (p_.restart_after_lost <= 0 || lost_in_a_row_ < p_.restart_after_lost || !pred.from_motion ||
-      pred.hinted || p_.localize_only || f.stereo_matches < p_.init_min_stereo)
+  // One restart until a frame is tracked again: a restarted frame resets the prediction's clock, and a
+  // camera that keeps failing would otherwise be dead-reckoned segment after segment for ever.
+  if (p_.restart_after_lost <= 0 || lost_in_a_row_ < p_.restart_after_lost || restarted_ ||
+      !pred.from_motion || pred.hinted || p_.localize_only || f.stereo_matches < p_.init_min_stereo)
     return false;
   const int lost = lost_in_a_row_;
   f.clearMatches();
@@ -191,12 +195,14 @@ bool Tracker::restartAtPrediction(Frame& f, const Prediction& pred, Output* out)
   local_keyframes_ = {reference_};
   inliers_ = 0;
   lost_in_a_row_ = 0;
+  restarted_ = true;
   state_ = msg::TrackingState::kOk;
   // The velocity stays: the car is still moving as it was predicted to.
   msg::TrackedFrame& tf = out->frame;
   tf.state = state_;
-  tf.problem = "lost for " + std::to_string(lost) + " frames: tracking started again at the motion model's " +
-               "prediction after " + fixedDecimals(pred.dt, 1) + " s, in a new map segment (keyframe " +
+  tf.problem = "not found in the map for " + std::to_string(lost) +
+               " frames in a row: tracking started again at the motion model's prediction after " +
+               fixedDecimals(pred.dt, 1) + " s, in a new map segment (keyframe " +
                std::to_string(out->keyframe->id) + ") tied to the old one by that prediction alone";
   return true;
 }
