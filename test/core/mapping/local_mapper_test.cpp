@@ -143,6 +143,37 @@ TEST_F(LocalMapperTest, CovisibilityCountsSharedPointsAndTheSpanningTreeFollowsT
   EXPECT_EQ(m.pointCount(), 200u);
 }
 
+// A map segment tracking started afresh after it was lost (Tracker, restart_after_lost): its first keyframe
+// shares no point with the map and hangs from the parent tracking gave it. That parent stays (the segment's
+// only tie), the next keyframe of the segment takes the first as its parent, and the segment's BA holds its
+// oldest keyframe, so a second keyframe placed 0.2 m off moves onto the first's points and not the reverse.
+TEST_F(LocalMapperTest, ANewMapSegmentKeepsItsParentAndItsFirstKeyframeIsHeld) {
+  for (int i = 0; i < 300; ++i) addPoint({rng.uniform(-6, 6), rng.uniform(-2, 1), rng.uniform(8, 18)});
+  for (int i = 0; i < 200; ++i) addPoint({rng.uniform(-6, 6), rng.uniform(-2, 1), rng.uniform(48, 58)});
+  LocalMapperParams p;
+  p.triangulate = p.fuse = p.cull_keyframes = false;
+  p.cull_min_observers = 1;
+  LocalMapper m(p);
+  const msg::KeyFrame k1 = keyframe(0, range(0, 150), true);
+  const msg::KeyFrame k2 = keyframe(0.5, range(100, 300), true);
+  msg::KeyFrame k3 = keyframe(40, range(300, 500), true);  // 40 m on: nothing of k1's or k2's in view
+  k3.state.parent = k2.id;
+  msg::KeyFrame k4 = keyframe(40.5, range(300, 500), false);
+  k4.state.T_w_c.translation() += Eigen::Vector3d(0.1, 0, 0.2);  // where tracking put it, 0.22 m off
+  m.process(k1);
+  m.process(k2);
+  const auto o3 = m.process(k3);
+  EXPECT_TRUE(o3.refined->state.covisible.empty());
+  EXPECT_EQ(o3.refined->state.parent, k2.id);
+  const auto o4 = m.process(k4);
+  EXPECT_EQ(o4.refined->state.parent, k3.id);
+  Pose3 T3, T4;
+  ASSERT_TRUE(m.keyframePose(k3.id, &T3));
+  ASSERT_TRUE(m.keyframePose(k4.id, &T4));
+  EXPECT_EQ(T3.translation(), k3.state.T_w_c.translation()) << "the segment's first keyframe moved";
+  EXPECT_LT((T4.translation() - Eigen::Vector3d(0, 0, 40.5)).norm(), 0.01) << "the second did not";
+}
+
 TEST_F(LocalMapperTest, KeypointsWithoutStereoSeenFromTwoKeyframesBecomePoints) {
   LocalMapperParams p;
   p.cull_keyframes = false;
