@@ -158,6 +158,7 @@ binloop::KeyFrame toRos(const core::KeyFrame& kf, const std::string& frame_id) {
   m.state = toRos(kf.state);
   convertAll(kf.new_points, &m.new_points);
   m.corrections_seen = kf.corrections_seen;
+  m.merges_seen = kf.merges_seen;
   m.resent = kf.resent;
   return m;
 }
@@ -208,6 +209,7 @@ core::KeyFrame fromRos(const binloop::KeyFrame& m) {
   kf.state = fromRos(m.state);
   convertAllBack(m.new_points, &kf.new_points);
   kf.corrections_seen = m.corrections_seen;
+  kf.merges_seen = m.merges_seen;
   kf.resent = m.resent;
   // What every stage needs of a keyframe (ids, counts), checked as the stages check it.
   if (const std::string bad = binloop::msg::keyframeShapeProblem(kf); !bad.empty())
@@ -226,6 +228,7 @@ binloop::LocalMapUpdate toRos(const core::LocalMapUpdate& u, const std_msgs::Hea
   m.culled_points = u.culled_points;
   m.culled_keyframes = u.culled_keyframes;
   m.corrections_seen = u.corrections_seen;
+  m.merges_seen = u.merges_seen;
   m.correction = u.correction;
   m.whole_map = u.whole_map;
   m.tracking_keyframe_ids = u.tracking_keyframe_ids;
@@ -250,6 +253,7 @@ core::LocalMapUpdate fromRos(const binloop::LocalMapUpdate& m) {
   u.culled_points = m.culled_points;
   u.culled_keyframes = m.culled_keyframes;
   u.corrections_seen = m.corrections_seen;
+  u.merges_seen = m.merges_seen;
   u.correction = m.correction;
   u.whole_map = m.whole_map;
   u.tracking_keyframe_ids = m.tracking_keyframe_ids;

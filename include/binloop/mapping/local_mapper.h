@@ -206,6 +206,9 @@ class LocalMapper {
   uint64_t seq_ = 0, updates_ = 0;
   SlamKeyframeId first_kf_ = kNoId;
   CorrectionHistory history_;
+  // What each global BA merge did to each keyframe, for keyframes tracking made before the merge reached it
+  // (KeyFrame::merges_seen). Not saved: a loaded or resumed map counts merges from 0, as tracking then does.
+  CorrectionHistory merges_;
   std::unique_ptr<GlobalBaJob> gba_;
   GlobalBaStats global_ba_;
 };

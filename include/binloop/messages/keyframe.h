@@ -35,6 +35,9 @@ struct KeyFrame {
   // Loop corrections its creator had applied when it made it (Correction::sequence). A receiver that has
   // applied more moves the pose and new points with the parent's correction (messages/correction.h).
   uint64_t corrections_seen = 0;
+  // Global BA results local mapping had merged (LocalMapUpdate::merges_seen) in the map its creator tracked
+  // in. A keyframe made before a merge reached tracking moves as its parent did in that merge.
+  uint64_t merges_seen = 0;
   // Sent again by local mapping to a loop stage that (re)started (LocalMapper::keyframeMessages): a keyframe
   // of the map to hold and index, not a new one to search for loops with.
   bool resent = false;

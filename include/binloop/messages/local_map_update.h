@@ -18,8 +18,11 @@ struct LocalMapUpdate {
   std::vector<MapPointId> culled_points;
   std::vector<SlamKeyframeId> culled_keyframes;
   uint64_t corrections_seen = 0;  // loop corrections applied before it was made (Correction::sequence)
-  bool correction = false;        // the whole map after a loop correction, not one keyframe's processing
-  bool whole_map = false;  // the whole map sent again to a stage that (re)started (LocalMapper::wholeMap)
+  // Global BA results merged before it was made, counted by the mapper that sent it (not saved with a map:
+  // a loaded or resumed mapper counts from 0 again, and tracking follows its count).
+  uint64_t merges_seen = 0;
+  bool correction = false;  // the whole map after a loop correction or a global BA, not one keyframe's
+  bool whole_map = false;   // the whole map sent again to a stage that (re)started (LocalMapper::wholeMap)
   // With whole_map: the highest counters of tracking's keyframe and point ids the map holds or still refers
   // to (culled keyframes, fused points), so that a restarted tracker issues none of them again.
   uint64_t tracking_keyframe_ids = 0, tracking_point_ids = 0;

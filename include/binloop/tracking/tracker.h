@@ -243,6 +243,7 @@ class Tracker {
   bool restarted_ = false;  // restarted at a prediction, and no frame tracked since
   uint64_t reloc_attempts_ = 0;
   uint64_t corrections_seen_ = 0;  // loop corrections applied (through local mapping's updates)
+  uint64_t merges_seen_ = 0;       // global BA results merged, as the mapper last counted them
   std::unique_ptr<KeyframeDatabase> keyframe_db_;  // with a vocabulary only
   struct PoseHint {
     Pose3 T_w_c;

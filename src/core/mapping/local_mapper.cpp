@@ -77,11 +77,15 @@ void LocalMapper::insert(const msg::KeyFrame& in) {
   }
   if (scales_.levels() == 0) scales_ = ScalePyramid(in.scale_factor, in.levels);
   camera_ = in.camera;
-  // Made before a loop correction tracking had not heard of yet: it moves as its parent did.
-  const bool is_late = in.corrections_seen < history_.applied();
-  const Pose3 late = is_late ? history_.adopt(in.corrections_seen, in.id, in.state.parent,
-                                              [this](SlamKeyframeId a) { return map_.culledParent(a); })
-                             : Pose3::Identity();
+  // Made before a loop correction or a global BA merge tracking had not heard of yet: it moves as its parent
+  // did (the correction first: a merge follows the loop it was started for).
+  const auto up = [this](SlamKeyframeId a) { return map_.culledParent(a); };
+  const bool late_for_loop = in.corrections_seen < history_.applied();
+  const bool late_for_merge = in.merges_seen < merges_.applied();
+  const bool is_late = late_for_loop || late_for_merge;
+  Pose3 late = Pose3::Identity();
+  if (late_for_loop) late = history_.adopt(in.corrections_seen, in.id, in.state.parent, up);
+  if (late_for_merge) late = merges_.adopt(in.merges_seen, in.id, in.state.parent, up) * late;
   KF& kf = map_.keyframes()[in.id];
   kf.state = in.state;
   kf.state.covisible.clear();
@@ -233,6 +237,7 @@ LocalMapper::Output LocalMapper::process(const msg::KeyFrame& in) {
     if (it != map_.points().end()) u->points.push_back(it->second.state);
   }
   u->corrections_seen = history_.applied();
+  u->merges_seen = merges_.applied();
   u->total_ms = msSince(t0);
 
   auto refined = messageOf(kf);
@@ -284,6 +289,7 @@ std::shared_ptr<msg::KeyFrame> LocalMapper::messageOf(const KF& kf) const {
   m->descriptors = kf.descriptors;
   m->state = kf.state;
   m->corrections_seen = history_.applied();  // its pose is already in the corrected map's frame
+  m->merges_seen = merges_.applied();
   return m;
 }
 
@@ -322,6 +328,7 @@ void LocalMapper::wholeMapInto(msg::LocalMapUpdate& u) const {
   for (const auto& [id, mp] : map_.points()) u.points.push_back(mp.state);
   std::sort(u.points.begin(), u.points.end(), [](const auto& a, const auto& b) { return a.id < b.id; });
   u.corrections_seen = history_.applied();
+  u.merges_seen = merges_.applied();
 }
 
 }  // namespace binloop

@@ -167,7 +167,9 @@ msg::LocalMapUpdatePtr LocalMapper::mergeGlobalBa(bool wait) {
   }
   size_t added = 0;
   for (const auto& [id, kf] : map_.keyframes()) added += kf.seq > job->seq_at_start;
-  moveMap(delta, &placed);
+  // Recorded as a loop correction is: a keyframe tracking made before this merge reached it moves with it.
+  merges_.begin(merges_.applied() + 1);
+  for (const auto& [id, d] : moveMap(delta, &placed)) merges_.note(id, d);
   removeBaOutliers(job->setup, job->result, *u);
   for (auto& [id, kf] : map_.keyframes()) updateConnections(kf);
   const double ms = 1000 * job->result.time_s;

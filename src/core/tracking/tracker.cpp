@@ -655,6 +655,7 @@ msg::KeyFramePtr Tracker::makeKeyframe(Frame& f) {
   kf->state.T_w_c = f.T_w_c;
   kf->state.parent = reference_;
   kf->corrections_seen = corrections_seen_;
+  kf->merges_seen = merges_seen_;
   kf->state.point_ids.assign(f.size(), kNoId);
   for (size_t i = 0; i < f.size(); ++i)
     if (f.points[i] != kNoId && !f.outlier[i]) kf->state.point_ids[i] = map_.resolve(f.points[i]);
@@ -702,9 +703,13 @@ void Tracker::restartClock() {
 }
 
 void Tracker::apply(const msg::LocalMapUpdate& u) {
-  // Keyframes made since mapping sent its corrected map are carried along, as mapping will carry them.
-  map_.apply(u, u.correction && u.corrections_seen > corrections_seen_);
+  // Keyframes made since mapping sent its corrected map (after a loop correction or a global BA merge) are
+  // carried along, as mapping will carry them when they reach it (they name the counts they were made at).
+  // The merge count follows the mapper's own: a mapper that resumed from a save counts from 0 again.
+  const bool moved = u.corrections_seen > corrections_seen_ || u.merges_seen != merges_seen_;
+  map_.apply(u, u.correction && moved);
   corrections_seen_ = std::max(corrections_seen_, u.corrections_seen);
+  merges_seen_ = u.merges_seen;
   if (keyframe_db_)
     for (SlamKeyframeId k : u.culled_keyframes) keyframe_db_->remove(k);
 }

@@ -85,6 +85,7 @@ void Tracker::adoptMap(const msg::LocalMapUpdate& whole) {
     throw std::invalid_argument("tracking has started already; a map is adopted by a new tracker");
   map_.apply(whole);
   corrections_seen_ = whole.corrections_seen;
+  merges_seen_ = whole.merges_seen;
   // A tracker restarted alone counts its ids from 1 again, and mapping refuses ids it holds: go on after
   // the highest of this tracker's issuer in the map.
   // It has issued none yet, but a tracker that took another's place counts in a new session already.

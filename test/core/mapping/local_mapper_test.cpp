@@ -410,5 +410,69 @@ TEST_F(LocalMapperTest, ACorrectionMovesKeyframesWithTheirParentAndPointsWithThe
   }
 }
 
+// The background global BA finds k3 0.5 m from where tracking put it and moves it back. Tracking had made k4
+// on k3 before that merge reached it, so k4 and its points are 0.5 m off too; arriving after the merge, k4
+// moves with k3 (KeyFrame::merges_seen), as after a loop correction. Without that, a keyframe of rendered 05
+// at 1x stayed 1.1 m off with every keyframe tracked after it (docs/results/2026-11-27-merge-race.md).
+TEST_F(LocalMapperTest, AKeyframeMadeBeforeAGlobalBaMergeMovesWithItsParent) {
+  for (int i = 0; i < 300; ++i) addPoint({rng.uniform(-6, 6), rng.uniform(-2, 1), rng.uniform(8, 18)});
+  LocalMapperParams p;
+  p.triangulate = p.fuse = p.local_ba = p.cull_keyframes = false;
+  p.global_ba_in_background = true;
+  p.cull_min_observers = 1;
+  LocalMapper m(p);
+  Pose3 off = Pose3::Identity();
+  off.translation() = Eigen::Vector3d(0.5, 0, 0);
+  const auto offBy = [&](msg::KeyFrame kf) {  // as tracking saw it, in a map 0.5 m off
+    kf.state.T_w_c = off * kf.state.T_w_c;
+    for (msg::MapPoint& mp : kf.new_points) mp.p_w = off * mp.p_w;
+    return kf;
+  };
+  const msg::KeyFrame k1 = keyframe(0, range(0, 120), true);
+  const msg::KeyFrame k2 = keyframe(0.5, range(20, 160), true);
+  const msg::KeyFrame truth3 = keyframe(1.0, range(60, 220), true);
+  const msg::KeyFrame k3 = offBy(truth3);
+  m.process(k1);
+  m.process(k2);
+  m.process(k3);
+  msg::KeyFrame truth4 = keyframe(1.5, range(160, 300), true);
+  truth4.state.parent = k3.id;
+  const msg::KeyFrame k4 = offBy(truth4);  // made on k3 before the merge, merges_seen 0
+
+  msg::Correction c;  // a loop that moves nothing; the global BA it starts does the work
+  c.sequence = 1;
+  c.query = k3.id;
+  c.match = k1.id;
+  c.fuse_by_projection = false;
+  for (const msg::KeyFrame* k : {&k1, &k2, &k3})
+    c.keyframes.push_back({k->id, k->state.T_w_c, k->state.T_w_c});
+  ASSERT_NE(m.apply(c), nullptr);
+  const msg::LocalMapUpdatePtr merged = m.mergeGlobalBa(true);
+  ASSERT_NE(merged, nullptr) << "the global BA ran and was merged";
+  EXPECT_TRUE(merged->correction);
+  EXPECT_EQ(merged->merges_seen, 1u);
+  Pose3 T;
+  ASSERT_TRUE(m.keyframePose(k3.id, &T));
+  ASSERT_LT((T.translation() - truth3.state.T_w_c.translation()).norm(), 0.05) << "the BA moved k3 back";
+
+  const auto o4 = m.process(k4);
+  EXPECT_EQ(o4.update->merges_seen, 1u);
+  EXPECT_LT((o4.refined->state.T_w_c.translation() - truth4.state.T_w_c.translation()).norm(), 0.05);
+  int checked = 0;
+  for (const msg::MapPoint& mp : o4.update->points) {
+    if (mp.reference != k4.id) continue;
+    const auto it =
+        std::find_if(scene.begin(), scene.end(), [&](const ScenePoint& s) { return s.id == mp.id; });
+    ASSERT_NE(it, scene.end());
+    EXPECT_LT((mp.p_w - it->p_w).norm(), 0.05);
+    ++checked;
+  }
+  EXPECT_EQ(checked, 80) << "k4's new points";
+  msg::KeyFrame k5 = keyframe(2.0, range(200, 300), false);  // made after the merge reached tracking
+  k5.state.parent = k4.id;
+  k5.merges_seen = 1;
+  EXPECT_LT((m.process(k5).refined->state.T_w_c.translation() - k5.state.T_w_c.translation()).norm(), 1e-9);
+}
+
 }  // namespace
 }  // namespace binloop
