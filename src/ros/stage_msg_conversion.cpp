@@ -411,6 +411,8 @@ binloop::TrackedFrame toRos(const core::TrackedFrame& f, const std::string& fram
   m.features = f.features;
   m.stereo_matches = f.stereo_matches;
   m.tracked_points = f.tracked_points;
+  m.reference_points = f.reference_points;
+  m.mapping_queue = f.mapping_queue;
   m.problem = f.problem;
   m.extract_ms = f.extract_ms;
   m.stereo_ms = f.stereo_ms;
@@ -435,6 +437,8 @@ core::TrackedFrame fromRos(const binloop::TrackedFrame& m) {
   f.features = m.features;
   f.stereo_matches = m.stereo_matches;
   f.tracked_points = m.tracked_points;
+  f.reference_points = m.reference_points;
+  f.mapping_queue = m.mapping_queue;
   f.problem = m.problem;
   f.extract_ms = m.extract_ms;
   f.stereo_ms = m.stereo_ms;

@@ -153,7 +153,7 @@ FrameStats writeTiming(const fs::path& out, const std::vector<msg::TrackedFrame>
   for (const auto& m : slam.mappingTimes()) map_time[m.keyframe] = &m;
   std::ofstream timing(out / "timing.csv");
   timing << "frame,state,features,stereo_matches,tracked_points,keyframe,extract_ms,stereo_ms,track_ms,"
-            "mapping_ms,ba_ms,triangulation_ms,points_triangulated\n";
+            "mapping_ms,ba_ms,triangulation_ms,points_triangulated,reference_points,mapping_queue\n";
   std::vector<double> ex, stt, tr, mp, ba, tri;
   FrameStats s;
   for (const msg::TrackedFrame& tf : frames) {
@@ -164,7 +164,7 @@ FrameStats writeTiming(const fs::path& out, const std::vector<msg::TrackedFrame>
            << tf.extract_ms << "," << tf.stereo_ms << "," << tf.track_ms << ","
            << (kf ? it->second->total_ms : 0) << "," << (kf ? it->second->ba_ms : 0) << ","
            << (kf ? it->second->triangulation_ms : 0) << "," << (kf ? it->second->points_triangulated : 0)
-           << "\n";
+           << "," << tf.reference_points << "," << tf.mapping_queue << "\n";
     if (tf.features > 0) {
       ex.push_back(tf.extract_ms);
       stt.push_back(tf.stereo_ms);

@@ -302,6 +302,8 @@ TEST(StageMsgConversion, TrackedFrameRoundTrip) {
   a.features = 2000;
   a.stereo_matches = 900;
   a.tracked_points = 400;
+  a.reference_points = 310;
+  a.mapping_queue = 2;
   a.problem = "none";
   a.extract_ms = 20.5;
   a.stereo_ms = 4.25;
@@ -317,6 +319,8 @@ TEST(StageMsgConversion, TrackedFrameRoundTrip) {
   EXPECT_EQ(a.features, b.features);
   EXPECT_EQ(a.stereo_matches, b.stereo_matches);
   EXPECT_EQ(a.tracked_points, b.tracked_points);
+  EXPECT_EQ(a.reference_points, b.reference_points);
+  EXPECT_EQ(a.mapping_queue, b.mapping_queue);
   EXPECT_EQ(a.problem, b.problem);
   EXPECT_EQ(a.extract_ms, b.extract_ms);
   EXPECT_EQ(a.stereo_ms, b.stereo_ms);

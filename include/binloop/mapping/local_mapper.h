@@ -194,6 +194,12 @@ class LocalMapper {
   void removeKeyframe(SlamKeyframeId id);
   std::vector<SlamKeyframeId> neighbors(const KF& kf, int n) const;
   MapPointId resolve(MapPointId id) const;
+  /// What a message sent now has seen: both counts together, so that they never drift apart.
+  template <class Message>
+  void stampSeen(Message& m) const {
+    m.corrections_seen = history_.applied();
+    m.merges_seen = merges_.applied();
+  }
 
   LocalMapperParams p_;
   ScalePyramid scales_;

@@ -214,7 +214,9 @@ class Tracker {
   /// whose point the replica no longer holds is dropped from the frame.
   std::vector<PoseObservation> observationsOf(Frame& f, std::vector<int>* index) const;
   void updateLocalKeyframes(const Frame& f);
-  bool needKeyframe(const Frame& f, int mapping_queue) const;
+  /// The reference keyframe's points seen by enough keyframes to count (ORB-SLAM2's nRefMatches).
+  int referencePoints() const;
+  bool needKeyframe(const Frame& f, int mapping_queue, int reference_points) const;
   /// Tracking's fresh start at the prediction (`restart_after_lost`), when its conditions hold.
   bool restartAtPrediction(Frame& f, const Prediction& pred, Output* out);
   msg::KeyFramePtr makeKeyframe(Frame& f);

@@ -236,8 +236,7 @@ LocalMapper::Output LocalMapper::process(const msg::KeyFrame& in) {
     auto it = map_.points().find(id);
     if (it != map_.points().end()) u->points.push_back(it->second.state);
   }
-  u->corrections_seen = history_.applied();
-  u->merges_seen = merges_.applied();
+  stampSeen(*u);
   u->total_ms = msSince(t0);
 
   auto refined = messageOf(kf);
@@ -288,8 +287,7 @@ std::shared_ptr<msg::KeyFrame> LocalMapper::messageOf(const KF& kf) const {
   m->keypoints = kf.keypoints;
   m->descriptors = kf.descriptors;
   m->state = kf.state;
-  m->corrections_seen = history_.applied();  // its pose is already in the corrected map's frame
-  m->merges_seen = merges_.applied();
+  stampSeen(*m);  // its pose is already in the corrected and merged map's frame
   return m;
 }
 
@@ -327,8 +325,7 @@ void LocalMapper::wholeMapInto(msg::LocalMapUpdate& u) const {
   for (SlamKeyframeId id : ids) u.keyframes.push_back(map_.keyframes().at(id).state);
   for (const auto& [id, mp] : map_.points()) u.points.push_back(mp.state);
   std::sort(u.points.begin(), u.points.end(), [](const auto& a, const auto& b) { return a.id < b.id; });
-  u.corrections_seen = history_.applied();
-  u.merges_seen = merges_.applied();
+  stampSeen(u);
 }
 
 }  // namespace binloop

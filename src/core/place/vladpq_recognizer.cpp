@@ -101,7 +101,7 @@ QueryResult VladPqRecognizer::querySignature(const SlotScope& scope) const {
   double bar = std::numeric_limits<double>::max(), rank_bar = bar;
   if (refs) {
     bar = rankedDistance(ref_distance, reference_rank_);
-    rank_bar = *std::min_element(ref_distance.begin(), ref_distance.end());
+    rank_bar = rankedDistance(ref_distance, 1);
   }
   r.timings.push_back({"reference", msSince(t)});
   if (!refs) {

@@ -177,7 +177,10 @@ bool Tracker::trackInMap(Frame& f, int mapping_queue, Output* out) {
   velocity_ = pred.last_pose.inverse() * f.T_w_c;
   velocity_dt_ = pred.dt > 0 ? pred.dt : 1;
   have_velocity_ = !relocalized;
-  if (!p_.localize_only && needKeyframe(f, mapping_queue)) out->keyframe = makeKeyframe(f);
+  tf.mapping_queue = mapping_queue;
+  tf.reference_points = referencePoints();
+  if (!p_.localize_only && needKeyframe(f, mapping_queue, tf.reference_points))
+    out->keyframe = makeKeyframe(f);
   return true;
 }
 
@@ -608,18 +611,21 @@ bool Tracker::trackLocalMap(Frame& f, float radius, int min_inliers) {
   return inliers_ >= min_inliers;
 }
 
-bool Tracker::needKeyframe(const Frame& f, int mapping_queue) const {
-  if (mapping_queue >= p_.max_mapping_queue) return false;
-  const size_t kfs = map_.keyframeCount();
+int Tracker::referencePoints() const {
   const size_t min_obs =
-      std::min<size_t>(kfs <= 2 ? 2 : 3, static_cast<size_t>(p_.keyframe_ref_min_observers));
-  int ref_matches = 0;
+      std::min<size_t>(map_.keyframeCount() <= 2 ? 2 : 3, static_cast<size_t>(p_.keyframe_ref_min_observers));
+  int n = 0;
   if (const msg::KeyframeState* ref = map_.keyframe(reference_)) {
     for (MapPointId id : ref->point_ids) {
-      if (id != kNoId && map_.resolve(id) != kNoId && map_.observers(map_.resolve(id)).size() >= min_obs)
-        ++ref_matches;
+      if (id != kNoId && map_.resolve(id) != kNoId && map_.observers(map_.resolve(id)).size() >= min_obs) ++n;
     }
   }
+  return n;
+}
+
+bool Tracker::needKeyframe(const Frame& f, int mapping_queue, int ref_matches) const {
+  if (mapping_queue >= p_.max_mapping_queue) return false;
+  const size_t kfs = map_.keyframeCount();
   int tracked_close = 0, untracked_close = 0;
   for (size_t i = 0; i < f.size(); ++i) {
     const float d = f.keypoints[i].depth;

@@ -107,6 +107,17 @@ TEST(SlamPipeline, RenderedRoute06StretchIsTrackedWithLowDrift) {
   const auto tracked = runOn(s->frames, s->cam, PipelineMode::kLockStep, &poses);
   for (const auto& tf : tracked)
     ASSERT_EQ(tf.state, msg::TrackingState::kOk) << "frame " << tf.frame_index << ": " << tf.problem;
+  // What each keyframe decision weighed: in lock-step nothing waits for mapping, and once a second keyframe
+  // is mapped the reference holds points other keyframes see (about 300-500 here; with one keyframe, none).
+  size_t second = 1;
+  while (second < tracked.size() && tracked[second].new_keyframe == kNoId) ++second;
+  ASSERT_LT(second, 20u);
+  for (size_t i = 1; i < tracked.size(); ++i) {
+    EXPECT_EQ(tracked[i].mapping_queue, 0) << "frame " << i;
+    if (i > second) {
+      EXPECT_GT(tracked[i].reference_points, 100) << "frame " << i;
+    }
+  }
   MatchedPoses m;
   for (size_t i = 0; i < poses.size(); ++i) {
     m.frames.push_back(static_cast<int>(i));
