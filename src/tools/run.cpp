@@ -344,7 +344,7 @@ int main(int argc, char** argv) {
       throw CliError("--rate paces a threaded run; --lockstep waits for mapping at every keyframe");
     std::cerr << "run: " << seq.directory() << ", frames " << start << "-" << end - 1 << ", "
               << (lockstep ? "lock-step" : "threaded") << "\n"
-              << seq.camera().describe();
+              << seq.camera().describe() << "\n";
 
     std::optional<LoopClosingSetup> loops;
     if (detector != "none") loops = loopClosingSetup(args, config, detector);

@@ -69,10 +69,16 @@ struct ExtractorCheck {
   std::string force_hint = "--force-extractor";
   /// Where warnings go (one line each, no "warning:" prefix); empty: std::cerr as "warning: <line>".
   std::function<void(const std::string&)> warn;
+  /// The caller describes images at the size they come in and cannot scale them as the model's training
+  /// images were (the SLAM: a keyframe's descriptors are tracking's): a model that differs only in that
+  /// scaling (ExtractorSettings::max_side) is loaded with a warning instead of refused.
+  bool images_as_they_come = false;
 };
 
 /// Compares the header's extractor with `c.expected` (nothing when `expected` is unknown):
 /// - equal: nothing;
+/// - different only in max_side, c.images_as_they_come: warns "<path>: trained on images scaled to a
+///   longer side <= N px; these are described at the size they come in";
 /// - different, c.force false: throws PlaceError "<path>: trained on descriptors of <its settings>, but
 ///   they will come from <expected> (differ: <fields>); a vocabulary only fits descriptors like those it
 ///   was trained on: retrain it with these settings, or use it anyway with <force_hint>";

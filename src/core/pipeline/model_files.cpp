@@ -12,6 +12,7 @@ LoopDetector::ModelFactory modelFileFactory(const std::string& dir, const OrbSla
                                             RecognizerOptions options) {
   options.extractor.expected = extractorSettings(orb, 0);
   options.extractor.force = force;
+  options.extractor.images_as_they_come = true;
   return [dir, options](const std::string& name) {
     RecognizerOptions ro = options;
     ro.model_file = (std::filesystem::path(dir) / (name + ".bin")).string();
@@ -71,6 +72,7 @@ std::shared_ptr<const VocabularyTree> loadRelocalisationVocabulary(const std::st
   ExtractorCheck check;
   check.expected = extractorSettings(orb, 0);
   check.force = force;
+  check.images_as_they_come = true;
   checkModelExtractor(path, check);
   return HbowRecognizer::loadVocabulary(path);
 }

@@ -130,6 +130,15 @@ void checkModelExtractor(const std::string& path, const ModelHeader& h, const Ex
       std::cerr << "warning: " << line << std::endl;
     }
   };
+  if (c.images_as_they_come && h.extractor.known()) {
+    ExtractorSettings scaled = c.expected;
+    scaled.max_side = h.extractor.max_side;
+    if (h.extractor == scaled) {
+      warn(path + ": trained on images scaled to a longer side <= " + std::to_string(h.extractor.max_side) +
+           " px; these are described at the size they come in");
+      return;
+    }
+  }
   if (!h.extractor.known()) {
     warn(path + ": the model file (version " + std::to_string(h.version) +
          ") does not record which extractor it was trained with; descriptors will come from " +

@@ -253,6 +253,26 @@ TEST(ModelFile, OtherExtractorSettingsAreRefusedWithBothNamed) {
                     "(differ: extractor imported DBoW2 vs binloop ORB with the Gaussian BRIEF pattern)");
 }
 
+// The SLAM describes its frames at the size they come in; a model trained on scaled-down pictures (the photo
+// vocabularies) is loaded with a warning there, and only a difference in the descriptors themselves refuses.
+TEST(ModelFile, TheSlamTakesAModelTrainedOnScaledImagesWithAWarning) {
+  TempDir dir;
+  const std::string f = trainSmallHbow(dir, slamExtractor(2000, 1024));
+  std::vector<std::string> warnings;
+  ExtractorCheck c;
+  c.expected = slamExtractor();
+  c.warn = [&](const std::string& w) { warnings.push_back(w); };
+  EXPECT_THROW_WITH(checkModelExtractor(f, c), PlaceError, "(differ: max side 1024 vs none)");
+  c.images_as_they_come = true;
+  EXPECT_NO_THROW(checkModelExtractor(f, c));
+  ASSERT_EQ(warnings.size(), 1u);
+  EXPECT_EQ(warnings[0], f + ": trained on images scaled to a longer side <= 1024 px; these are described at "
+                             "the size they come in");
+  TempDir dir2;
+  EXPECT_THROW_WITH(checkModelExtractor(trainSmallHbow(dir2, slamExtractor(1000, 1024)), c), PlaceError,
+                    "(differ: features 1000 vs 2000, max side 1024 vs none)");
+}
+
 TEST(ModelFile, ForcedExtractorMismatchWarnsAndLoads) {
   TempDir dir;
   const std::string f = trainSmallHbow(dir, slamExtractor(1000));
