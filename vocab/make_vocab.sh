@@ -16,6 +16,8 @@
 #                                real-image loop sets (data/loop_sets/*.txt), plus every 16th frame of
 #                                rendered route 08; longer side scaled to 1024 first (--max-side 1024) and
 #                                ORB's learned BRIEF tests (--pattern orb); eval-loops queries the same way.
+#   vocab/photos/hbow_k8l5.bin  — a small hbow vocabulary (k=8, L=5) from the same photos: relocalisation
+#                                for a camera run with ORB's learned tests (docs/robot.md), tracked.
 # Needs ../shared/data/kitti/poses/08.txt for the route; takes about 15 minutes on 2 cores.
 # The hbow files (21-27 MB) are too large to track and are made here; the other four are tracked.
 # `vocab/make_vocab.sh hbow` makes only the two hbow files (render of 08 plus about a minute of training).
@@ -95,3 +97,7 @@ for m in $models; do
   bl train "$m" --images "$stage" --max-side 1024 --pattern orb --seed 1 --skip-unreadable $extra \
     --out "$out/photos/$m.bin"
 done
+if [ "${1:-}" != hbow ]; then
+  bl train hbow --images "$stage" --max-side 1024 --pattern orb --seed 1 --skip-unreadable --k 8 --levels 5 \
+    --out "$out/photos/hbow_k8l5.bin"
+fi
