@@ -73,7 +73,8 @@ void LoopDetectorNodelet::onInit() {
     NODELET_FATAL("binloop/LoopDetector: %s", e.what());
     throw;
   }
-  vocab_dir_ = stringParam(pnh, "vocab_dir", binloop::packagePath(binloop::kShippedModelDir));
+  vocab_dir_ = binloop::modelDirFor(stringParam(pnh, "vocab_dir", binloop::kAutoVocab),
+                                    config_.tracker.orb.pattern == binloop::BriefPatternKind::kOrbLearned);
   force_ = boolParam(pnh, "force_extractor", false);
   defaultRulesFromConfig(pnh);
   candidates_pub_ = nh.advertise<binloop::LoopCandidates>("loop_candidates", 100);

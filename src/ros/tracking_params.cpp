@@ -41,7 +41,9 @@ TrackingParams TrackingParams::read(const ros::NodeHandle& pnh) {
   p.config.tracker.seed = static_cast<uint64_t>(numberParam(pnh, "seed", 1));
   p.config.tracker.localize_only = boolParam(pnh, "localize_only", p.config.tracker.localize_only);
   // "" or "none": relocalisation tries only the most recent keyframes.
-  const std::string reloc = stringParam(pnh, "reloc_vocab", binloop::packagePath(binloop::kRelocVocab));
+  const std::string reloc =
+      binloop::relocVocabFor(stringParam(pnh, "reloc_vocab", binloop::kAutoVocab),
+                             p.config.tracker.orb.pattern == binloop::BriefPatternKind::kOrbLearned);
   if (!reloc.empty() && reloc != "none") {
     p.config.tracker.vocabulary = binloop::loadRelocalisationVocabulary(
         reloc, p.config.tracker.orb, boolParam(pnh, "force_extractor", false));

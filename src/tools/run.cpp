@@ -64,7 +64,8 @@ LoopClosingSetup loopClosingSetup(const CliArgs& args, const SlamConfig& config,
   l.detector.model = detector;
   l.closer = config.closer;
   l.closer.verify.seed = config.tracker.seed;
-  const std::string dir = args.str("vocab-dir");
+  const std::string dir =
+      modelDirFor(args.str("vocab-dir"), config.tracker.orb.pattern == BriefPatternKind::kOrbLearned);
   l.make_model = modelFileFactory(dir, config.tracker.orb, args.has("force-extractor"), config.models);
   l.model_identity = modelFileIdentities(dir);
   if (args.has("shadow")) {
@@ -275,8 +276,10 @@ CliArgs runArgs() {
               "repeats")
       .option("detector", "loop detector: hmvlad, hbow, fabmap, vlad, vladpq, or none (no loop closing)",
               "hmvlad")
-      .option("vocab-dir", "where the detectors' model files are (<dir>/<model>.bin); default: the package's",
-              packagePath(kShippedModelDir))
+      .option("vocab-dir",
+              "where the detectors' model files are (<dir>/<model>.bin); 'auto': the package's set made with "
+              "the config's BRIEF tests (vocab/kitti08, or vocab/photos with orb.learned_pattern: 1)",
+              kAutoVocab)
       .option("shadow", "models run beside the active one and only logged: 'all' or a comma list")
       .option("switch-detector-at",
               "KF:model[,KF:model...]: switch the active detector when it has seen KF keyframes")
@@ -294,8 +297,9 @@ CliArgs runArgs() {
       .option("reloc-vocab",
               "hbow vocabulary that indexes the keyframes for relocalisation anywhere in the map; 'none': "
               "only the "
-              "most recent keyframes are tried; default: the package's shipped k=8 L=5 vocabulary",
-              packagePath(kRelocVocab))
+              "most recent keyframes are tried; 'auto': the package's k=8 L=5 vocabulary made with the "
+              "config's BRIEF tests (in the folder --vocab-dir auto picks)",
+              kAutoVocab)
       .option("load-map",
               "start in a map saved by --save-map or the ROS save_map service (tracking relocalises in it)")
       .option("save-map", "save the map at the end (one state file per stage, as the ROS save_map service)")
@@ -322,7 +326,8 @@ int main(int argc, char** argv) {
         throw CliError("--localize-only needs a map to localise in: give --load-map");
       config.tracker.localize_only = true;
     }
-    const std::string reloc_vocab = args.str("reloc-vocab");
+    const std::string reloc_vocab =
+        relocVocabFor(args.str("reloc-vocab"), config.tracker.orb.pattern == BriefPatternKind::kOrbLearned);
     if (reloc_vocab != "none") {
       config.tracker.vocabulary =
           loadRelocalisationVocabulary(reloc_vocab, config.tracker.orb, args.has("force-extractor"));

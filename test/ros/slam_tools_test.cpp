@@ -65,6 +65,31 @@ TEST(SlamTools, DefaultsAreThePackagesShippedFilesFromAnyFolder) {
       << hbow.out;
 }
 
+// A real camera turns on ORB's learned BRIEF tests in its config and nothing else: the default model folder
+// and relocalisation vocabulary follow them to the shipped photo set, which loads (with the warning that it
+// was trained on scaled pictures) instead of the Gaussian set being refused.
+TEST(SlamTools, LearnedTestsPickThePhotoVocabulariesByThemselves) {
+  const std::string seq = binloop::test::sharedData("kitti/sample_00");
+  BINLOOP_REQUIRE_DATA(seq);
+  const std::string photos = std::string(BINLOOP_ROOT_DIR) + "/vocab/photos";
+  binloop::test::TempDir tmp;
+  std::ofstream(tmp / "learned.yaml") << "%YAML:1.0\norb:\n  learned_pattern: 1\n";
+  const auto r = binloop::test::runCommand("cd " + tmp.path() + " && " + std::string(BINLOOP_TOOL_DIR) +
+                                           "/run " + seq + " --out out --lockstep --config learned.yaml");
+  ASSERT_EQ(r.code, 0) << r.out;
+  const std::string summary = binloop::test::readText(tmp / "out/summary.json");
+  EXPECT_NE(summary.find("\"reloc_vocab\": \"" + photos + "/hbow_k8l5.bin\""), std::string::npos) << summary;
+  EXPECT_NE(r.out.find(photos + "/hmvlad.bin: trained on images scaled to a longer side <= 1024 px"),
+            std::string::npos)
+      << r.out;
+  // The Gaussian set named by hand is still refused, naming the difference.
+  const auto kitti = tool("run", seq + " --out " + (tmp / "k") + " --lockstep --config " +
+                                     (tmp / "learned.yaml") + " --reloc-vocab " + kVocab + "/hbow_k8l5.bin");
+  EXPECT_NE(kitti.code, 0);
+  EXPECT_NE(kitti.out.find(kVocab + "/hbow_k8l5.bin: trained on descriptors of"), std::string::npos)
+      << kitti.out;
+}
+
 TEST(SlamTools, BadLoopOptionsAreOneClearLine) {
   const std::string seq = binloop::test::sharedData("kitti/sample_00");
   BINLOOP_REQUIRE_DATA(seq);

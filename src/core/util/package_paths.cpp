@@ -41,4 +41,14 @@ std::string packageDir() {
 
 std::string packagePath(const std::string& rel) { return (fs::path(packageDir()) / rel).string(); }
 
+std::string modelDirFor(const std::string& given, bool orb_learned_tests) {
+  if (given != kAutoVocab) return given;
+  return packagePath(orb_learned_tests ? kPhotoModelDir : kShippedModelDir);
+}
+
+std::string relocVocabFor(const std::string& given, bool orb_learned_tests) {
+  if (given != kAutoVocab) return given;
+  return packagePath(orb_learned_tests ? kPhotoRelocVocab : kRelocVocab);
+}
+
 }  // namespace binloop
