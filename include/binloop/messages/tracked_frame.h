@@ -26,7 +26,8 @@ struct TrackedFrame {
   Matrix6d pose_covariance = Matrix6d::Zero();
   int features = 0, stereo_matches = 0, tracked_points = 0;
   // What the keyframe decision weighed against tracked_points: the reference keyframe's points that other
-  // keyframes see too, and the keyframes waiting for local mapping (a frame that was not tracked: 0, 0).
+  // keyframes see too, and the keyframes waiting for local mapping (a frame that was not tracked: 0, 0;
+  // localisation only, which makes no keyframe: reference_points 0).
   int reference_points = 0, mapping_queue = 0;
   // Why the frame was not tracked (bad input, lost), or that tracking started again at the motion model's
   // prediction (Tracker, restart_after_lost); empty otherwise.

@@ -178,9 +178,10 @@ bool Tracker::trackInMap(Frame& f, int mapping_queue, Output* out) {
   velocity_dt_ = pred.dt > 0 ? pred.dt : 1;
   have_velocity_ = !relocalized;
   tf.mapping_queue = mapping_queue;
-  tf.reference_points = referencePoints();
-  if (!p_.localize_only && needKeyframe(f, mapping_queue, tf.reference_points))
-    out->keyframe = makeKeyframe(f);
+  if (!p_.localize_only) {  // a map that stays as loaded needs no keyframe decision
+    tf.reference_points = referencePoints();
+    if (needKeyframe(f, mapping_queue, tf.reference_points)) out->keyframe = makeKeyframe(f);
+  }
   return true;
 }
 
@@ -617,7 +618,8 @@ int Tracker::referencePoints() const {
   int n = 0;
   if (const msg::KeyframeState* ref = map_.keyframe(reference_)) {
     for (MapPointId id : ref->point_ids) {
-      if (id != kNoId && map_.resolve(id) != kNoId && map_.observers(map_.resolve(id)).size() >= min_obs) ++n;
+      const MapPointId p = id != kNoId ? map_.resolve(id) : kNoId;
+      if (p != kNoId && map_.observers(p).size() >= min_obs) ++n;
     }
   }
   return n;
