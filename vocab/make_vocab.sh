@@ -25,13 +25,12 @@
 # BINLOOP_TOOLS=<dir> runs the tools from <dir> instead of scripts/binloop (a build of the core alone).
 # BINLOOP_VOCAB_OUT=<dir> writes <dir>/kitti08 and <dir>/photos instead of vocab/ (to compare before replacing).
 set -euo pipefail
-case "${1:-}" in
-  "" | hbow | photos | kitti08) ;;
-  *)
-    echo "make_vocab.sh: unknown set '$1' (none for every set, or hbow, photos, kitti08)" >&2
-    exit 2
-    ;;
-esac
+sets="hbow photos kitti08"
+which="${1:-}"
+if [ -n "$which" ] && ! grep -qw -- "$which" <<<"$sets"; then
+  echo "make_vocab.sh: unknown set '$which' (none for every set, or ${sets// /, })" >&2
+  exit 2
+fi
 source "$(dirname "$0")/../scripts/env.sh"
 cd "$BINLOOP_ROOT"
 bl() {
@@ -47,9 +46,9 @@ fi
 out="${BINLOOP_VOCAB_OUT:-vocab}"
 mkdir -p "$out/kitti08" "$out/photos"
 models="hbow fabmap vlad hmvlad vladpq"
-[ "${1:-}" = hbow ] && models=hbow
+[ "$which" = hbow ] && models=hbow
 kitti_models="$models"
-[ "${1:-}" = photos ] && kitti_models=""
+[ "$which" = photos ] && kitti_models=""
 # The VLAD family's words, larger than the thesis' (VLAD 4, HMVLAD 2 and 4): with either BRIEF pattern,
 # 64 words (HMVLAD 8 and 64) raise R@100P on every rendered route and on the real loop sets, at about 13 ms
 # a signature instead of 1.4 (docs/decisions.md, "64 VLAD words").
@@ -59,14 +58,22 @@ vlad_words() {
     hmvlad) echo "--k 8" ;;
   esac
 }
-for m in $kitti_models; do
-  extra=$(vlad_words "$m")
-  bl train "$m" --images "$seq08" --every 8 --seed 1 $extra --out "$out/kitti08/$m.bin"
-done
-if [ -n "$kitti_models" ] && [ "${1:-}" != hbow ]; then
-  bl train hbow --images "$seq08" --every 8 --seed 1 --k 8 --levels 5 --out "$out/kitti08/hbow_k8l5.bin"
-fi
-[ "${1:-}" = kitti08 ] && exit 0
+# train_set <images> <out dir> <models> [train options]: each model, and the small hbow that relocalisation
+# uses beside them (k=8, L=5, tracked; not made by `make_vocab.sh hbow`, which makes the large ones only).
+train_set() {
+  local images=$1 dir=$2 set_models=$3 extra
+  shift 3
+  [ -n "$set_models" ] || return 0
+  for m in $set_models; do
+    extra=$(vlad_words "$m")
+    bl train "$m" --images "$images" "$@" --seed 1 $extra --out "$dir/$m.bin"
+  done
+  if [ "$which" != hbow ]; then
+    bl train hbow --images "$images" "$@" --seed 1 --k 8 --levels 5 --out "$dir/hbow_k8l5.bin"
+  fi
+}
+train_set "$seq08" "$out/kitti08" "$kitti_models" --every 8
+[ "$which" = kitti08 ] && exit 0
 stage="$work/photos"
 rm -rf "$stage" && mkdir -p "$stage"
 i=0
@@ -92,12 +99,4 @@ for f in "$seq08"/image_0/*.png; do
   n=$((n + 1))
 done
 echo "make_vocab: $i training images for vocab/photos (loop-set images left out)"
-for m in $models; do
-  extra=$(vlad_words "$m")
-  bl train "$m" --images "$stage" --max-side 1024 --pattern orb --seed 1 --skip-unreadable $extra \
-    --out "$out/photos/$m.bin"
-done
-if [ "${1:-}" != hbow ]; then
-  bl train hbow --images "$stage" --max-side 1024 --pattern orb --seed 1 --skip-unreadable --k 8 --levels 5 \
-    --out "$out/photos/hbow_k8l5.bin"
-fi
+train_set "$stage" "$out/photos" "$models" --max-side 1024 --pattern orb --skip-unreadable
