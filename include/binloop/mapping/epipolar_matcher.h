@@ -1,9 +1,10 @@
 #pragma once
 // Matches between two keyframes' keypoints that have no map point yet, for triangulation (ORB-SLAM2's
 // SearchForTriangulation). Both poses are known, so a keypoint in one keyframe can only match a keypoint
-// near its epipolar line in the other; that geometric test is a few flops, so every pair is tested and
-// only the survivors pay for a Hamming distance. ORB-SLAM2 narrows the pairs with vocabulary nodes
-// instead; the line test keeps mapping independent of any vocabulary.
+// near its epipolar line in the other: the second keyframe's candidates are binned in cells, a keypoint
+// visits the cells its band crosses, and only candidates within the band pay for a Hamming distance.
+// ORB-SLAM2 narrows the pairs with vocabulary nodes instead; the line test keeps mapping independent of any
+// vocabulary. The result is the same as testing every pair (ties go to the lower index).
 #include <utility>
 #include <vector>
 

@@ -112,5 +112,79 @@ TEST_F(EpipolarMatcherTest, MatchesWithAnInconsistentRotationAreDropped) {
   for (const auto& [i, j] : m) EXPECT_NE(j % 20, 0) << "keypoint " << j << " turned 90 degrees was kept";
 }
 
+// Every pair tested, ties to the lower index: what the binned search must give, pair for pair.
+std::vector<std::pair<int, int>> everyPair(const EpipolarView& a, const EpipolarView& b,
+                                           const ScalePyramid& s, const EpipolarParams& p) {
+  const Eigen::Matrix3d F = fundamentalMatrix(*a.T_w_c, *b.T_w_c, *b.camera);
+  const Eigen::Vector3d c_b = b.T_w_c->inverse() * a.T_w_c->translation();
+  const Eigen::Vector2d e = b.camera->project(c_b);
+  const auto &ka = *a.keypoints, &kb = *b.keypoints;
+  std::vector<int> best_of_a(ka.size(), -1), best_of_b(kb.size(), -1), dist_of_b(kb.size(), 1 << 30);
+  for (size_t i = 0; i < ka.size(); ++i) {
+    if ((*a.point_ids)[i] != kNoId) continue;
+    const Eigen::Vector3d l = F * Eigen::Vector3d(ka[i].x, ka[i].y, 1);
+    int best = 1 << 30, best_j = -1;
+    for (size_t j = 0; j < kb.size(); ++j) {
+      if ((*b.point_ids)[j] != kNoId) continue;
+      const double d = l.x() * kb[j].x + l.y() * kb[j].y + l.z();
+      if (d * d / (l.x() * l.x() + l.y() * l.y()) >= p.line_chi2 * s.sigma2[kb[j].octave]) continue;
+      if (ka[i].right_x < 0 && kb[j].right_x < 0 && c_b.z() > 0 &&
+          (e - Eigen::Vector2d(kb[j].x, kb[j].y)).norm() < p.epipole_px * s.scale[kb[j].octave])
+        continue;
+      const int h = hamming((*a.descriptors)[i], (*b.descriptors)[j]);
+      if (h < best) best = h, best_j = static_cast<int>(j);
+    }
+    if (best_j < 0 || best > p.max_hamming) continue;
+    best_of_a[i] = best_j;
+    if (best < dist_of_b[best_j]) dist_of_b[best_j] = best, best_of_b[best_j] = static_cast<int>(i);
+  }
+  std::vector<std::pair<int, int>> pairs;
+  for (size_t i = 0; i < ka.size(); ++i)
+    if (best_of_a[i] >= 0 && best_of_b[best_of_a[i]] == static_cast<int>(i))
+      pairs.emplace_back(static_cast<int>(i), best_of_a[i]);
+  return pairs;
+}
+
+// Keypoints all over both images at every level, descriptors drawn from a few so that ties are common; the
+// second camera moved forward (the epipole in the image, lines at every angle), sideways, up, or not at all.
+TEST(EpipolarMatcher, TheBinnedSearchGivesWhatTestingEveryPairGives) {
+  const StereoCamera cam = test::kitti();
+  const ScalePyramid scales{1.2f, 8};
+  EpipolarParams p;
+  p.check_rotation = false;  // compare the matching itself
+  p.max_hamming = 90;
+  HashRng rng(11);
+  std::vector<Desc256> pool;
+  for (int k = 0; k < 12; ++k) pool.push_back(randomDescriptor(rng));
+  auto keypoints = [&](std::vector<msg::KeyPoint>* kps, Descriptors* desc, std::vector<MapPointId>* ids) {
+    for (int n = 0; n < 1500; ++n) {
+      msg::KeyPoint k{static_cast<float>(rng.uniform(0, cam.width - 1)),
+                      static_cast<float>(rng.uniform(0, cam.height - 1)),
+                      0.f,
+                      static_cast<uint8_t>(rng.uniform(0, 7.99)),
+                      -1.f,
+                      -1.f};
+      if (rng.chance(0.5)) k.right_x = k.x - 10.f;
+      kps->push_back(k);
+      desc->push_back(flipBits(pool[static_cast<size_t>(rng.uniform(0, 11.99))], 20, rng));
+      ids->push_back(rng.chance(0.2) ? MapPointId{7} : kNoId);
+    }
+  };
+  const Eigen::Vector3d moves[] = {{0.1, 0, 1.5}, {1.5, 0.1, 0.2}, {0, 1.2, 0.1}, {0, 0, 0}, {-0.3, 0.2, -1}};
+  for (const Eigen::Vector3d& t : moves) {
+    View a, b;
+    a.T_w_c = Pose3::Identity();
+    b.T_w_c = Pose3::Identity();
+    b.T_w_c.linear() = Eigen::AngleAxisd(0.05, Eigen::Vector3d(0.2, 1, 0.1).normalized()).toRotationMatrix();
+    b.T_w_c.translation() = t;
+    keypoints(&a.kps, &a.desc, &a.ids);
+    keypoints(&b.kps, &b.desc, &b.ids);
+    const auto expected = everyPair(a.view(cam), b.view(cam), scales, p);
+    EXPECT_GT(expected.size(), 50u) << "move " << t.transpose();
+    EXPECT_EQ(matchAlongEpipolarLines(a.view(cam), b.view(cam), scales, p), expected)
+        << "move " << t.transpose();
+  }
+}
+
 }  // namespace
 }  // namespace binloop
