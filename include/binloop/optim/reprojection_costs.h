@@ -33,8 +33,11 @@
 // ceres::HuberLoss(delta) is rho(s) = s for s <= delta^2, 2 delta sqrt(s) - delta^2 above, which is g2o's
 // RobustKernelHuber on chi2.
 //
-// Jacobians are automatic (ceres::AutoDiffCostFunction, dual numbers): exact to rounding and short to
-// check; the rotation is ceres::AngleAxisRotatePoint, whose derivative is exact at w = 0 too.
+// The pose optimiser's Jacobians are automatic (ceres::AutoDiffCostFunction, dual numbers): exact to
+// rounding and short to check; the rotation is ceres::AngleAxisRotatePoint, whose derivative is exact at
+// w = 0 too. Bundle adjustment uses linearizeReprojection below, the same residual with its Jacobians in
+// closed form (a test holds them to the automatic ones): its solver is our own (schur_lm), and the dual
+// numbers cost it as much as the whole linear algebra.
 //
 // A point at z <= 0 (behind the camera or on its plane) makes the functor return false, so Ceres rejects
 // any step that would put an observed point there. Callers must not add an observation whose point is
@@ -174,6 +177,53 @@ class PoseOnlyReprojectionCost {
   double obs_[3];
   double sqrt_info_;
 };
+
+/// One observation linearised: the whitened residual of ReprojectionCost and its Jacobians at xi = 0.
+/// Always three rows; a mono observation's third row is zero, so a solver can use one block size.
+struct LinearizedReprojection {
+  Eigen::Vector3d r = Eigen::Vector3d::Zero();
+  Eigen::Matrix<double, 3, 6> J_pose = Eigen::Matrix<double, 3, 6>::Zero();  // by xi = (w, rho)
+  Eigen::Matrix3d J_point = Eigen::Matrix3d::Zero();                         // by p_w
+  double chi2 = 0;                                                           // |r|^2
+  bool in_front = false;                                                     // z > 0
+};
+
+/// ReprojectionCost<3> (stereo) or <2> (mono)'s residual with its Jacobians in closed form, at xi = 0
+/// about the pose [R | t] (the bundle adjuster moves its expansion point every iteration, as g2o does, so
+/// it needs them only there). With p_c = R p_w + t = (x, y, z):
+///     d p_c / d w = -[p_c]x,   d p_c / d rho = I,   d p_c / d p_w = R,
+///     d (u, v, u_r) / d p_c = [fx/z, 0, -fx x/z^2;  0, fy/z, -fy y/z^2;  fx/z, 0, (bf - fx x)/z^2],
+/// and the residual is the observation minus the projection, hence the minus sign. The Jacobians are left
+/// unset (zero) behind the camera, where the residual means nothing.
+inline LinearizedReprojection linearizeReprojection(const ProjectionConstants& k, const Eigen::Matrix3d& R,
+                                                    const Eigen::Vector3d& t, const Eigen::Vector3d& p_w,
+                                                    const double* obs, double sqrt_info, bool stereo,
+                                                    bool with_jacobians = true) {
+  LinearizedReprojection l;
+  const Eigen::Vector3d p_c = R * p_w + t;
+  l.in_front = p_c.z() > 0;
+  const double inv_z = 1.0 / p_c.z();
+  const double u = k.fx * p_c.x() * inv_z + k.cx;
+  l.r(0) = sqrt_info * (obs[0] - u);
+  l.r(1) = sqrt_info * (obs[1] - (k.fy * p_c.y() * inv_z + k.cy));
+  if (stereo) l.r(2) = sqrt_info * (obs[2] - (u - k.bf * inv_z));
+  l.chi2 = l.r.squaredNorm();
+  if (!with_jacobians || !l.in_front) return l;
+  const double inv_z2 = inv_z * inv_z;
+  Eigen::Matrix3d d_proj = Eigen::Matrix3d::Zero();  // minus sqrt_info times d (u, v, u_r) / d p_c
+  d_proj(0, 0) = -sqrt_info * k.fx * inv_z;
+  d_proj(0, 2) = sqrt_info * k.fx * p_c.x() * inv_z2;
+  d_proj(1, 1) = -sqrt_info * k.fy * inv_z;
+  d_proj(1, 2) = sqrt_info * k.fy * p_c.y() * inv_z2;
+  if (stereo) {
+    d_proj(2, 0) = d_proj(0, 0);
+    d_proj(2, 2) = -sqrt_info * (k.bf - k.fx * p_c.x()) * inv_z2;
+  }
+  l.J_pose.leftCols<3>() = -d_proj * skew(p_c);
+  l.J_pose.rightCols<3>() = d_proj;
+  l.J_point = d_proj * R;
+  return l;
+}
 
 using StereoReprojectionCost = ReprojectionCost<3>;
 using MonoReprojectionCost = ReprojectionCost<2>;

@@ -106,13 +106,11 @@ std::vector<std::pair<int, int>> matchAlongEpipolarLines(const EpipolarView& a, 
   for (size_t j = 0; j < kb.size(); ++j)
     if ((*b.point_ids)[j] == kNoId) cand_b.push_back(static_cast<int>(j));
   const BandGrid grid(kb, cand_b);
-  // The widest band any candidate's level allows.
-  double max_sigma2 = 0;
-  for (int j : cand_b) max_sigma2 = std::max(max_sigma2, static_cast<double>(s.sigma2[kb[j].octave]));
-  const double half_width = std::sqrt(p.line_chi2 * max_sigma2) + 1e-3;  // a superset: rounding is harmless
+  // The widest band the top level allows: the grid only has to give a superset, `consider` decides.
+  const double half_width = std::sqrt(p.line_chi2 * static_cast<double>(s.sigma2.back())) + 1e-3;
 
   constexpr int kNone = -1;
-  std::vector<int> best_of_a(ka.size(), kNone), dist_of_a(ka.size(), std::numeric_limits<int>::max());
+  std::vector<int> best_of_a(ka.size(), kNone);
   std::vector<int> best_of_b(kb.size(), kNone), dist_of_b(kb.size(), std::numeric_limits<int>::max());
   for (size_t i = 0; i < ka.size(); ++i) {
     if ((*a.point_ids)[i] != kNoId) continue;
@@ -141,7 +139,6 @@ std::vector<std::pair<int, int>> matchAlongEpipolarLines(const EpipolarView& a, 
     }
     if (best_j == kNone || best > p.max_hamming) continue;
     best_of_a[i] = best_j;
-    dist_of_a[i] = best;
     if (best < dist_of_b[best_j]) dist_of_b[best_j] = best, best_of_b[best_j] = static_cast<int>(i);
   }
   std::vector<std::pair<int, int>> pairs;

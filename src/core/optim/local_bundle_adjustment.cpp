@@ -1,43 +1,16 @@
 #include "binloop/optim/local_bundle_adjustment.h"
 
-#include <ceres/iteration_callback.h>
-#include <ceres/loss_function.h>
-#include <ceres/ordered_groups.h>
-#include <ceres/problem.h>
-#include <ceres/solver.h>
-
 #include <algorithm>
 #include <chrono>
-#include <memory>
 
-#include "binloop/optim/reprojection_costs.h"
-#include "observation_term.h"
 #include "optim_checks.h"
+#include "schur_lm.h"
 
 namespace binloop {
 namespace {
 
 using namespace optim_detail;
 constexpr const char* kWho = "localBundleAdjustment";
-
-using Term = ObservationTerm<StereoReprojectionCost::CostFunction, MonoReprojectionCost::CostFunction>;
-
-// ORB-SLAM2's mbAbortBA: Ceres calls this after every iteration (and after evaluating the start, iteration
-// 0). Terminating "successfully" keeps the parameters reached so far, as g2o's force-stop flag does.
-class AbortCallback : public ceres::IterationCallback {
- public:
-  explicit AbortCallback(std::atomic<bool>* flag) : flag_(flag) {}
-  ceres::CallbackReturnType operator()(const ceres::IterationSummary&) override {
-    if (!flag_->load()) return ceres::SOLVER_CONTINUE;
-    fired_ = true;
-    return ceres::SOLVER_TERMINATE_SUCCESSFULLY;
-  }
-  bool fired() const { return fired_; }
-
- private:
-  std::atomic<bool>* flag_;
-  bool fired_ = false;
-};
 
 template <typename Item>
 void checkUniqueIds(const std::vector<Item>& items, const char* what) {
@@ -88,102 +61,29 @@ void checkInput(const StereoCamera& camera, const BaProblem& pb, const LocalBaPa
   checkCamera(kWho, camera, any_stereo);
 }
 
-// The variables: one 6-vector per keyframe (the increment about its input pose, reprojection_costs.h) and
-// one 3-vector per point, each kind in one array. Ceres orders the blocks of an elimination group by
-// address, so contiguous storage in input order makes that order (and the result) independent of where the
-// allocator put things.
-struct Variables {
-  std::vector<double> xi;  // 6 per keyframe, zero = input pose
-  std::vector<double> p;   // 3 per point
-  double* keyframe(size_t i) { return xi.data() + 6 * i; }
-  double* point(size_t i) { return p.data() + 3 * i; }
-};
-
-struct Stage {
-  int iterations = 0;
-  bool aborted = false;
-};
-
-// Solves over the observations marked in `use`, with the given losses (nullptr: plain squares).
-Stage solveStage(const BaProblem& pb, const std::vector<Term>& terms, const std::vector<bool>& use,
-                 ceres::LossFunction* loss_stereo, ceres::LossFunction* loss_mono, int max_iterations,
-                 BaLinearSolver solver, std::atomic<bool>* abort, Variables& v,
-                 std::vector<bool>& kf_touched) {
-  Stage stage;
-  ceres::Problem::Options po;
-  po.cost_function_ownership = ceres::DO_NOT_TAKE_OWNERSHIP;
-  po.loss_function_ownership = ceres::DO_NOT_TAKE_OWNERSHIP;
-  ceres::Problem problem(po);
-  std::vector<bool> kf_in(pb.keyframes.size()), pt_in(pb.points.size());
-  for (size_t i = 0; i < terms.size(); ++i) {
-    if (!use[i]) continue;
-    const BaObservation& o = pb.observations[i];
-    problem.AddResidualBlock(terms[i].cost(), terms[i].stereo ? loss_stereo : loss_mono,
-                             v.keyframe(o.keyframe), v.point(o.point));
-    kf_in[o.keyframe] = pt_in[o.point] = true;
-  }
-  if (problem.NumResidualBlocks() == 0) return stage;
-
-  // Points first (group 0, eliminated), then keyframes; fixed keyframes stay in the ordering but constant.
-  auto ordering = std::make_shared<ceres::ParameterBlockOrdering>();
-  bool any_free_keyframe = false;
-  for (size_t j = 0; j < pb.points.size(); ++j)
-    if (pt_in[j]) ordering->AddElementToGroup(v.point(j), 0);
-  for (size_t i = 0; i < pb.keyframes.size(); ++i) {
-    if (!kf_in[i]) continue;
-    ordering->AddElementToGroup(v.keyframe(i), 1);
-    if (pb.keyframes[i].fixed) {
-      problem.SetParameterBlockConstant(v.keyframe(i));
-    } else {
-      kf_touched[i] = true;
-      any_free_keyframe = true;
-    }
-  }
-
-  ceres::Solver::Options options;
-  options.minimizer_type = ceres::TRUST_REGION;
-  options.trust_region_strategy_type = ceres::LEVENBERG_MARQUARDT;
-  if (any_free_keyframe) {
-    options.linear_solver_type =
-        solver == BaLinearSolver::kSparseSchur ? ceres::SPARSE_SCHUR : ceres::DENSE_SCHUR;
-    options.linear_solver_ordering = ordering;
-  } else {
-    // Structure only: every point is its own 3x3 system; a Schur solver would have nothing left to reduce.
-    options.linear_solver_type = ceres::SPARSE_NORMAL_CHOLESKY;
-  }
-  options.max_num_iterations = max_iterations;
-  options.num_threads = 1;  // determinism: the same input gives bit-identical output
-  options.logging_type = ceres::SILENT;
-  options.minimizer_progress_to_stdout = false;
-  std::unique_ptr<AbortCallback> callback;
-  if (abort) {
-    callback = std::make_unique<AbortCallback>(abort);
-    options.callbacks.push_back(callback.get());
-  }
-  ceres::Solver::Summary summary;
-  ceres::Solve(options, &problem, &summary);
-  stage.iterations =
-      std::max(0, static_cast<int>(summary.iterations.size()) - 1);  // iteration 0 is the start
-  stage.aborted = callback && callback->fired();
-  return stage;
-}
-
-// One reprojection term per observation, stereo or monocular, about its keyframe's initial pose, with its
-// outlier threshold.
-std::vector<Term> makeTerms(const ProjectionConstants& k, const BaProblem& pb, const LocalBaParams& params) {
-  std::vector<Term> terms(pb.observations.size());
+// One term per observation, stereo or monocular, with its outlier threshold and Huber width.
+std::vector<BaTerm> makeTerms(const BaProblem& pb, const LocalBaParams& params) {
+  std::vector<BaTerm> terms(pb.observations.size());
   for (size_t i = 0; i < pb.observations.size(); ++i) {
     const BaObservation& o = pb.observations[i];
-    const Pose3& T0 = pb.keyframes[o.keyframe].T_c_w;
-    if (o.u_right >= 0) {
-      terms[i].stereo.reset(StereoReprojectionCost::create(k, T0, o.uv, o.u_right, o.inv_sigma2));
-      terms[i].chi2_max = params.chi2_stereo;
-    } else {
-      terms[i].mono.reset(MonoReprojectionCost::create(k, T0, o.uv, o.u_right, o.inv_sigma2));
-      terms[i].chi2_max = params.chi2_mono;
-    }
+    BaTerm& t = terms[i];
+    t.keyframe = static_cast<uint32_t>(o.keyframe);
+    t.point = static_cast<uint32_t>(o.point);
+    t.obs[0] = o.uv.x();
+    t.obs[1] = o.uv.y();
+    t.obs[2] = o.u_right;
+    t.sqrt_info = std::sqrt(o.inv_sigma2);
+    t.stereo = o.u_right >= 0;
+    t.chi2_max = t.stereo ? params.chi2_stereo : params.chi2_mono;
+    t.huber_delta = t.stereo ? params.huber_delta_stereo : params.huber_delta_mono;
   }
   return terms;
+}
+
+/// Behind the camera, or chi2 above the threshold (or not a number).
+bool isOutlier(const ProjectionConstants& k, const BaTerm& t, const BaState& s) {
+  const LinearizedReprojection e = evaluateTerm(k, t, s);
+  return !e.in_front || !(e.chi2 <= t.chi2_max);
 }
 
 }  // namespace
@@ -229,67 +129,66 @@ LocalBaResult localBundleAdjustment(const StereoCamera& camera, const BaProblem&
   checkInput(camera, pb, params);
   const ProjectionConstants k(camera);
   const size_t n = pb.observations.size();
+  const std::vector<BaTerm> terms = makeTerms(pb, params);
 
-  std::vector<Term> terms = makeTerms(k, pb, params);
-  ceres::HuberLoss huber_stereo(params.huber_delta_stereo), huber_mono(params.huber_delta_mono);
+  BaState start;
+  for (const BaKeyframe& kf : pb.keyframes) {
+    start.R.emplace_back(kf.T_c_w.linear());
+    start.t.emplace_back(kf.T_c_w.translation());
+  }
+  for (const BaPoint& p : pb.points) start.p.push_back(p.p_w);
+  BaState s = start;
+  std::vector<bool> fixed(pb.keyframes.size()), moved(pb.keyframes.size());
+  for (size_t i = 0; i < pb.keyframes.size(); ++i) fixed[i] = pb.keyframes[i].fixed;
 
-  Variables v;
-  v.xi.assign(6 * pb.keyframes.size(), 0.0);
-  v.p.resize(3 * pb.points.size());
-  for (size_t j = 0; j < pb.points.size(); ++j) Eigen::Map<Eigen::Vector3d>(v.point(j)) = pb.points[j].p_w;
-  std::vector<bool> kf_touched(pb.keyframes.size());
-
-  // Stage 1: Huber, every observation whose point is in front of its camera (Ceres cannot start from a
+  // Stage 1: Huber, every observation whose point is in front of its camera (a solver cannot start from a
   // point behind one; those are outliers from the start).
   std::vector<bool> use(n);
-  for (size_t i = 0; i < n; ++i) {
-    const BaObservation& o = pb.observations[i];
-    bool in_front = false;
-    terms[i].chi2(v.keyframe(o.keyframe), v.point(o.point), &in_front);
-    use[i] = in_front;
-  }
+  for (size_t i = 0; i < n; ++i) use[i] = evaluateTerm(k, terms[i], s).in_front;
   LocalBaResult result;
+  LmRun run;
+  run.solver = params.linear_solver;
+  run.abort = abort;
   if (params.robust_iterations > 0) {
-    const Stage s = solveStage(pb, terms, use, &huber_stereo, &huber_mono, params.robust_iterations,
-                               params.linear_solver, abort, v, kf_touched);
-    result.iterations += s.iterations;
-    result.aborted = s.aborted;
+    run.max_iterations = params.robust_iterations;
+    run.robust = true;
+    const LmOutcome o = solveSchurLm(k, terms, use, fixed, run, s, moved);
+    result.iterations += o.iterations;
+    result.aborted = o.aborted;
   }
 
   // Stage 2: drop the outliers of stage 1 (chi2 over the threshold or behind the camera), plain squares.
   if (!result.aborted && params.refine_iterations > 0) {
-    for (size_t i = 0; i < n; ++i) {
-      const BaObservation& o = pb.observations[i];
-      use[i] = use[i] && !terms[i].isOutlier(v.keyframe(o.keyframe), v.point(o.point));
-    }
-    const Stage s = solveStage(pb, terms, use, nullptr, nullptr, params.refine_iterations,
-                               params.linear_solver, abort, v, kf_touched);
-    result.iterations += s.iterations;
-    result.aborted = s.aborted;
+    for (size_t i = 0; i < n; ++i) use[i] = use[i] && !isOutlier(k, terms[i], s);
+    run.max_iterations = params.refine_iterations;
+    run.robust = false;
+    const LmOutcome o = solveSchurLm(k, terms, use, fixed, run, s, moved);
+    result.iterations += o.iterations;
+    result.aborted = o.aborted;
   }
 
   // Read back and judge every observation at the result.
   for (size_t i = 0; i < pb.keyframes.size(); ++i) {
     const BaKeyframe& kf = pb.keyframes[i];
     if (kf.fixed) continue;
-    result.keyframes.push_back(
-        {i, kf.id, kf_touched[i] ? poseFromIncrement(v.keyframe(i), kf.T_c_w) : kf.T_c_w});
+    Pose3 T = kf.T_c_w;
+    if (moved[i]) {  // each step multiplies in an exact rotation: no drift worth re-orthonormalising
+      T.linear() = s.R[i];
+      T.translation() = s.t[i];
+    }
+    result.keyframes.push_back({i, kf.id, T});
   }
   result.points.resize(pb.points.size());
-  for (size_t j = 0; j < pb.points.size(); ++j)
-    result.points[j] = {pb.points[j].id, Eigen::Map<const Eigen::Vector3d>(v.point(j))};
+  for (size_t j = 0; j < pb.points.size(); ++j) result.points[j] = {pb.points[j].id, s.p[j]};
   result.outlier.assign(n, false);
-  const double xi0[6] = {0, 0, 0, 0, 0, 0};
   for (size_t i = 0; i < n; ++i) {
-    const BaObservation& o = pb.observations[i];
-    result.outlier[i] = terms[i].isOutlier(v.keyframe(o.keyframe), v.point(o.point));
+    result.outlier[i] = isOutlier(k, terms[i], s);
     if (result.outlier[i]) {
       ++result.num_outliers;
       continue;
     }
-    bool in_front = false;
-    result.initial_cost += 0.5 * terms[i].chi2(xi0, pb.points[o.point].p_w.data(), &in_front);
-    result.final_cost += 0.5 * terms[i].chi2(v.keyframe(o.keyframe), v.point(o.point), &in_front);
+    result.initial_cost += 0.5 * evaluateTerm(k, terms[i], start).chi2;
+    result.final_cost += 0.5 * evaluateTerm(k, terms[i], s).chi2;
   }
   result.time_s = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
   return result;

@@ -1,7 +1,7 @@
 #pragma once
-// One observation in an optimiser (private to src/core/optim): its Ceres cost, stereo or mono, and its
-// outlier threshold. `Stereo` and `Mono` are the AutoDiffCostFunction types; their functors' chi2() take
-// the parameter blocks and then `bool* in_front`, which is all that differs between pose-only and BA terms.
+// One observation in a Ceres optimiser (private to src/core/optim; bundle adjustment has its own,
+// schur_lm.h): its cost, stereo or mono, and its outlier threshold. `Stereo` and `Mono` are the
+// AutoDiffCostFunction types; their functors' chi2() take the parameter blocks and then `bool* in_front`.
 #include <ceres/cost_function.h>
 
 #include <memory>

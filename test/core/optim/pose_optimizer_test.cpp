@@ -4,6 +4,7 @@
 
 #include <cstring>
 #include <limits>
+#include <memory>
 
 #include "binloop/optim/reprojection_costs.h"
 #include "optim_test_scene.h"
@@ -246,4 +247,48 @@ TEST(ReprojectionCosts, ResidualIsTheWhitenedProjectionError) {
   const double zero[6] = {0, 0, 0, 0, 0, 0};
   const Pose3 same = poseFromIncrement(zero, T0);
   EXPECT_TRUE(same.matrix() == T0.matrix());
+}
+
+// Bundle adjustment's closed-form Jacobians (linearizeReprojection) are the automatic ones of the Ceres
+// functor at xi = 0, for stereo and mono, far and near points, and a rotated camera.
+TEST(ReprojectionCosts, ClosedFormJacobiansAreTheAutomaticOnes) {
+  const StereoCamera cam = kitti();
+  const ProjectionConstants k(cam);
+  HashRng rng(9);
+  for (int trial = 0; trial < 20; ++trial) {
+    const Pose3 T = perturb(Pose3::Identity(), 30, 5, rng);
+    const Eigen::Vector3d p_w =
+        backProject(cam, T, rng.uniform(0, cam.width), rng.uniform(0, cam.height), rng.uniform(2, 80));
+    const Eigen::Vector2d uv(rng.uniform(0, cam.width), rng.uniform(0, cam.height));
+    const double u_right = uv.x() - rng.uniform(1, 40), inv_sigma2 = 1 / std::pow(1.2, 2 * rng.below(8));
+    const double obs[3] = {uv.x(), uv.y(), u_right};
+    for (const bool stereo : {true, false}) {
+      SCOPED_TRACE(::testing::Message() << "trial " << trial << (stereo ? " stereo" : " mono"));
+      const LinearizedReprojection l =
+          linearizeReprojection(k, T.linear(), T.translation(), p_w, obs, std::sqrt(inv_sigma2), stereo);
+      ASSERT_TRUE(l.in_front);
+      const int rows = stereo ? 3 : 2;
+      double r[3] = {0, 0, 0}, J_xi[3 * 6] = {}, J_p[3 * 3] = {};
+      double* jacobians[2] = {J_xi, J_p};
+      const double xi[6] = {0, 0, 0, 0, 0, 0};
+      const double* params[2] = {xi, p_w.data()};
+      std::unique_ptr<ceres::CostFunction> f(
+          stereo ? static_cast<ceres::CostFunction*>(
+                       StereoReprojectionCost::create(k, T, uv, u_right, inv_sigma2))
+                 : MonoReprojectionCost::create(k, T, uv, -1, inv_sigma2));
+      ASSERT_TRUE(f->Evaluate(params, r, jacobians));
+      for (int i = 0; i < rows; ++i) {
+        const double scale = 1 + l.J_pose.row(i).cwiseAbs().maxCoeff();
+        EXPECT_NEAR(l.r(i), r[i], 1e-9 * (1 + std::abs(r[i])));
+        for (int j = 0; j < 6; ++j)
+          EXPECT_NEAR(l.J_pose(i, j), J_xi[6 * i + j], 1e-9 * scale) << i << "," << j;
+        for (int j = 0; j < 3; ++j)
+          EXPECT_NEAR(l.J_point(i, j), J_p[3 * i + j], 1e-9 * scale) << i << "," << j;
+      }
+      if (!stereo) {
+        EXPECT_TRUE(l.J_pose.row(2).isZero() && l.J_point.row(2).isZero() && l.r(2) == 0);
+      }
+      EXPECT_NEAR(l.chi2, l.r.squaredNorm(), 1e-12);
+    }
+  }
 }
