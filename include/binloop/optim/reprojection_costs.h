@@ -189,27 +189,25 @@ struct LinearizedReprojection {
 };
 
 /// ReprojectionCost<3> (stereo) or <2> (mono)'s residual with its Jacobians in closed form, at xi = 0
-/// about the pose [R | t] (the bundle adjuster moves its expansion point every iteration, as g2o does, so
-/// it needs them only there). With p_c = R p_w + t = (x, y, z):
+/// about the pose T_c_w = [R | t] (the bundle adjuster moves its expansion point every iteration, as g2o
+/// does, so it needs them only there). The residual is whitenedReprojection's. With p_c = R p_w + t = (x, y,
+/// z):
 ///     d p_c / d w = -[p_c]x,   d p_c / d rho = I,   d p_c / d p_w = R,
 ///     d (u, v, u_r) / d p_c = [fx/z, 0, -fx x/z^2;  0, fy/z, -fy y/z^2;  fx/z, 0, (bf - fx x)/z^2],
 /// and the residual is the observation minus the projection, hence the minus sign. The Jacobians are left
 /// unset (zero) behind the camera, where the residual means nothing.
-inline LinearizedReprojection linearizeReprojection(const ProjectionConstants& k, const Eigen::Matrix3d& R,
-                                                    const Eigen::Vector3d& t, const Eigen::Vector3d& p_w,
-                                                    const double* obs, double sqrt_info, bool stereo,
+inline LinearizedReprojection linearizeReprojection(const ProjectionConstants& k, const Pose3& T_c_w,
+                                                    const Eigen::Vector3d& p_w, const double* obs,
+                                                    double sqrt_info, bool stereo,
                                                     bool with_jacobians = true) {
   LinearizedReprojection l;
-  const Eigen::Vector3d p_c = R * p_w + t;
-  l.in_front = p_c.z() > 0;
-  const double inv_z = 1.0 / p_c.z();
-  const double u = k.fx * p_c.x() * inv_z + k.cx;
-  l.r(0) = sqrt_info * (obs[0] - u);
-  l.r(1) = sqrt_info * (obs[1] - (k.fy * p_c.y() * inv_z + k.cy));
-  if (stereo) l.r(2) = sqrt_info * (obs[2] - (u - k.bf * inv_z));
+  const Eigen::Matrix3d R = T_c_w.linear();
+  const Eigen::Vector3d p_c = R * p_w + T_c_w.translation();
+  l.in_front = stereo ? whitenedReprojection<3, double>(k, obs, sqrt_info, p_c.data(), l.r.data())
+                      : whitenedReprojection<2, double>(k, obs, sqrt_info, p_c.data(), l.r.data());
   l.chi2 = l.r.squaredNorm();
   if (!with_jacobians || !l.in_front) return l;
-  const double inv_z2 = inv_z * inv_z;
+  const double inv_z = 1.0 / p_c.z(), inv_z2 = inv_z * inv_z;
   Eigen::Matrix3d d_proj = Eigen::Matrix3d::Zero();  // minus sqrt_info times d (u, v, u_r) / d p_c
   d_proj(0, 0) = -sqrt_info * k.fx * inv_z;
   d_proj(0, 2) = sqrt_info * k.fx * p_c.x() * inv_z2;

@@ -83,7 +83,7 @@ std::vector<BaTerm> makeTerms(const BaProblem& pb, const LocalBaParams& params) 
 /// Behind the camera, or chi2 above the threshold (or not a number).
 bool isOutlier(const ProjectionConstants& k, const BaTerm& t, const BaState& s) {
   const LinearizedReprojection e = evaluateTerm(k, t, s);
-  return !e.in_front || !(e.chi2 <= t.chi2_max);
+  return optim_detail::isOutlier(e.in_front, e.chi2, t.chi2_max);
 }
 
 }  // namespace
@@ -132,13 +132,10 @@ LocalBaResult localBundleAdjustment(const StereoCamera& camera, const BaProblem&
   const std::vector<BaTerm> terms = makeTerms(pb, params);
 
   BaState start;
-  for (const BaKeyframe& kf : pb.keyframes) {
-    start.R.emplace_back(kf.T_c_w.linear());
-    start.t.emplace_back(kf.T_c_w.translation());
-  }
+  for (const BaKeyframe& kf : pb.keyframes) start.T.push_back(kf.T_c_w);
   for (const BaPoint& p : pb.points) start.p.push_back(p.p_w);
   BaState s = start;
-  std::vector<bool> fixed(pb.keyframes.size()), moved(pb.keyframes.size());
+  std::vector<bool> fixed(pb.keyframes.size());
   for (size_t i = 0; i < pb.keyframes.size(); ++i) fixed[i] = pb.keyframes[i].fixed;
 
   // Stage 1: Huber, every observation whose point is in front of its camera (a solver cannot start from a
@@ -152,7 +149,7 @@ LocalBaResult localBundleAdjustment(const StereoCamera& camera, const BaProblem&
   if (params.robust_iterations > 0) {
     run.max_iterations = params.robust_iterations;
     run.robust = true;
-    const LmOutcome o = solveSchurLm(k, terms, use, fixed, run, s, moved);
+    const LmOutcome o = solveSchurLm(k, terms, use, fixed, run, s);
     result.iterations += o.iterations;
     result.aborted = o.aborted;
   }
@@ -162,22 +159,15 @@ LocalBaResult localBundleAdjustment(const StereoCamera& camera, const BaProblem&
     for (size_t i = 0; i < n; ++i) use[i] = use[i] && !isOutlier(k, terms[i], s);
     run.max_iterations = params.refine_iterations;
     run.robust = false;
-    const LmOutcome o = solveSchurLm(k, terms, use, fixed, run, s, moved);
+    const LmOutcome o = solveSchurLm(k, terms, use, fixed, run, s);
     result.iterations += o.iterations;
     result.aborted = o.aborted;
   }
 
-  // Read back and judge every observation at the result.
-  for (size_t i = 0; i < pb.keyframes.size(); ++i) {
-    const BaKeyframe& kf = pb.keyframes[i];
-    if (kf.fixed) continue;
-    Pose3 T = kf.T_c_w;
-    if (moved[i]) {  // each step multiplies in an exact rotation: no drift worth re-orthonormalising
-      T.linear() = s.R[i];
-      T.translation() = s.t[i];
-    }
-    result.keyframes.push_back({i, kf.id, T});
-  }
+  // Read back and judge every observation at the result. A keyframe no term saw is its input, bit for bit;
+  // each step multiplies in an exact rotation, so there is no drift worth re-orthonormalising.
+  for (size_t i = 0; i < pb.keyframes.size(); ++i)
+    if (!pb.keyframes[i].fixed) result.keyframes.push_back({i, pb.keyframes[i].id, s.T[i]});
   result.points.resize(pb.points.size());
   for (size_t j = 0; j < pb.points.size(); ++j) result.points[j] = {pb.points[j].id, s.p[j]};
   result.outlier.assign(n, false);

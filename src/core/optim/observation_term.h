@@ -6,6 +6,8 @@
 
 #include <memory>
 
+#include "optim_checks.h"
+
 namespace binloop::optim_detail {
 
 template <typename Stereo, typename Mono>
@@ -27,7 +29,7 @@ struct ObservationTerm {
   bool isOutlier(Blocks... blocks) const {
     bool in_front = false;
     const double c = chi2(blocks..., &in_front);
-    return !in_front || !(c <= chi2_max);
+    return optim_detail::isOutlier(in_front, c, chi2_max);
   }
 };
 

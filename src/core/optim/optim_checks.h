@@ -1,5 +1,5 @@
 #pragma once
-// Input checks shared by the optimisers (private to src/core/optim). Every failure is a
+// Input checks and the outlier rule shared by the optimisers (private to src/core/optim). Every failure is a
 // std::invalid_argument naming the function, the item and the value.
 #include <Eigen/Core>
 #include <cmath>
@@ -52,6 +52,11 @@ inline void checkObservation(const char* who, const std::string& name, const Eig
 inline void checkPositive(const char* who, const char* name, double v) {
   if (!(v > 0) || !std::isfinite(v))
     fail(who, std::string("parameter ") + name + " must be positive (got " + num(v) + ")");
+}
+
+/// Every optimiser's outlier rule: behind the camera, or chi2 above the threshold (or not a number).
+inline bool isOutlier(bool in_front, double chi2, double chi2_max) {
+  return !in_front || !(chi2 <= chi2_max);
 }
 
 }  // namespace binloop::optim_detail

@@ -1,7 +1,8 @@
 #include "schur_lm.h"
 
+#include <ceres/loss_function.h>
+
 #include <Eigen/Cholesky>
-#include <Eigen/Geometry>
 #include <Eigen/SparseCholesky>
 #include <algorithm>
 #include <cmath>
@@ -26,22 +27,16 @@ Eigen::Index firstRow(int c) { return Eigen::Index{6} * c; }
 
 double clampedDiagonal(double d) { return std::clamp(d, kMinDiagonal, kMaxDiagonal); }
 
-/// rho(s) and rho'(s) of the Huber loss on chi2 s (delta 0: plain squares, rho(s) = s).
-struct Loss {
-  double rho = 0, weight = 1;
-};
-Loss loss(double s, double delta) {
-  if (delta <= 0 || s <= delta * delta) return {s, 1.0};
-  const double r = std::sqrt(s);
-  return {2 * delta * r - delta * delta, delta / r};
-}
-
-Eigen::Matrix3d expSo3(const Eigen::Vector3d& w) {
-  const double theta2 = w.squaredNorm();
-  // First order below machine precision, as Ceres's AngleAxisToRotationMatrix; exactly I at w = 0.
-  if (theta2 <= std::numeric_limits<double>::epsilon()) return Eigen::Matrix3d::Identity() + skew(w);
-  const double theta = std::sqrt(theta2);
-  return Eigen::AngleAxisd(theta, w / theta).toRotationMatrix();
+/// rho(s) (index 0) and rho'(s) (index 1) of ceres::HuberLoss(delta) on chi2 s, the pose optimiser's
+/// robust kernel; delta 0: plain squares, rho(s) = s.
+void robustLoss(double s, double delta, double rho[3]) {
+  if (delta > 0) {
+    ceres::HuberLoss(delta).Evaluate(s, rho);
+    return;
+  }
+  rho[0] = s;
+  rho[1] = 1;
+  rho[2] = 0;
 }
 
 // What does not change during a run: which terms, keyframes and points take part, and where each
@@ -49,6 +44,7 @@ Eigen::Matrix3d expSo3(const Eigen::Vector3d& w) {
 struct Structure {
   std::vector<uint32_t> used;  // term indices, ascending
   std::vector<int> col;        // per keyframe: its block column in the reduced system; -1: fixed or unseen
+  std::vector<int> term_col;   // per position in `used`: its keyframe's column
   int num_free = 0;
   std::vector<uint32_t> points;             // point indices seen by a used term, ascending
   std::vector<uint32_t> point_begin;        // per point slot: its range in point_terms
@@ -72,6 +68,7 @@ Structure makeStructure(const std::vector<BaTerm>& terms, const std::vector<bool
   }
   for (size_t k = 0; k < fixed.size(); ++k)
     if (kf_seen[k] && !fixed[k]) st.col[k] = st.num_free++;
+  for (uint32_t i : st.used) st.term_col.push_back(st.col[terms[i].keyframe]);
   for (size_t j = 0; j < num_points; ++j) {
     if (point_slot[j] < 0) continue;
     point_slot[j] = static_cast<int>(st.points.size());
@@ -87,7 +84,7 @@ Structure makeStructure(const std::vector<BaTerm>& terms, const std::vector<bool
 
   for (int c = 0; c < st.num_free; ++c) st.blocks.emplace_back(c, c);
   std::unordered_map<uint64_t, uint32_t> block_of;
-  const auto colOf = [&](uint32_t pos) { return st.col[terms[st.used[pos]].keyframe]; };
+  const auto colOf = [&](uint32_t pos) { return st.term_col[pos]; };
   st.point_free.resize(st.points.size());
   for (size_t s = 0; s < st.points.size(); ++s) {
     const auto b = st.point_terms.begin() + st.point_begin[s],
@@ -157,14 +154,15 @@ class Solver {
         const uint32_t pos = st_.point_terms[i];
         const BaTerm& t = terms_[st_.used[pos]];
         const LinearizedReprojection e = evaluateTerm(k_, t, s, true);
-        const Loss ls = loss(e.chi2, run_.robust ? t.huber_delta : 0.0);
-        l.cost += 0.5 * ls.rho;
-        const Eigen::Matrix3d wJp = ls.weight * e.J_point;
+        double rho[3];
+        robustLoss(e.chi2, run_.robust ? t.huber_delta : 0.0, rho);
+        l.cost += 0.5 * rho[0];
+        const Eigen::Matrix3d wJp = rho[1] * e.J_point;
         V.noalias() += e.J_point.transpose() * wJp;
         gp.noalias() += wJp.transpose() * e.r;
-        const int c = st_.col[t.keyframe];
+        const int c = st_.term_col[pos];
         if (c < 0) continue;
-        const Eigen::Matrix<double, 3, 6> wJc = ls.weight * e.J_pose;
+        const Eigen::Matrix<double, 3, 6> wJc = rho[1] * e.J_pose;
         l.U[c].noalias() += e.J_pose.transpose() * wJc;
         l.gc[c].noalias() += wJc.transpose() * e.r;
         l.W[pos].noalias() = wJc.transpose() * e.J_point;
@@ -198,13 +196,13 @@ class Solver {
       for (uint32_t a = st_.point_free[slot]; a < end; ++a) {
         const uint32_t pa = st_.point_terms[a];
         Y_[pa].noalias() = l.W[pa] * V_inv;
-        const int ca = st_.col[terms_[st_.used[pa]].keyframe];
+        const int ca = st_.term_col[pa];
         rhs.segment<6>(firstRow(ca)).noalias() += Y_[pa] * l.gp[slot];
         for (uint32_t b = a; b < end; ++b) {
           const uint32_t pb = st_.point_terms[b];
           Mat66 M = Y_[pa] * l.W[pb].transpose();
           // Two terms of one point in one keyframe: the block gets both cross products.
-          if (b != a && st_.col[terms_[st_.used[pb]].keyframe] == ca) M += M.transpose().eval();
+          if (b != a && st_.term_col[pb] == ca) M += M.transpose().eval();
           blocks_[st_.pair_block[pair++]] -= M;
         }
       }
@@ -220,7 +218,7 @@ class Solver {
       Eigen::Vector3d b = -l.gp[slot];
       for (uint32_t i = st_.point_free[slot]; i < st_.point_begin[slot + 1]; ++i) {
         const uint32_t pos = st_.point_terms[i];
-        b.noalias() -= l.W[pos].transpose() * dc_[st_.col[terms_[st_.used[pos]].keyframe]];
+        b.noalias() -= l.W[pos].transpose() * dc_[st_.term_col[pos]];
       }
       dp_[slot] = V_inv_[slot] * b;
     }
@@ -250,13 +248,8 @@ class Solver {
 
   /// `to` = `from` moved by the last step (only the free keyframes and the used points are written).
   void apply(const BaState& from, BaState& to) const {
-    for (size_t k = 0; k < st_.col.size(); ++k) {
-      const int c = st_.col[k];
-      if (c < 0) continue;
-      const Eigen::Matrix3d dR = expSo3(dc_[c].head<3>());
-      to.R[k] = dR * from.R[k];
-      to.t[k] = dR * from.t[k] + dc_[c].tail<3>();
-    }
+    for (size_t k = 0; k < st_.col.size(); ++k)
+      if (st_.col[k] >= 0) to.T[k] = poseFromIncrement(dc_[st_.col[k]].data(), from.T[k]);
     for (size_t slot = 0; slot < st_.points.size(); ++slot)
       to.p[st_.points[slot]] = from.p[st_.points[slot]] + dp_[slot];
   }
@@ -268,7 +261,9 @@ class Solver {
       const BaTerm& t = terms_[i];
       const LinearizedReprojection e = evaluateTerm(k_, t, s, false);
       if (!e.in_front || !std::isfinite(e.chi2)) return false;
-      sum += 0.5 * loss(e.chi2, run_.robust ? t.huber_delta : 0.0).rho;
+      double rho[3];
+      robustLoss(e.chi2, run_.robust ? t.huber_delta : 0.0, rho);
+      sum += 0.5 * rho[0];
     }
     *out = sum;
     return true;
@@ -278,13 +273,13 @@ class Solver {
   double variableNorm(const BaState& s) const {
     double n2 = 0;
     for (size_t k = 0; k < st_.col.size(); ++k)
-      if (st_.col[k] >= 0) n2 += s.t[k].squaredNorm();
+      if (st_.col[k] >= 0) n2 += s.T[k].translation().squaredNorm();
     for (uint32_t j : st_.points) n2 += s.p[j].squaredNorm();
     return std::sqrt(n2);
   }
 
  private:
-  bool solveReduced(const Eigen::VectorXd& rhs, Eigen::VectorXd& x) const {
+  bool solveReduced(const Eigen::VectorXd& rhs, Eigen::VectorXd& x) {
     const Eigen::Index n = firstRow(st_.num_free);
     if (run_.solver == BaLinearSolver::kDenseSchur) {
       Eigen::MatrixXd S = Eigen::MatrixXd::Zero(n, n);
@@ -305,11 +300,16 @@ class Solver {
       }
       Eigen::SparseMatrix<double> S(n, n);
       S.setFromTriplets(entries.begin(), entries.end());
-      const Eigen::SimplicialLDLT<Eigen::SparseMatrix<double>, Eigen::Upper> ldlt(S);
-      if (ldlt.info() != Eigen::Success) return false;
-      x = ldlt.solve(rhs);
+      // The pattern is the same at every step of a run (explicit zeros are kept): order it once.
+      if (!pattern_analyzed_) {
+        ldlt_.analyzePattern(S);
+        pattern_analyzed_ = true;
+      }
+      ldlt_.factorize(S);
+      if (ldlt_.info() != Eigen::Success) return false;
+      x = ldlt_.solve(rhs);
       // LDLT does not need positive pivots; a step from an indefinite system is no descent step.
-      if ((ldlt.vectorD().array() <= 0).any()) return false;
+      if ((ldlt_.vectorD().array() <= 0).any()) return false;
     }
     return x.allFinite();
   }
@@ -325,24 +325,24 @@ class Solver {
   std::vector<Vec6> dc_;
   std::vector<Eigen::Vector3d> dp_;
   double model_gain_ = 0, step_norm_ = 0;
+  Eigen::SimplicialLDLT<Eigen::SparseMatrix<double>, Eigen::Upper> ldlt_;  // the sparse path's
+  bool pattern_analyzed_ = false;
 };
 
 }  // namespace
 
 LinearizedReprojection evaluateTerm(const ProjectionConstants& k, const BaTerm& term, const BaState& s,
                                     bool with_jacobians) {
-  return linearizeReprojection(k, s.R[term.keyframe], s.t[term.keyframe], s.p[term.point], term.obs,
-                               term.sqrt_info, term.stereo, with_jacobians);
+  return linearizeReprojection(k, s.T[term.keyframe], s.p[term.point], term.obs, term.sqrt_info, term.stereo,
+                               with_jacobians);
 }
 
 LmOutcome solveSchurLm(const ProjectionConstants& k, const std::vector<BaTerm>& terms,
                        const std::vector<bool>& use, const std::vector<bool>& fixed, const LmRun& run,
-                       BaState& state, std::vector<bool>& moved) {
+                       BaState& state) {
   LmOutcome out;
   const Structure st = makeStructure(terms, use, fixed, state.p.size());
   if (st.used.empty()) return out;
-  for (size_t kf = 0; kf < st.col.size(); ++kf)
-    if (st.col[kf] >= 0) moved[kf] = true;
   const auto aborted = [&] { return run.abort && run.abort->load(); };
 
   Solver solver(k, terms, st, run);

@@ -39,10 +39,9 @@ struct BaTerm {
   double huber_delta = 0;
 };
 
-/// The variables: every keyframe's pose (R, t of T_c_w) and every point.
+/// The variables: every keyframe's pose T_c_w and every point.
 struct BaState {
-  std::vector<Eigen::Matrix3d> R;
-  std::vector<Eigen::Vector3d> t;
+  std::vector<Pose3> T;
   std::vector<Eigen::Vector3d> p;
 };
 
@@ -62,10 +61,10 @@ struct LmOutcome {
 LinearizedReprojection evaluateTerm(const ProjectionConstants& k, const BaTerm& term, const BaState& s,
                                     bool with_jacobians = false);
 
-/// Minimises over the terms marked in `use`; keyframes marked in `fixed` hold still. `moved` is set for
-/// every keyframe that was free to move (not fixed, and seen by a used term).
+/// Minimises over the terms marked in `use`; keyframes marked in `fixed` hold still. Only free keyframes
+/// seen by a used term, and points seen by one, are written.
 LmOutcome solveSchurLm(const ProjectionConstants& k, const std::vector<BaTerm>& terms,
                        const std::vector<bool>& use, const std::vector<bool>& fixed, const LmRun& run,
-                       BaState& state, std::vector<bool>& moved);
+                       BaState& state);
 
 }  // namespace binloop::optim_detail

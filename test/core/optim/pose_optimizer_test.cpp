@@ -264,8 +264,7 @@ TEST(ReprojectionCosts, ClosedFormJacobiansAreTheAutomaticOnes) {
     const double obs[3] = {uv.x(), uv.y(), u_right};
     for (const bool stereo : {true, false}) {
       SCOPED_TRACE(::testing::Message() << "trial " << trial << (stereo ? " stereo" : " mono"));
-      const LinearizedReprojection l =
-          linearizeReprojection(k, T.linear(), T.translation(), p_w, obs, std::sqrt(inv_sigma2), stereo);
+      const LinearizedReprojection l = linearizeReprojection(k, T, p_w, obs, std::sqrt(inv_sigma2), stereo);
       ASSERT_TRUE(l.in_front);
       const int rows = stereo ? 3 : 2;
       double r[3] = {0, 0, 0}, J_xi[3 * 6] = {}, J_p[3 * 3] = {};
