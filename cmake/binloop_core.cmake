@@ -34,10 +34,16 @@ foreach(cfg IMPORTED_LOCATION IMPORTED_LOCATION_RELEASE IMPORTED_LOCATION_NOCONF
   endif()
 endforeach()
 
+# CHOLMOD (SuiteSparse, which Ceres needs too): the sparse Cholesky of global bundle adjustment.
+find_path(CHOLMOD_INCLUDE_DIR cholmod.h PATH_SUFFIXES suitesparse REQUIRED)
+find_library(CHOLMOD_LIBRARY cholmod REQUIRED)
+
 file(GLOB_RECURSE BINLOOP_CORE_SOURCES CONFIGURE_DEPENDS ${BINLOOP_ROOT}/src/core/*.cpp)
 add_library(binloop_core SHARED ${BINLOOP_CORE_SOURCES})
 target_include_directories(binloop_core PUBLIC ${BINLOOP_ROOT}/include ${OpenCV_INCLUDE_DIRS})
-target_link_libraries(binloop_core PUBLIC Eigen3::Eigen ${OpenCV_LIBS} Threads::Threads Ceres::ceres PRIVATE ${CMAKE_DL_LIBS})
+target_include_directories(binloop_core PRIVATE ${CHOLMOD_INCLUDE_DIR})
+target_link_libraries(binloop_core PUBLIC Eigen3::Eigen ${OpenCV_LIBS} Threads::Threads Ceres::ceres
+                      PRIVATE ${CHOLMOD_LIBRARY} ${CMAKE_DL_LIBS})
 target_compile_options(binloop_core PRIVATE ${BINLOOP_WARNINGS})
 # The last place packageDir() looks for vocab/ and config/ (util/package_paths.h).
 set_source_files_properties(${BINLOOP_ROOT}/src/core/util/package_paths.cpp PROPERTIES

@@ -19,7 +19,7 @@ PACKAGES=(
   # rviz (launch files' rviz:=true) and a virtual display + screenshots for looking at it headless
   rviz xvfb imagemagick
   # numerics and vision
-  libopencv-dev libeigen3-dev libceres-dev libgtest-dev libgmock-dev libbenchmark-dev
+  libopencv-dev libeigen3-dev libceres-dev libsuitesparse-dev libgtest-dev libgmock-dev libbenchmark-dev
   # real photographs used as texture banks and vocabulary training data
   opencv-doc python3-skimage plasma-workspace-wallpapers
   # real photographs of the held-out loop set (data/loop_sets/real_heldout.txt)

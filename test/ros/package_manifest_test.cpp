@@ -57,6 +57,10 @@ const std::map<std::string, std::string> kCmakePackages = {
     {"Ceres", "libceres-dev"}, {"GTest", "gtest"},          {"Threads", ""},
     {"rostest", "rostest"},    {"roslaunch", "roslaunch"},  {"benchmark", "libbenchmark-dev"},
 };
+// find_library names (a library without a CMake package) and the dependency that provides each.
+const std::map<std::string, std::string> kCmakeLibraries = {
+    {"cholmod", "suitesparse"},
+};
 
 }  // namespace
 
@@ -97,6 +101,15 @@ TEST(PackageManifest, EveryFindPackageAndCatkinComponentIsDeclared) {
           << "find_package(" << name << ") needs '" << known->second << "' in package.xml";
   }
   EXPECT_GE(found, 5);
+  const std::regex fl(R"(find_library\(\s*[A-Za-z0-9_]+\s+([A-Za-z0-9_]+))");
+  for (std::sregex_iterator it(cmake.begin(), cmake.end(), fl), end; it != end; ++it) {
+    const std::string name = (*it)[1];
+    const auto known = kCmakeLibraries.find(name);
+    ASSERT_NE(known, kCmakeLibraries.end())
+        << "find_library(... " << name << "): add it to this test's table and to package.xml";
+    EXPECT_TRUE(deps.count(known->second))
+        << "find_library(... " << name << ") needs '" << known->second << "' in package.xml";
+  }
   // The catkin components: set(BINLOOP_CATKIN_DEPS ...) and message_generation.
   const std::smatch m = [&] {
     std::smatch r;

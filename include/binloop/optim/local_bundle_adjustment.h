@@ -49,7 +49,7 @@ struct BaProblem {
 
 /// How the reduced camera system (the keyframes' 6x6 blocks, points eliminated) is factorised. A local
 /// window has 10-20 free keyframes, a 60-120 wide system: dense Cholesky. Global BA frees hundreds of
-/// keyframes of which each sees only its neighbours' points: sparse Cholesky (Eigen's SimplicialLDLT).
+/// keyframes of which each sees only its neighbours' points: sparse Cholesky (CHOLMOD's supernodal LLT).
 enum class BaLinearSolver {
   kDenseSchur,   // dense Cholesky of the reduced system (the default)
   kSparseSchur,  // sparse Cholesky of the reduced system

@@ -3,7 +3,7 @@
 #include <ceres/loss_function.h>
 
 #include <Eigen/Cholesky>
-#include <Eigen/SparseCholesky>
+#include <Eigen/CholmodSupport>
 #include <algorithm>
 #include <cmath>
 #include <limits>
@@ -302,14 +302,13 @@ class Solver {
       S.setFromTriplets(entries.begin(), entries.end());
       // The pattern is the same at every step of a run (explicit zeros are kept): order it once.
       if (!pattern_analyzed_) {
-        ldlt_.analyzePattern(S);
+        llt_.cholmod().print = 0;  // a matrix that is not positive definite is a rejected step, not a message
+        llt_.analyzePattern(S);
         pattern_analyzed_ = true;
       }
-      ldlt_.factorize(S);
-      if (ldlt_.info() != Eigen::Success) return false;
-      x = ldlt_.solve(rhs);
-      // LDLT does not need positive pivots; a step from an indefinite system is no descent step.
-      if ((ldlt_.vectorD().array() <= 0).any()) return false;
+      llt_.factorize(S);
+      if (llt_.info() != Eigen::Success) return false;
+      x = llt_.solve(rhs);
     }
     return x.allFinite();
   }
@@ -325,7 +324,9 @@ class Solver {
   std::vector<Vec6> dc_;
   std::vector<Eigen::Vector3d> dp_;
   double model_gain_ = 0, step_norm_ = 0;
-  Eigen::SimplicialLDLT<Eigen::SparseMatrix<double>, Eigen::Upper> ldlt_;  // the sparse path's
+  // The sparse path's. Supernodal: far points tie each keyframe to dozens of others, so the factor is
+  // dense in bands, where CHOLMOD's dense kernels beat a simplicial (one column at a time) factorisation.
+  Eigen::CholmodSupernodalLLT<Eigen::SparseMatrix<double>, Eigen::Upper> llt_;
   bool pattern_analyzed_ = false;
 };
 
