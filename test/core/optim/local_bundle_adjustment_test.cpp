@@ -246,10 +246,14 @@ TEST(LocalBundleAdjustment, EachGroupWithoutAnAnchorHoldsItsOldestKeyframe) {
   EXPECT_EQ(holdEachUnanchoredGroup(p), 0) << "every group is anchored now";
 }
 
-TEST(LocalBundleAdjustment, BitIdenticalAcrossRuns) {
+namespace {
+
+void expectBitIdenticalRuns(BaLinearSolver solver) {
   const Window w = makeWindow(spec(600, 2));
-  const LocalBaResult a = localBundleAdjustment(w.cam, w.problem),
-                      b = localBundleAdjustment(w.cam, w.problem);
+  LocalBaParams params;
+  params.linear_solver = solver;
+  const LocalBaResult a = localBundleAdjustment(w.cam, w.problem, params),
+                      b = localBundleAdjustment(w.cam, w.problem, params);
   ASSERT_EQ(a.keyframes.size(), b.keyframes.size());
   for (size_t i = 0; i < a.keyframes.size(); ++i)
     EXPECT_TRUE(sameBits(a.keyframes[i].T_c_w, b.keyframes[i].T_c_w));
@@ -258,6 +262,16 @@ TEST(LocalBundleAdjustment, BitIdenticalAcrossRuns) {
   EXPECT_EQ(a.outlier, b.outlier);
   EXPECT_EQ(0, std::memcmp(&a.final_cost, &b.final_cost, sizeof(double)));
   EXPECT_EQ(a.iterations, b.iterations);
+}
+
+}  // namespace
+
+// Both linear solvers: the dense one of local BA and the sparse one (CHOLMOD) of global BA.
+TEST(LocalBundleAdjustment, BitIdenticalAcrossRuns) {
+  for (const BaLinearSolver solver : {BaLinearSolver::kDenseSchur, BaLinearSolver::kSparseSchur}) {
+    SCOPED_TRACE(solver == BaLinearSolver::kDenseSchur ? "dense" : "sparse");
+    expectBitIdenticalRuns(solver);
+  }
 }
 
 TEST(LocalBundleAdjustment, SparseSchurAgreesWithDenseSchur) {
