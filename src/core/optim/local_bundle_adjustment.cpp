@@ -172,13 +172,14 @@ LocalBaResult localBundleAdjustment(const StereoCamera& camera, const BaProblem&
   for (size_t j = 0; j < pb.points.size(); ++j) result.points[j] = {pb.points[j].id, s.p[j]};
   result.outlier.assign(n, false);
   for (size_t i = 0; i < n; ++i) {
-    result.outlier[i] = isOutlier(k, terms[i], s);
+    const LinearizedReprojection e = evaluateTerm(k, terms[i], s);
+    result.outlier[i] = optim_detail::isOutlier(e.in_front, e.chi2, terms[i].chi2_max);
     if (result.outlier[i]) {
       ++result.num_outliers;
       continue;
     }
     result.initial_cost += 0.5 * evaluateTerm(k, terms[i], start).chi2;
-    result.final_cost += 0.5 * evaluateTerm(k, terms[i], s).chi2;
+    result.final_cost += 0.5 * e.chi2;
   }
   result.time_s = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
   return result;
