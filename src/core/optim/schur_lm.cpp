@@ -5,8 +5,10 @@
 #include <Eigen/Cholesky>
 #include <Eigen/CholmodSupport>
 #include <algorithm>
+#include <array>
 #include <cmath>
 #include <limits>
+#include <memory>
 #include <unordered_map>
 
 namespace binloop::optim_detail {
@@ -27,17 +29,45 @@ Eigen::Index firstRow(int c) { return Eigen::Index{6} * c; }
 
 double clampedDiagonal(double d) { return std::clamp(d, kMinDiagonal, kMaxDiagonal); }
 
-/// rho(s) (index 0) and rho'(s) (index 1) of ceres::HuberLoss(delta) on chi2 s, the pose optimiser's
-/// robust kernel; delta 0: plain squares, rho(s) = s.
-void robustLoss(double s, double delta, double rho[3]) {
-  if (delta > 0) {
-    ceres::HuberLoss(delta).Evaluate(s, rho);
+/// rho(s) (index 0) and rho'(s) (index 1) of the term's loss on chi2 s; no loss: plain squares, rho(s) = s.
+void robustLoss(const ceres::LossFunction* loss, double s, double rho[3]) {
+  if (loss) {
+    loss->Evaluate(s, rho);
     return;
   }
   rho[0] = s;
   rho[1] = 1;
   rho[2] = 0;
 }
+
+// ceres::HuberLoss(delta), the pose optimiser's robust kernel, one per distinct width among a run's terms
+// (a stage has two: mono and stereo), made once per run rather than per term and evaluation.
+class Losses {
+ public:
+  Losses(const std::vector<BaTerm>& terms, const std::vector<uint32_t>& used, bool robust) {
+    if (!robust) return;
+    of_term_.reserve(used.size());
+    for (uint32_t i : used) {
+      const double delta = terms[i].huber_delta;
+      if (!(delta > 0)) {  // no width: plain squares for this term
+        of_term_.push_back(nullptr);
+        continue;
+      }
+      auto it = std::find_if(losses_.begin(), losses_.end(), [&](const auto& l) { return l.first == delta; });
+      if (it == losses_.end()) {
+        losses_.emplace_back(delta, std::make_unique<ceres::HuberLoss>(delta));
+        it = losses_.end() - 1;
+      }
+      of_term_.push_back(it->second.get());
+    }
+  }
+  /// The loss of the term at position `pos` in the run's used terms; nullptr: plain squares.
+  const ceres::LossFunction* at(size_t pos) const { return of_term_.empty() ? nullptr : of_term_[pos]; }
+
+ private:
+  std::vector<std::pair<double, std::unique_ptr<ceres::HuberLoss>>> losses_;
+  std::vector<const ceres::LossFunction*> of_term_;
+};
 
 // What does not change during a run: which terms, keyframes and points take part, and where each
 // keyframe pair lands in the reduced camera system.
@@ -129,7 +159,7 @@ class Solver {
  public:
   Solver(const ProjectionConstants& k, const std::vector<BaTerm>& terms, const Structure& st,
          const LmRun& run)
-      : k_(k), terms_(terms), st_(st), run_(run) {
+      : k_(k), terms_(terms), st_(st), run_(run), losses_(terms, st.used, run.robust) {
     lin_.U.resize(st.num_free);
     lin_.gc.resize(st.num_free);
     lin_.V.resize(st.points.size());
@@ -155,7 +185,7 @@ class Solver {
         const BaTerm& t = terms_[st_.used[pos]];
         const LinearizedReprojection e = evaluateTerm(k_, t, s, true);
         double rho[3];
-        robustLoss(e.chi2, run_.robust ? t.huber_delta : 0.0, rho);
+        robustLoss(losses_.at(pos), e.chi2, rho);
         l.cost += 0.5 * rho[0];
         const Eigen::Matrix3d wJp = rho[1] * e.J_point;
         V.noalias() += e.J_point.transpose() * wJp;
@@ -257,12 +287,11 @@ class Solver {
   /// 1/2 sum rho(chi2) at a state; false when an observed point is at or behind its camera there.
   bool cost(const BaState& s, double* out) const {
     double sum = 0;
-    for (uint32_t i : st_.used) {
-      const BaTerm& t = terms_[i];
-      const LinearizedReprojection e = evaluateTerm(k_, t, s, false);
+    for (size_t pos = 0; pos < st_.used.size(); ++pos) {
+      const LinearizedReprojection e = evaluateTerm(k_, terms_[st_.used[pos]], s, false);
       if (!e.in_front || !std::isfinite(e.chi2)) return false;
       double rho[3];
-      robustLoss(e.chi2, run_.robust ? t.huber_delta : 0.0, rho);
+      robustLoss(losses_.at(pos), e.chi2, rho);
       sum += 0.5 * rho[0];
     }
     *out = sum;
@@ -289,34 +318,60 @@ class Solver {
       if (llt.info() != Eigen::Success) return false;
       x = llt.solve(rhs);
     } else {
-      std::vector<Eigen::Triplet<double>> entries;
-      entries.reserve(36 * blocks_.size());
+      // The pattern is the same at every step of a run: build it and order it once, then only write values.
+      if (S_.rows() != n) {
+        makeSparsePattern(n);
+        llt_.cholmod().print = 0;  // a matrix that is not positive definite is a rejected step, not a message
+        llt_.analyzePattern(S_);
+      }
+      double* values = S_.valuePtr();
       for (size_t b = 0; b < blocks_.size(); ++b) {
-        const auto [ca, cb] = st_.blocks[b];
-        for (int i = 0; i < 6; ++i) {
-          for (int j = (ca == cb ? i : 0); j < 6; ++j)
-            entries.emplace_back(firstRow(ca) + i, firstRow(cb) + j, blocks_[b](i, j));
+        const bool diagonal = st_.blocks[b].first == st_.blocks[b].second;
+        for (int j = 0; j < 6; ++j) {
+          double* column = values + block_offset_[b][j];
+          for (int i = 0; i <= (diagonal ? j : 5); ++i) column[i] = blocks_[b](i, j);
         }
       }
-      Eigen::SparseMatrix<double> S(n, n);
-      S.setFromTriplets(entries.begin(), entries.end());
-      // The pattern is the same at every step of a run (explicit zeros are kept): order it once.
-      if (!pattern_analyzed_) {
-        llt_.cholmod().print = 0;  // a matrix that is not positive definite is a rejected step, not a message
-        llt_.analyzePattern(S);
-        pattern_analyzed_ = true;
-      }
-      llt_.factorize(S);
+      llt_.factorize(S_);
       if (llt_.info() != Eigen::Success) return false;
       x = llt_.solve(rhs);
     }
     return x.allFinite();
   }
 
+  // The upper triangle of the reduced system's block pattern, and where each block's column j starts in
+  // the value array: in column-major storage a block's rows are contiguous within each of its columns.
+  void makeSparsePattern(Eigen::Index n) {
+    std::vector<Eigen::Triplet<double>> entries;
+    entries.reserve(36 * blocks_.size());
+    for (const auto& [ca, cb] : st_.blocks) {
+      for (int j = 0; j < 6; ++j) {
+        for (int i = 0; i <= (ca == cb ? j : 5); ++i)
+          entries.emplace_back(firstRow(ca) + i, firstRow(cb) + j, 0.0);
+      }
+    }
+    S_.resize(n, n);
+    S_.setFromTriplets(entries.begin(), entries.end());
+    S_.makeCompressed();
+    block_offset_.resize(st_.blocks.size());
+    for (size_t b = 0; b < st_.blocks.size(); ++b) {
+      const auto [ca, cb] = st_.blocks[b];
+      for (int j = 0; j < 6; ++j) {
+        const Eigen::Index col = firstRow(cb) + j;
+        const int* rows = S_.innerIndexPtr();
+        const int* first =
+            std::lower_bound(rows + S_.outerIndexPtr()[col], rows + S_.outerIndexPtr()[col + 1],
+                             static_cast<int>(firstRow(ca)));
+        block_offset_[b][j] = first - rows;
+      }
+    }
+  }
+
   const ProjectionConstants& k_;
   const std::vector<BaTerm>& terms_;
   const Structure& st_;
   const LmRun& run_;
+  const Losses losses_;
   Linear lin_;
   std::vector<Mat63> Y_;  // per used term of a free keyframe: W V^-1
   std::vector<Eigen::Matrix3d> V_inv_;
@@ -326,8 +381,9 @@ class Solver {
   double model_gain_ = 0, step_norm_ = 0;
   // The sparse path's. Supernodal: far points tie each keyframe to dozens of others, so the factor is
   // dense in bands, where CHOLMOD's dense kernels beat a simplicial (one column at a time) factorisation.
+  Eigen::SparseMatrix<double> S_;
+  std::vector<std::array<std::ptrdiff_t, 6>> block_offset_;  // per block, per column: its first value
   Eigen::CholmodSupernodalLLT<Eigen::SparseMatrix<double>, Eigen::Upper> llt_;
-  bool pattern_analyzed_ = false;
 };
 
 }  // namespace
