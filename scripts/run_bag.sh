@@ -71,13 +71,24 @@ done
 "$recorder_bin" --out "$out" >"$out/record.log" 2>&1 &
 recorder=$!
 # Wait for the Tracking nodelet (it advertises tracked_frame once its inputs are subscribed, whatever their
-# namespace and transport), then give the subscriptions a second to connect to the bag's publishers.
+# namespace and transport). The player starts paused and runs once every subscriber of its topics has
+# connected to it: a fixed delay is not enough on a loaded machine, and a pair sent before is lost.
 for _ in $(seq 300); do
   rostopic list 2>/dev/null | grep -qx /binloop/tracked_frame && break
   sleep 0.1
 done
 echo "run-bag: playing $bag at rate $rate through $launch (detector $detector); graph log $out/graph.log"
-rosbag play --clock -q -d 1 -r "$rate" "$bag"
+player=binloop_bag_player
+rosbag play --clock -q --pause -r "$rate" "$bag" __name:=$player &
+pids+=($!)
+play=$!
+"$(dirname "${BASH_SOURCE[0]}")/wait_bag_connections.py" "$player" 30 || echo "run-bag: playing anyway" >&2
+for try in $(seq 50); do
+  rosservice call "/$player/pause_playback" "data: false" >/dev/null 2>&1 && break
+  [ "$try" = 50 ] && { echo "run-bag: could not start the player (/$player/pause_playback)" >&2; exit 1; }
+  sleep 0.2
+done
+wait "$play"
 # The recorder writes once the graph has been quiet for 3 s (it may still be working through queued pairs).
 kill -INT "$recorder"; wait "$recorder" || true
 if [ -n "$shot" ]; then

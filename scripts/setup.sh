@@ -9,7 +9,7 @@ PACKAGES=(
   # the core is compiled by both builds (ROS-free and catkin): the second takes the first's objects
   ccache
   libnodelet-dev libnodeletlib-dev pluginlib-dev libtf2-ros-dev libtf2-eigen-dev
-  librosbag-dev python3-rosbag python3-rospy python3-geometry-msgs python3-diagnostic-msgs libdynamic-reconfigure-config-init-mutex-dev python3-dynamic-reconfigure
+  librosbag-dev python3-rosbag python3-rospy python3-std-srvs python3-geometry-msgs python3-diagnostic-msgs libdynamic-reconfigure-config-init-mutex-dev python3-dynamic-reconfigure
   libcv-bridge-dev libimage-transport-dev libmessage-filters-dev
   libsensor-msgs-dev libgeometry-msgs-dev libnav-msgs-dev libvisualization-msgs-dev libstd-msgs-dev
   libdiagnostic-msgs-dev libdiagnostic-updater-dev
