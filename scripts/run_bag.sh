@@ -60,6 +60,7 @@ rosparam set /use_sim_time true
 # shellcheck disable=SC2086
 roslaunch binloop "$launch" detector:="$detector" use_sim_time:=true $extra >"$out/graph.log" 2>&1 &
 graph=$!
+pids+=("$graph")
 # The recorder of the sourced space (the first prefix that has one); not rosrun, which in a devel space also
 # searches the source folder, where the checkout's own .build/ holds more copies.
 recorder_bin=""
@@ -70,6 +71,7 @@ done
 [ -n "$recorder_bin" ] || { echo "run-bag: no lib/binloop/record-run on CMAKE_PREFIX_PATH (source a setup.bash)" >&2; exit 1; }
 "$recorder_bin" --out "$out" >"$out/record.log" 2>&1 &
 recorder=$!
+pids+=("$recorder")
 # Wait for the Tracking nodelet (it advertises tracked_frame once its inputs are subscribed, whatever their
 # namespace and transport). The player starts paused and runs once every subscriber of its topics has
 # connected to it: a fixed delay is not enough on a loaded machine, and a pair sent before is lost.
@@ -80,11 +82,12 @@ done
 echo "run-bag: playing $bag at rate $rate through $launch (detector $detector); graph log $out/graph.log"
 player=binloop_bag_player
 rosbag play --clock -q --pause -r "$rate" "$bag" __name:=$player &
-pids+=($!)
 play=$!
-"$(dirname "${BASH_SOURCE[0]}")/wait_bag_connections.py" "$player" 30 || echo "run-bag: playing anyway" >&2
+pids+=("$play")
+"$(dirname "${BASH_SOURCE[0]}")/wait_bag_connections.py" "$player" "$bag" 30 || echo "run-bag: playing anyway" >&2
 for try in $(seq 50); do
   rosservice call "/$player/pause_playback" "data: false" >/dev/null 2>&1 && break
+  kill -0 "$play" 2>/dev/null || { echo "run-bag: rosbag play ended before it played (see above)" >&2; exit 1; }
   [ "$try" = 50 ] && { echo "run-bag: could not start the player (/$player/pause_playback)" >&2; exit 1; }
   sleep 0.2
 done
