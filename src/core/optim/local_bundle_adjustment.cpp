@@ -81,8 +81,7 @@ std::vector<BaTerm> makeTerms(const BaProblem& pb, const LocalBaParams& params) 
 }
 
 /// Behind the camera, or chi2 above the threshold (or not a number).
-bool isOutlier(const ProjectionConstants& k, const BaTerm& t, const BaState& s) {
-  const LinearizedReprojection e = evaluateTerm(k, t, s);
+bool isOutlier(const LinearizedReprojection& e, const BaTerm& t) {
   return optim_detail::isOutlier(e.in_front, e.chi2, t.chi2_max);
 }
 
@@ -156,7 +155,7 @@ LocalBaResult localBundleAdjustment(const StereoCamera& camera, const BaProblem&
 
   // Stage 2: drop the outliers of stage 1 (chi2 over the threshold or behind the camera), plain squares.
   if (!result.aborted && params.refine_iterations > 0) {
-    for (size_t i = 0; i < n; ++i) use[i] = use[i] && !isOutlier(k, terms[i], s);
+    for (size_t i = 0; i < n; ++i) use[i] = use[i] && !isOutlier(evaluateTerm(k, terms[i], s), terms[i]);
     run.max_iterations = params.refine_iterations;
     run.robust = false;
     const LmOutcome o = solveSchurLm(k, terms, use, fixed, run, s);
@@ -173,7 +172,7 @@ LocalBaResult localBundleAdjustment(const StereoCamera& camera, const BaProblem&
   result.outlier.assign(n, false);
   for (size_t i = 0; i < n; ++i) {
     const LinearizedReprojection e = evaluateTerm(k, terms[i], s);
-    result.outlier[i] = optim_detail::isOutlier(e.in_front, e.chi2, terms[i].chi2_max);
+    result.outlier[i] = isOutlier(e, terms[i]);
     if (result.outlier[i]) {
       ++result.num_outliers;
       continue;

@@ -354,11 +354,11 @@ class Solver {
     S_.setFromTriplets(entries.begin(), entries.end());
     S_.makeCompressed();
     block_offset_.resize(st_.blocks.size());
+    const int* rows = S_.innerIndexPtr();
     for (size_t b = 0; b < st_.blocks.size(); ++b) {
       const auto [ca, cb] = st_.blocks[b];
       for (int j = 0; j < 6; ++j) {
         const Eigen::Index col = firstRow(cb) + j;
-        const int* rows = S_.innerIndexPtr();
         const int* first =
             std::lower_bound(rows + S_.outerIndexPtr()[col], rows + S_.outerIndexPtr()[col + 1],
                              static_cast<int>(firstRow(ca)));
