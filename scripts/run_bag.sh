@@ -80,7 +80,7 @@ for _ in $(seq 300); do
   sleep 0.1
 done
 echo "run-bag: playing $bag at rate $rate through $launch (detector $detector); graph log $out/graph.log"
-player=binloop_bag_player
+player=binloop_bag_player_$$  # its own name: a second run-bag on the same master must not replace it
 rosbag play --clock -q --pause -r "$rate" "$bag" __name:=$player &
 play=$!
 pids+=("$play")
