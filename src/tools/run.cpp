@@ -135,6 +135,11 @@ void writeTrajectories(const fs::path& out, const std::vector<msg::TrackedFrame>
   Trajectory keyframes;
   for (const auto& k : mapper.keyframes()) keyframes.push_back({k.stamp_s, k.T_w_c});
   writeTrajectoryFiles((out / "keyframes").string(), keyframes);
+  // Each frame where tracking put it at the time, before later loop corrections and BA moved its keyframe:
+  // what a robot got live, and what tells odometry's errors from a correction's.
+  Trajectory live;
+  for (const auto& f : frames) live.push_back({f.stamp_s, f.T_w_c});
+  writeTrajectoryFiles((out / "live").string(), live);
 }
 
 void addTimes(JsonObject& js, const std::string& name, const std::vector<double>& v) {
@@ -241,9 +246,16 @@ int writeLoops(const fs::path& out, const SlamPipeline& slam, const KittiSequenc
                                        .add("started", g.started)
                                        .add("merged", g.merged)
                                        .add("stopped_by_a_loop", g.aborted)
-                                       .add("last_ms", g.last_ms)
-                                       .add("last_keyframes", g.last_keyframes)
                                        .add("last_added_meanwhile", g.last_added_meanwhile));
+  if (g.last_keyframes > 0)  // the last global BA that reached the map, threaded or not
+    js.add("global_ba_last", JsonObject()
+                                 .add("ms", g.last_ms)
+                                 .add("keyframes", g.last_keyframes)
+                                 .add("iterations", g.last_iterations)
+                                 .add("robust_iterations", g.last_robust_iterations)
+                                 .add("outliers_removed", g.last_outliers)
+                                 .add("initial_cost", g.last_initial_cost)
+                                 .add("final_cost", g.last_final_cost));
   return by_status["accepted"];
 }
 
@@ -266,8 +278,8 @@ CliArgs runArgs() {
       "    [--load-map <dir> [--localize-only]] [--save-map <dir>]\n"
       "Tracks and maps a KITTI-layout stereo sequence (image_0/, image_1/, calib.txt, times.txt), closes "
       "loops,\n"
-      "and writes trajectory.kitti.txt / .tum.txt (every frame, loop-corrected), keyframes.kitti.txt / "
-      ".tum.txt,\n"
+      "and writes trajectory.kitti.txt / .tum.txt (every frame, loop-corrected), live.kitti.txt / .tum.txt\n"
+      "(every frame as tracked at the time), keyframes.kitti.txt / .tum.txt,\n"
       "timing.csv, loops.csv (one row per keyframe and model queried), summary.json.");
   args.positional("sequence_dir", "KITTI-layout sequence folder")
       .option("out", "output folder (created)")

@@ -52,6 +52,10 @@ struct LocalMapperParams {
   // After a loop correction, a bundle adjustment of the whole map. On by default
   // (docs/results/2026-11-26-slam-measurements.md, "Loop closing, measured": what it costs and gives).
   bool global_ba_after_loop = true;
+  // Its iterations (`ba` holds local BA's): with Huber loss over every observation, then plain squares
+  // over the inliers.
+  int global_ba_robust_iterations = 5;
+  int global_ba_refine_iterations = 10;
   // Where it runs. False: on mapping's thread, before the corrected map goes to tracking (mapping waits;
   // lock-step runs stay bit-identical). True (the threaded pipeline and the nodelet set it): on its own
   // thread over a copy of the map, as ORB-SLAM2 does; mapping goes on, and mergeGlobalBa() folds the result
@@ -93,6 +97,9 @@ class LocalMapper {
     std::string last_failure;
     double last_ms = 0;  // the last merged one's solve
     int last_keyframes = 0, last_added_meanwhile = 0;
+    int last_iterations = 0, last_robust_iterations = 0;  // its LM iterations: both stages, stage 1
+    int last_outliers = 0;                                // observations it removed
+    double last_initial_cost = 0, last_final_cost = 0;    // 1/2 chi2 over its final inliers, before and after
   };
   const GlobalBaStats& globalBaStats() const { return global_ba_; }
   /// Set from another thread to cut a running local BA short (a new keyframe is waiting).
@@ -166,8 +173,9 @@ class LocalMapper {
   void localBundleAdjustment(KF& kf, msg::LocalMapUpdate& u);
   /// Bundle adjustment of the `free` keyframes and every point they see; other keyframes that see those
   /// points hold still.
-  void bundleAdjust(const std::vector<SlamKeyframeId>& free, const LocalBaParams& params,
-                    msg::LocalMapUpdate& u);
+  // Returns the solver's report (its points and keyframes are in the map already).
+  LocalBaResult bundleAdjust(const std::vector<SlamKeyframeId>& free, const LocalBaParams& params,
+                             msg::LocalMapUpdate& u);
   struct BaSetup {
     BaProblem problem;
     size_t free = 0;  // the first `free` keyframes of the problem are optimised
@@ -176,6 +184,7 @@ class LocalMapper {
   BaSetup makeBaProblem(const std::vector<SlamKeyframeId>& free) const;
   void removeBaOutliers(const BaSetup& b, const LocalBaResult& r, msg::LocalMapUpdate& u);
   LocalBaParams globalBaParams() const;
+  void noteGlobalBa(const LocalBaResult& r, size_t keyframes);  // into global_ba_'s last_* fields
   /// Moves every keyframe by its delta (T_w_c_after T_w_c_before^-1) or its nearest ancestor's, and every
   /// point with its reference keyframe unless `placed` gives its new position. Returns each keyframe's
   /// delta, by id.

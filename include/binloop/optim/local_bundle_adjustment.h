@@ -84,9 +84,10 @@ struct LocalBaResult {
   /// 1/2 sum of chi2 over the final inliers, at the input and at the result (same observations, no
   /// robust loss, so the two compare).
   double initial_cost = 0, final_cost = 0;
-  int iterations = 0;    // Levenberg-Marquardt iterations, both stages
-  double time_s = 0;     // wall time of the whole call
-  bool aborted = false;  // the abort flag stopped it (stage 2 then does not run)
+  int iterations = 0;         // Levenberg-Marquardt iterations, both stages
+  int robust_iterations = 0;  // ... of which stage 1 (Huber) took
+  double time_s = 0;          // wall time of the whole call
+  bool aborted = false;       // the abort flag stopped it (stage 2 then does not run)
 };
 
 /// Holds the oldest keyframe (lowest id) of every group of keyframes that shares points, directly or

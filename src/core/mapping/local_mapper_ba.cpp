@@ -55,10 +55,10 @@ LocalMapper::BaSetup LocalMapper::makeBaProblem(const std::vector<SlamKeyframeId
   return b;
 }
 
-void LocalMapper::bundleAdjust(const std::vector<SlamKeyframeId>& free, const LocalBaParams& params,
-                               msg::LocalMapUpdate& u) {
+LocalBaResult LocalMapper::bundleAdjust(const std::vector<SlamKeyframeId>& free, const LocalBaParams& params,
+                                        msg::LocalMapUpdate& u) {
   const BaSetup b = makeBaProblem(free);
-  if (b.problem.points.empty()) return;
+  if (b.problem.points.empty()) return {};
   const auto t0 = std::chrono::steady_clock::now();
   const LocalBaResult r = binloop::localBundleAdjustment(camera_, b.problem, params, &abort_);
   u.ba_ms = msSince(t0);
@@ -69,6 +69,7 @@ void LocalMapper::bundleAdjust(const std::vector<SlamKeyframeId>& free, const Lo
   for (const BaPoint& bp : r.points) map_.points().at(bp.id).state.p_w = bp.p_w;
   removeBaOutliers(b, r, u);
   for (size_t i = 0; i < b.free; ++i) updateConnections(map_.keyframes().at(b.problem.keyframes[i].id));
+  return r;
 }
 
 void LocalMapper::removeBaOutliers(const BaSetup& b, const LocalBaResult& r, msg::LocalMapUpdate& u) {
@@ -101,6 +102,8 @@ void LocalMapper::removeBaOutliers(const BaSetup& b, const LocalBaResult& r, msg
 LocalBaParams LocalMapper::globalBaParams() const {
   LocalBaParams g = p_.ba;
   g.linear_solver = BaLinearSolver::kSparseSchur;  // hundreds of free keyframes
+  g.robust_iterations = p_.global_ba_robust_iterations;
+  g.refine_iterations = p_.global_ba_refine_iterations;
   return g;
 }
 
@@ -179,10 +182,19 @@ msg::LocalMapUpdatePtr LocalMapper::mergeGlobalBa(bool wait) {
   wholeMapInto(*u);
   u->total_ms = msSince(t0);
   ++global_ba_.merged;
-  global_ba_.last_ms = ms;
-  global_ba_.last_keyframes = static_cast<int>(start.keyframes.size());
   global_ba_.last_added_meanwhile = static_cast<int>(added);
+  noteGlobalBa(job->result, start.keyframes.size());
   return u;
+}
+
+void LocalMapper::noteGlobalBa(const LocalBaResult& r, size_t keyframes) {
+  global_ba_.last_ms = 1000 * r.time_s;
+  global_ba_.last_keyframes = static_cast<int>(keyframes);
+  global_ba_.last_iterations = r.iterations;
+  global_ba_.last_robust_iterations = r.robust_iterations;
+  global_ba_.last_outliers = r.num_outliers;
+  global_ba_.last_initial_cost = r.initial_cost;
+  global_ba_.last_final_cost = r.final_cost;
 }
 
 LocalMapper::~LocalMapper() { stopGlobalBa(); }

@@ -150,6 +150,7 @@ LocalBaResult localBundleAdjustment(const StereoCamera& camera, const BaProblem&
     run.robust = true;
     const LmOutcome o = solveSchurLm(k, terms, use, fixed, run, s);
     result.iterations += o.iterations;
+    result.robust_iterations = o.iterations;
     result.aborted = o.aborted;
   }
 

@@ -109,6 +109,8 @@ Sections backEndSettings(SlamConfig& c) {
         {"ba_refine_iterations", {S::kInt, &m.ba.refine_iterations, 0}},
         {"cull_keyframes", {S::kBool, &m.cull_keyframes, 0}},
         {"global_ba_after_loop", {S::kBool, &m.global_ba_after_loop, 0}},
+        {"global_ba_robust_iterations", {S::kInt, &m.global_ba_robust_iterations, 1}},
+        {"global_ba_refine_iterations", {S::kInt, &m.global_ba_refine_iterations, 0}},
         {"redundant_ratio", {S::kFloat, &m.redundant_ratio, 0}}}},
       {"loop_detection",
        {{"max_reference", {S::kInt, &d.max_reference, 1}},
