@@ -60,7 +60,7 @@ LocalBaResult LocalMapper::bundleAdjust(const std::vector<SlamKeyframeId>& free,
   const BaSetup b = makeBaProblem(free);
   if (b.problem.points.empty()) return {};
   const auto t0 = std::chrono::steady_clock::now();
-  const LocalBaResult r = binloop::localBundleAdjustment(camera_, b.problem, params, &abort_);
+  LocalBaResult r = binloop::localBundleAdjustment(camera_, b.problem, params, &abort_);
   u.ba_ms = msSince(t0);
   u.ba_iterations = r.iterations;
   u.ba_outliers = r.num_outliers;
