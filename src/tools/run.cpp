@@ -249,13 +249,13 @@ int writeLoops(const fs::path& out, const SlamPipeline& slam, const KittiSequenc
                                        .add("last_added_meanwhile", g.last_added_meanwhile));
   if (g.last_keyframes > 0)  // the last global BA that reached the map, threaded or not
     js.add("global_ba_last", JsonObject()
-                                 .add("ms", g.last_ms)
+                                 .add("ms", 1000 * g.last.time_s)
                                  .add("keyframes", g.last_keyframes)
-                                 .add("iterations", g.last_iterations)
-                                 .add("robust_iterations", g.last_robust_iterations)
-                                 .add("outliers_removed", g.last_outliers)
-                                 .add("initial_cost", g.last_initial_cost)
-                                 .add("final_cost", g.last_final_cost));
+                                 .add("iterations", g.last.iterations)
+                                 .add("robust_iterations", g.last.robust_iterations)
+                                 .add("outliers_removed", g.last.num_outliers)
+                                 .add("initial_cost", g.last.initial_cost)
+                                 .add("final_cost", g.last.final_cost));
   return by_status["accepted"];
 }
 

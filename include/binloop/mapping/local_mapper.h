@@ -95,11 +95,9 @@ class LocalMapper {
     int started = 0, merged = 0, aborted = 0;  // aborted: stopped by a correction (or discarded at the end)
     int failed = 0;                            // threw in its thread: the map stays as it was
     std::string last_failure;
-    double last_ms = 0;  // the last merged one's solve
+    // The last global BA that reached the map (merged, or run in the foreground)
+    BaSummary last;
     int last_keyframes = 0, last_added_meanwhile = 0;
-    int last_iterations = 0, last_robust_iterations = 0;  // its LM iterations: both stages, stage 1
-    int last_outliers = 0;                                // observations it removed
-    double last_initial_cost = 0, last_final_cost = 0;    // 1/2 chi2 over its final inliers, before and after
   };
   const GlobalBaStats& globalBaStats() const { return global_ba_; }
   /// Set from another thread to cut a running local BA short (a new keyframe is waiting).
@@ -172,8 +170,7 @@ class LocalMapper {
   std::vector<MapPointId> pointsOf(const std::vector<SlamKeyframeId>& keyframes) const;
   void localBundleAdjustment(KF& kf, msg::LocalMapUpdate& u);
   /// Bundle adjustment of the `free` keyframes and every point they see; other keyframes that see those
-  /// points hold still.
-  // Returns the solver's report (its points and keyframes are in the map already).
+  /// points hold still. Returns the solver's report (its points and keyframes are in the map already).
   LocalBaResult bundleAdjust(const std::vector<SlamKeyframeId>& free, const LocalBaParams& params,
                              msg::LocalMapUpdate& u);
   struct BaSetup {
@@ -184,7 +181,7 @@ class LocalMapper {
   BaSetup makeBaProblem(const std::vector<SlamKeyframeId>& free) const;
   void removeBaOutliers(const BaSetup& b, const LocalBaResult& r, msg::LocalMapUpdate& u);
   LocalBaParams globalBaParams() const;
-  void noteGlobalBa(const LocalBaResult& r, size_t keyframes);  // into global_ba_'s last_* fields
+  void noteGlobalBa(const LocalBaResult& r, size_t keyframes);  // into global_ba_'s last* fields
   /// Moves every keyframe by its delta (T_w_c_after T_w_c_before^-1) or its nearest ancestor's, and every
   /// point with its reference keyframe unless `placed` gives its new position. Returns each keyframe's
   /// delta, by id.

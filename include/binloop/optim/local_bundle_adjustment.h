@@ -73,6 +73,17 @@ struct BaRefinedKeyframe {
   Pose3 T_c_w = Pose3::Identity();
 };
 
+/// What a bundle adjustment did, apart from the poses and points it found: what reports and stats keep.
+struct BaSummary {
+  int num_outliers = 0;  // observations judged outliers at the result
+  /// 1/2 sum of chi2 over the final inliers, at the input and at the result (same observations, no
+  /// robust loss, so the two compare).
+  double initial_cost = 0, final_cost = 0;
+  int iterations = 0;         // Levenberg-Marquardt iterations, both stages
+  int robust_iterations = 0;  // ... of which stage 1 (Huber) took
+  double time_s = 0;          // wall time of the whole call
+};
+
 struct LocalBaResult {
   /// The keyframes that are not fixed, in input order (one with no observation comes back as given).
   std::vector<BaRefinedKeyframe> keyframes;
@@ -80,14 +91,8 @@ struct LocalBaResult {
   std::vector<BaPoint> points;
   /// Per observation: at the result, chi2 is above its threshold or the point is behind the camera.
   std::vector<bool> outlier;
-  int num_outliers = 0;
-  /// 1/2 sum of chi2 over the final inliers, at the input and at the result (same observations, no
-  /// robust loss, so the two compare).
-  double initial_cost = 0, final_cost = 0;
-  int iterations = 0;         // Levenberg-Marquardt iterations, both stages
-  int robust_iterations = 0;  // ... of which stage 1 (Huber) took
-  double time_s = 0;          // wall time of the whole call
-  bool aborted = false;       // the abort flag stopped it (stage 2 then does not run)
+  BaSummary summary;
+  bool aborted = false;  // the abort flag stopped it (stage 2 then does not run)
 };
 
 /// Holds the oldest keyframe (lowest id) of every group of keyframes that shares points, directly or

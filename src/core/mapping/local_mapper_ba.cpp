@@ -62,8 +62,8 @@ LocalBaResult LocalMapper::bundleAdjust(const std::vector<SlamKeyframeId>& free,
   const auto t0 = std::chrono::steady_clock::now();
   LocalBaResult r = binloop::localBundleAdjustment(camera_, b.problem, params, &abort_);
   u.ba_ms = msSince(t0);
-  u.ba_iterations = r.iterations;
-  u.ba_outliers = r.num_outliers;
+  u.ba_iterations = r.summary.iterations;
+  u.ba_outliers = r.summary.num_outliers;
   for (const BaRefinedKeyframe& rk : r.keyframes)
     map_.keyframes().at(rk.id).state.T_w_c = orthonormalized(rk.T_c_w.inverse());
   for (const BaPoint& bp : r.points) map_.points().at(bp.id).state.p_w = bp.p_w;
@@ -175,10 +175,9 @@ msg::LocalMapUpdatePtr LocalMapper::mergeGlobalBa(bool wait) {
   for (const auto& [id, d] : moveMap(delta, &placed)) merges_.note(id, d);
   removeBaOutliers(job->setup, job->result, *u);
   for (auto& [id, kf] : map_.keyframes()) updateConnections(kf);
-  const double ms = 1000 * job->result.time_s;
-  u->ba_ms = ms;
-  u->ba_iterations = job->result.iterations;
-  u->ba_outliers = job->result.num_outliers;
+  u->ba_ms = 1000 * job->result.summary.time_s;
+  u->ba_iterations = job->result.summary.iterations;
+  u->ba_outliers = job->result.summary.num_outliers;
   wholeMapInto(*u);
   u->total_ms = msSince(t0);
   ++global_ba_.merged;
@@ -188,13 +187,8 @@ msg::LocalMapUpdatePtr LocalMapper::mergeGlobalBa(bool wait) {
 }
 
 void LocalMapper::noteGlobalBa(const LocalBaResult& r, size_t keyframes) {
-  global_ba_.last_ms = 1000 * r.time_s;
+  global_ba_.last = r.summary;
   global_ba_.last_keyframes = static_cast<int>(keyframes);
-  global_ba_.last_iterations = r.iterations;
-  global_ba_.last_robust_iterations = r.robust_iterations;
-  global_ba_.last_outliers = r.num_outliers;
-  global_ba_.last_initial_cost = r.initial_cost;
-  global_ba_.last_final_cost = r.final_cost;
 }
 
 LocalMapper::~LocalMapper() { stopGlobalBa(); }

@@ -149,8 +149,8 @@ LocalBaResult localBundleAdjustment(const StereoCamera& camera, const BaProblem&
     run.max_iterations = params.robust_iterations;
     run.robust = true;
     const LmOutcome o = solveSchurLm(k, terms, use, fixed, run, s);
-    result.iterations += o.iterations;
-    result.robust_iterations = o.iterations;
+    result.summary.iterations += o.iterations;
+    result.summary.robust_iterations = o.iterations;
     result.aborted = o.aborted;
   }
 
@@ -160,7 +160,7 @@ LocalBaResult localBundleAdjustment(const StereoCamera& camera, const BaProblem&
     run.max_iterations = params.refine_iterations;
     run.robust = false;
     const LmOutcome o = solveSchurLm(k, terms, use, fixed, run, s);
-    result.iterations += o.iterations;
+    result.summary.iterations += o.iterations;
     result.aborted = o.aborted;
   }
 
@@ -175,13 +175,13 @@ LocalBaResult localBundleAdjustment(const StereoCamera& camera, const BaProblem&
     const LinearizedReprojection e = evaluateTerm(k, terms[i], s);
     result.outlier[i] = isOutlier(e, terms[i]);
     if (result.outlier[i]) {
-      ++result.num_outliers;
+      ++result.summary.num_outliers;
       continue;
     }
-    result.initial_cost += 0.5 * evaluateTerm(k, terms[i], start).chi2;
-    result.final_cost += 0.5 * e.chi2;
+    result.summary.initial_cost += 0.5 * evaluateTerm(k, terms[i], start).chi2;
+    result.summary.final_cost += 0.5 * e.chi2;
   }
-  result.time_s = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
+  result.summary.time_s = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
   return result;
 }
 

@@ -177,13 +177,13 @@ TEST(LocalBundleAdjustment, ShrinksTheErrorKeepsFixedKeyframesAndFlagsGrossOutli
   ASSERT_GT(f.planted, 100);
   EXPECT_EQ(f.missed, 0);
   EXPECT_LE(f.clean_flagged, 0.005 * f.clean);
-  EXPECT_LE(r.num_outliers, 2 * f.planted);
-  EXPECT_EQ(r.num_outliers, static_cast<int>(std::count(r.outlier.begin(), r.outlier.end(), true)));
-  EXPECT_LT(r.final_cost, 0.01 * r.initial_cost);
-  EXPECT_GT(r.iterations, 5);
-  EXPECT_LE(r.iterations, 15);
+  EXPECT_LE(r.summary.num_outliers, 2 * f.planted);
+  EXPECT_EQ(r.summary.num_outliers, static_cast<int>(std::count(r.outlier.begin(), r.outlier.end(), true)));
+  EXPECT_LT(r.summary.final_cost, 0.01 * r.summary.initial_cost);
+  EXPECT_GT(r.summary.iterations, 5);
+  EXPECT_LE(r.summary.iterations, 15);
   EXPECT_FALSE(r.aborted);
-  EXPECT_GT(r.time_s, 0);
+  EXPECT_GT(r.summary.time_s, 0);
 }
 
 // Without pixel noise the truth is the optimum: poses and points land on it.
@@ -260,8 +260,8 @@ void expectBitIdenticalRuns(BaLinearSolver solver) {
   for (size_t j = 0; j < a.points.size(); ++j)
     EXPECT_EQ(0, std::memcmp(a.points[j].p_w.data(), b.points[j].p_w.data(), 3 * sizeof(double)));
   EXPECT_EQ(a.outlier, b.outlier);
-  EXPECT_EQ(0, std::memcmp(&a.final_cost, &b.final_cost, sizeof(double)));
-  EXPECT_EQ(a.iterations, b.iterations);
+  EXPECT_EQ(0, std::memcmp(&a.summary.final_cost, &b.summary.final_cost, sizeof(double)));
+  EXPECT_EQ(a.summary.iterations, b.summary.iterations);
 }
 
 }  // namespace
@@ -286,7 +286,7 @@ TEST(LocalBundleAdjustment, SparseSchurAgreesWithDenseSchur) {
     EXPECT_LT(rotationErrorDeg(d.keyframes[i].T_c_w, s.keyframes[i].T_c_w), 1e-6);
   }
   EXPECT_EQ(d.outlier, s.outlier);
-  EXPECT_NEAR(d.final_cost, s.final_cost, 1e-6 * d.final_cost);
+  EXPECT_NEAR(d.summary.final_cost, s.summary.final_cost, 1e-6 * d.summary.final_cost);
 }
 
 TEST(LocalBundleAdjustment, AbortFlagStopsIt) {
@@ -294,18 +294,18 @@ TEST(LocalBundleAdjustment, AbortFlagStopsIt) {
   std::atomic<bool> abort{true};
   const LocalBaResult r = localBundleAdjustment(w.cam, w.problem, {}, &abort);
   EXPECT_TRUE(r.aborted);
-  EXPECT_EQ(r.iterations, 0);
+  EXPECT_EQ(r.summary.iterations, 0);
   ASSERT_EQ(r.keyframes.size(), 10u);
   for (const BaRefinedKeyframe& k : r.keyframes)
     EXPECT_TRUE(k.T_c_w.matrix() == w.problem.keyframes[k.index].T_c_w.matrix());
   for (size_t j = 0; j < r.points.size(); ++j) EXPECT_TRUE(r.points[j].p_w == w.problem.points[j].p_w);
   // Its outliers are judged at the starting values: the perturbation makes most of them outliers.
-  EXPECT_GT(r.num_outliers, 0);
+  EXPECT_GT(r.summary.num_outliers, 0);
 
   abort = false;
   const LocalBaResult full = localBundleAdjustment(w.cam, w.problem, {}, &abort);
   EXPECT_FALSE(full.aborted);
-  EXPECT_GT(full.iterations, 5);
+  EXPECT_GT(full.summary.iterations, 5);
 }
 
 TEST(LocalBundleAdjustment, PointBehindACameraIsAnOutlier) {
@@ -321,7 +321,7 @@ TEST(LocalBundleAdjustment, PointBehindACameraIsAnOutlier) {
   EXPECT_TRUE(r.outlier[r.outlier.size() - 2]);
   EXPECT_TRUE(r.outlier[r.outlier.size() - 1]);
   EXPECT_TRUE(r.points[j].p_w == behind);
-  EXPECT_LT(r.num_outliers, 0.01 * r.outlier.size() + 2);
+  EXPECT_LT(r.summary.num_outliers, 0.01 * r.outlier.size() + 2);
 }
 
 TEST(LocalBundleAdjustment, AllKeyframesFixedRefinesThePointsOnly) {

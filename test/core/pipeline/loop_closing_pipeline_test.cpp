@@ -174,10 +174,10 @@ TEST(LoopClosingPipeline, ABackgroundGlobalBaIsMergedWithoutLosingKeyframesAdded
   LocalMapper::GlobalBaStats g;
   const DriveRun r = runDrive(*d, true, PipelineMode::kThreaded, {}, mp, &g);
   std::cout << "global BA: " << g.started << " started, " << g.merged << " merged, " << g.aborted
-            << " stopped by a loop; the last over " << g.last_keyframes << " keyframes in " << g.last_ms
-            << " ms, " << g.last_added_meanwhile << " keyframes added meanwhile, " << g.last_iterations
-            << " iterations (" << g.last_robust_iterations << " with Huber), cost " << g.last_initial_cost
-            << " -> " << g.last_final_cost << ", " << g.last_outliers << " observations removed\n";
+            << " stopped by a loop; the last over " << g.last_keyframes << " keyframes in " << 1000 * g.last.time_s
+            << " ms, " << g.last_added_meanwhile << " keyframes added meanwhile, " << g.last.iterations
+            << " iterations (" << g.last.robust_iterations << " with Huber), cost " << g.last.initial_cost
+            << " -> " << g.last.final_cost << ", " << g.last.num_outliers << " observations removed\n";
   size_t detected = 0;
   for (const auto* c : accepted(r)) detected += c->model != "operator";
   ASSERT_GT(detected, 0u) << "the detector closed no loop";
@@ -186,10 +186,10 @@ TEST(LoopClosingPipeline, ABackgroundGlobalBaIsMergedWithoutLosingKeyframesAdded
   EXPECT_GE(g.merged, 1);
   EXPECT_GT(g.last_keyframes, 30);
   // Its report is the merged solve's: within the iteration caps, and the map fits its inliers better.
-  EXPECT_GT(g.last_iterations, 0);
-  EXPECT_LE(g.last_robust_iterations, mp.global_ba_robust_iterations);
-  EXPECT_LE(g.last_iterations, mp.global_ba_robust_iterations + mp.global_ba_refine_iterations);
-  EXPECT_LT(g.last_final_cost, g.last_initial_cost);
+  EXPECT_GT(g.last.iterations, 0);
+  EXPECT_LE(g.last.robust_iterations, mp.global_ba_robust_iterations);
+  EXPECT_LE(g.last.iterations, mp.global_ba_robust_iterations + mp.global_ba_refine_iterations);
+  EXPECT_LT(g.last.final_cost, g.last.initial_cost);
   // Every frame's reference keyframe is still in the map (or was culled and follows its parent).
   EXPECT_EQ(r.unresolved, 0u);
   const size_t last = d->frames.size() - 1;
