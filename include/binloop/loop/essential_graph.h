@@ -20,13 +20,6 @@ struct EssentialGraphParams {
   int min_covisibility = 100;                         // ORB-SLAM2
   double sigma_rot_rad = 0.01, sigma_trans_m = 0.05;  // odometry-like edges
   double loop_sigma_rot_rad = 0.01, loop_sigma_trans_m = 0.05;
-  // Off: every tree and covisibility edge gets the sigmas above (ORB-SLAM2). On: each one's sigmas are
-  // scaled by sqrt(median weight / its weight), the weight being the points its two keyframes share, so that
-  // stretches the map tracked through many points stay stiff and a loop's error goes where few points tied
-  // the keyframes together (turns, gaps). The median edge keeps the sigmas above; the scale is held to
-  // [1/kMaxSigmaScale, kMaxSigmaScale]. Old-loop edges and tree edges with no shared point keep them too.
-  bool weight_by_covisibility = false;
-  static constexpr double kMaxSigmaScale = 4.0;
 };
 
 struct EssentialGraph {

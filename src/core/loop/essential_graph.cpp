@@ -1,34 +1,11 @@
 #include "binloop/loop/essential_graph.h"
 
 #include <algorithm>
-#include <cmath>
 #include <set>
 #include <stdexcept>
 #include <unordered_map>
 
 namespace binloop {
-namespace {
-
-uint32_t sharedPoints(const msg::KeyframeState& k, SlamKeyframeId other) {
-  for (const msg::CovisibleEdge& e : k.covisible)
-    if (e.id == other) return e.weight;
-  return 0;
-}
-
-// The median weight of the tree and strong covisibility edges: the weight whose edge keeps the base sigmas.
-double medianWeight(const std::vector<msg::KeyframeState>& keyframes, int min_covisibility) {
-  std::vector<uint32_t> w;
-  for (const msg::KeyframeState& k : keyframes) {
-    if (const uint32_t t = sharedPoints(k, k.parent)) w.push_back(t);
-    for (const msg::CovisibleEdge& e : k.covisible)
-      if (static_cast<int>(e.weight) >= min_covisibility && e.id != k.parent) w.push_back(e.weight);
-  }
-  if (w.empty()) return 0;
-  std::nth_element(w.begin(), w.begin() + w.size() / 2, w.end());
-  return w[w.size() / 2];
-}
-
-}  // namespace
 
 EssentialGraph buildEssentialGraph(const std::vector<msg::KeyframeState>& keyframes,
                                    const std::vector<LoopEdge>& old_loops, const LoopEdge& new_loop,
@@ -66,24 +43,19 @@ EssentialGraph buildEssentialGraph(const std::vector<msg::KeyframeState>& keyfra
     g.old_loop_edges +=
         add(a->second, b->second, current(a->second, b->second), p.sigma_rot_rad, p.sigma_trans_m, false);
   }
-  const double median = p.weight_by_covisibility ? medianWeight(keyframes, p.min_covisibility) : 0;
-  auto odometry = [&](size_t i, size_t j, uint32_t weight) {
-    double f = 1;
-    if (median > 0 && weight > 0) {
-      f = std::clamp(std::sqrt(median / weight), 1 / EssentialGraphParams::kMaxSigmaScale,
-                     EssentialGraphParams::kMaxSigmaScale);
-    }
-    return add(i, j, current(i, j), f * p.sigma_rot_rad, f * p.sigma_trans_m, false);
-  };
   for (const msg::KeyframeState& k : keyframes) {
     const size_t i = index.at(k.id);
     auto parent = index.find(k.parent);
-    if (parent != index.end()) g.tree_edges += odometry(parent->second, i, sharedPoints(k, k.parent));
+    if (parent != index.end()) {
+      g.tree_edges +=
+          add(parent->second, i, current(parent->second, i), p.sigma_rot_rad, p.sigma_trans_m, false);
+    }
     for (const msg::CovisibleEdge& e : k.covisible) {
       if (static_cast<int>(e.weight) < p.min_covisibility) continue;
       auto o = index.find(e.id);
       if (o == index.end()) continue;
-      g.covisibility_edges += odometry(i, o->second, e.weight);
+      g.covisibility_edges +=
+          add(i, o->second, current(i, o->second), p.sigma_rot_rad, p.sigma_trans_m, false);
     }
   }
   return g;

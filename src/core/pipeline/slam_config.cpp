@@ -131,7 +131,6 @@ Sections backEndSettings(SlamConfig& c) {
         {"ransac_min_inliers", {S::kInt, &l.verify.ransac.min_inliers, 3}},
         {"min_inliers", {S::kInt, &l.verify.min_inliers, 3}},
         {"covisibility_min", {S::kInt, &l.graph.min_covisibility, 1}},
-        {"graph_weight_by_covisibility", {S::kBool, &l.graph.weight_by_covisibility, 0}},
         {"drift_base_m", {S::kDouble, &l.drift_base_m, 0}},
         {"drift_per_m", {S::kDouble, &l.drift_per_m, 0}},
         {"confirm_min_travel_m", {S::kDouble, &l.confirm_min_travel_m, 0}},
