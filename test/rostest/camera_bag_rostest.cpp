@@ -134,7 +134,14 @@ TEST_F(CameraBag, AnExternalLoopIsVerifiedLikeADetectedOne) {
             << ": " << good.closures.back().status << ", " << good.closures.back().detail << "\n";
   EXPECT_TRUE(good.accepted) << good.closures.back().status << ": " << good.closures.back().detail;
   EXPECT_EQ(good.closures.back().model, "rostest");
-  EXPECT_EQ(good.closures.back().match_frame, near_frame);
+  // Re-anchoring (loop_closing.reanchor_min_m, 5 m) measures the loop against a covisible keyframe of the
+  // match nearer the query when the asked one is further; which one depends on where the threaded run put
+  // its keyframes, so only its neighbourhood is certain.
+  if (good.closures.back().detail.find("anchored at keyframe") == std::string::npos) {
+    EXPECT_EQ(good.closures.back().match_frame, near_frame);
+  } else {
+    EXPECT_NEAR(static_cast<double>(good.closures.back().match_frame), static_cast<double>(near_frame), 15);
+  }
 
   const auto [far_frame, far] = firstLapKeyframe(d, keyframe_at, query_frame, 40);
   const auto wrong = call(query, far);
