@@ -196,7 +196,7 @@ void LocalMappingNodelet::mergeGlobalBa() {
   publishMap(header.stamp);
   autosave(false);
   NODELET_INFO("binloop/LocalMapping: global BA merged (%.0f ms over %d keyframes, %d added meanwhile)",
-               1000 * mapper_->globalBaStats().last.time_s, mapper_->globalBaStats().last_keyframes,
+               mapper_->globalBaStats().last.ms(), mapper_->globalBaStats().last_keyframes,
                mapper_->globalBaStats().last_added_meanwhile);
 }
 

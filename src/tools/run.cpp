@@ -249,7 +249,7 @@ int writeLoops(const fs::path& out, const SlamPipeline& slam, const KittiSequenc
                                        .add("last_added_meanwhile", g.last_added_meanwhile));
   if (g.last_keyframes > 0)  // the last global BA that reached the map, threaded or not
     js.add("global_ba_last", JsonObject()
-                                 .add("ms", 1000 * g.last.time_s)
+                                 .add("ms", g.last.ms())
                                  .add("keyframes", g.last_keyframes)
                                  .add("iterations", g.last.iterations)
                                  .add("robust_iterations", g.last.robust_iterations)

@@ -182,6 +182,8 @@ class LocalMapper {
   void removeBaOutliers(const BaSetup& b, const LocalBaResult& r, msg::LocalMapUpdate& u);
   LocalBaParams globalBaParams() const;
   void noteGlobalBa(const LocalBaResult& r, size_t keyframes);  // into global_ba_'s last* fields
+  /// What the update reports of the BA it carries (time, iterations, outliers).
+  static void reportBa(const BaSummary& s, msg::LocalMapUpdate& u);
   /// Moves every keyframe by its delta (T_w_c_after T_w_c_before^-1) or its nearest ancestor's, and every
   /// point with its reference keyframe unless `placed` gives its new position. Returns each keyframe's
   /// delta, by id.

@@ -82,6 +82,8 @@ struct BaSummary {
   int iterations = 0;         // Levenberg-Marquardt iterations, both stages
   int robust_iterations = 0;  // ... of which stage 1 (Huber) took
   double time_s = 0;          // wall time of the whole call
+
+  double ms() const { return 1000 * time_s; }
 };
 
 struct LocalBaResult {

@@ -59,11 +59,8 @@ LocalBaResult LocalMapper::bundleAdjust(const std::vector<SlamKeyframeId>& free,
                                         msg::LocalMapUpdate& u) {
   const BaSetup b = makeBaProblem(free);
   if (b.problem.points.empty()) return {};
-  const auto t0 = std::chrono::steady_clock::now();
   LocalBaResult r = binloop::localBundleAdjustment(camera_, b.problem, params, &abort_);
-  u.ba_ms = msSince(t0);
-  u.ba_iterations = r.summary.iterations;
-  u.ba_outliers = r.summary.num_outliers;
+  reportBa(r.summary, u);
   for (const BaRefinedKeyframe& rk : r.keyframes)
     map_.keyframes().at(rk.id).state.T_w_c = orthonormalized(rk.T_c_w.inverse());
   for (const BaPoint& bp : r.points) map_.points().at(bp.id).state.p_w = bp.p_w;
@@ -175,9 +172,7 @@ msg::LocalMapUpdatePtr LocalMapper::mergeGlobalBa(bool wait) {
   for (const auto& [id, d] : moveMap(delta, &placed)) merges_.note(id, d);
   removeBaOutliers(job->setup, job->result, *u);
   for (auto& [id, kf] : map_.keyframes()) updateConnections(kf);
-  u->ba_ms = 1000 * job->result.summary.time_s;
-  u->ba_iterations = job->result.summary.iterations;
-  u->ba_outliers = job->result.summary.num_outliers;
+  reportBa(job->result.summary, *u);
   wholeMapInto(*u);
   u->total_ms = msSince(t0);
   ++global_ba_.merged;
@@ -189,6 +184,12 @@ msg::LocalMapUpdatePtr LocalMapper::mergeGlobalBa(bool wait) {
 void LocalMapper::noteGlobalBa(const LocalBaResult& r, size_t keyframes) {
   global_ba_.last = r.summary;
   global_ba_.last_keyframes = static_cast<int>(keyframes);
+}
+
+void LocalMapper::reportBa(const BaSummary& s, msg::LocalMapUpdate& u) {
+  u.ba_ms = s.ms();
+  u.ba_iterations = s.iterations;
+  u.ba_outliers = s.num_outliers;
 }
 
 LocalMapper::~LocalMapper() { stopGlobalBa(); }

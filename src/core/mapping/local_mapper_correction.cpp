@@ -62,10 +62,9 @@ msg::LocalMapUpdatePtr LocalMapper::apply(const msg::Correction& c) {
     } else {
       abort_ = false;  // a keyframe that arrives meanwhile cuts it short, as a new loop stops ORB-SLAM2's
       msg::LocalMapUpdate ba;
-      noteGlobalBa(bundleAdjust(all, globalBaParams(), ba), all.size());
-      u->ba_ms = ba.ba_ms;
-      u->ba_iterations = ba.ba_iterations;
-      u->ba_outliers = ba.ba_outliers;
+      const LocalBaResult r = bundleAdjust(all, globalBaParams(), ba);
+      noteGlobalBa(r, all.size());
+      reportBa(r.summary, *u);
       u->culled_points = ba.culled_points;
     }
   }

@@ -174,11 +174,10 @@ TEST(LoopClosingPipeline, ABackgroundGlobalBaIsMergedWithoutLosingKeyframesAdded
   LocalMapper::GlobalBaStats g;
   const DriveRun r = runDrive(*d, true, PipelineMode::kThreaded, {}, mp, &g);
   std::cout << "global BA: " << g.started << " started, " << g.merged << " merged, " << g.aborted
-            << " stopped by a loop; the last over " << g.last_keyframes << " keyframes in "
-            << 1000 * g.last.time_s << " ms, " << g.last_added_meanwhile << " keyframes added meanwhile, "
-            << g.last.iterations << " iterations (" << g.last.robust_iterations << " with Huber), cost "
-            << g.last.initial_cost << " -> " << g.last.final_cost << ", " << g.last.num_outliers
-            << " observations removed\n";
+            << " stopped by a loop; the last over " << g.last_keyframes << " keyframes in " << g.last.ms()
+            << " ms, " << g.last_added_meanwhile << " keyframes added meanwhile, " << g.last.iterations
+            << " iterations (" << g.last.robust_iterations << " with Huber), cost " << g.last.initial_cost
+            << " -> " << g.last.final_cost << ", " << g.last.num_outliers << " observations removed\n";
   size_t detected = 0;
   for (const auto* c : accepted(r)) detected += c->model != "operator";
   ASSERT_GT(detected, 0u) << "the detector closed no loop";
