@@ -34,9 +34,12 @@ class StateWriter;
 class StateReader;
 
 struct LocalMapperParams {
-  int covisibility_min = 15;       // shared points for an edge of the covisibility graph
-  int cull_after_keyframes = 2;    // a new point is judged this many keyframes after its creation...
-  int cull_min_observers = 3;      // ... and culled if fewer keyframes see it (ORB-SLAM2, stereo)
+  int covisibility_min = 15;     // shared points for an edge of the covisibility graph
+  int cull_after_keyframes = 2;  // a new point is judged this many keyframes after its creation...
+  int cull_min_observers = 3;    // ... and culled if fewer keyframes see it (ORB-SLAM2, stereo)
+  // ... counting a keyframe that sees it in both images twice (ORB-SLAM2's count, whose stereo bound is 4:
+  // two stereo sightings keep a point)
+  bool cull_stereo_counts_twice = false;
   bool triangulate = true;         // new points from keypoints matched with covisible keyframes
   int triangulate_neighbors = 10;  // strongest covisible keyframes searched (ORB-SLAM2)
   EpipolarParams epipolar;

@@ -19,8 +19,10 @@ void LocalMapper::cullRecentPoints(msg::LocalMapUpdate& u) {
     auto it = map_.points().find(id);
     if (it == map_.points().end()) continue;
     const uint64_t age = seq_ - it->second.first_seq;
-    if (age >= static_cast<uint64_t>(p_.cull_after_keyframes) &&
-        static_cast<int>(it->second.obs.size()) < p_.cull_min_observers) {
+    int observers = 0;
+    for (const auto& [k, idx] : it->second.obs)
+      observers += p_.cull_stereo_counts_twice && map_.keyframes().at(k).keypoints[idx].right_x >= 0 ? 2 : 1;
+    if (age >= static_cast<uint64_t>(p_.cull_after_keyframes) && observers < p_.cull_min_observers) {
       removePoint(id);
       u.culled_points.push_back(id);
     } else if (age < static_cast<uint64_t>(p_.cull_after_keyframes) + 1) {

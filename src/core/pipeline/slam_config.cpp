@@ -99,6 +99,7 @@ Sections backEndSettings(SlamConfig& c) {
        {{"covisibility_min", {S::kInt, &m.covisibility_min, 1}},
         {"cull_after_keyframes", {S::kInt, &m.cull_after_keyframes, 1}},
         {"cull_min_observers", {S::kInt, &m.cull_min_observers, 1}},
+        {"cull_stereo_counts_twice", {S::kBool, &m.cull_stereo_counts_twice, 0}},
         {"triangulate", {S::kBool, &m.triangulate, 0}},
         {"triangulate_neighbors", {S::kInt, &m.triangulate_neighbors, 1}},
         {"fuse", {S::kBool, &m.fuse, 0}},

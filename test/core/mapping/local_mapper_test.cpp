@@ -143,6 +143,29 @@ TEST_F(LocalMapperTest, CovisibilityCountsSharedPointsAndTheSpanningTreeFollowsT
   EXPECT_EQ(m.pointCount(), 200u);
 }
 
+// ORB-SLAM2's count for culling new points (`cull_stereo_counts_twice`): a keyframe that sees a point in both
+// images counts twice, so with its bound (4) a point two keyframes see stays when both saw it in stereo and
+// goes when the second saw it in the left image only; binloop's own count (3 keyframes) culls both.
+TEST_F(LocalMapperTest, ANewPointSeenInStereoByTwoKeyframesStaysUnderOrbSlam2sCount) {
+  for (int i = 0; i < 100; ++i) addPoint({rng.uniform(-6, 6), rng.uniform(-2, 1), rng.uniform(8, 18)});
+  for (const bool twice : {false, true}) {
+    for (ScenePoint& s : scene) s.id = kNoId;
+    LocalMapperParams p;
+    p.triangulate = p.fuse = p.local_ba = p.cull_keyframes = false;
+    p.cull_after_keyframes = 1;  // judged when the second keyframe comes
+    p.cull_stereo_counts_twice = twice;
+    p.cull_min_observers = twice ? 4 : 3;
+    LocalMapper m(p);
+    const msg::KeyFrame k1 = keyframe(0, range(0, 100), true);
+    msg::KeyFrame k2 = keyframe(0.5, range(0, 100), false);
+    for (size_t i = 50; i < 100; ++i) k2.keypoints[i].right_x = k2.keypoints[i].depth = -1;  // left only
+    m.process(k1);
+    const auto o2 = m.process(k2);
+    EXPECT_EQ(m.pointCount(), twice ? 50u : 0u) << (twice ? "ORB-SLAM2's count" : "keyframes");
+    EXPECT_EQ(o2.update->culled_points.size(), twice ? 50u : 100u);
+  }
+}
+
 // A map segment tracking started afresh after it was lost (Tracker, restart_after_lost): its first keyframe
 // shares no point with the map and hangs from the parent tracking gave it. That parent stays (the segment's
 // only tie), the next keyframe of the segment takes the first as its parent, and the segment's BA holds its
