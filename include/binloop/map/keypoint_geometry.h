@@ -14,6 +14,9 @@
 
 namespace binloop {
 
+/// Matched in the right image too: the keypoint has a disparity and a depth.
+inline bool hasStereo(const msg::KeyPoint& k) { return k.right_x >= 0 && k.depth > 0; }
+
 /// The camera-frame point of a keypoint with stereo depth (k.depth > 0).
 inline Eigen::Vector3d unprojectKeypoint(const msg::KeyPoint& k, const StereoCamera& cam) {
   const double z = k.depth;

@@ -36,7 +36,7 @@ class StateReader;
 struct LocalMapperParams {
   int covisibility_min = 15;     // shared points for an edge of the covisibility graph
   int cull_after_keyframes = 2;  // a new point is judged this many keyframes after its creation...
-  int cull_min_observers = 3;    // ... and culled if fewer keyframes see it (ORB-SLAM2, stereo)
+  int cull_min_observers = 3;    // ... and culled if fewer keyframes see it
   // ... counting a keyframe that sees it in both images twice (ORB-SLAM2's count, whose stereo bound is 4:
   // two stereo sightings keep a point)
   bool cull_stereo_counts_twice = false;
@@ -185,6 +185,8 @@ class LocalMapper {
   void removeBaOutliers(const BaSetup& b, const LocalBaResult& r, msg::LocalMapUpdate& u);
   LocalBaParams globalBaParams() const;
   void noteGlobalBa(const LocalBaResult& r, size_t keyframes);  // into global_ba_'s last* fields
+  /// How many keyframes see a point, for culling (a stereo sighting twice with cull_stereo_counts_twice).
+  int observerCount(const MP& mp) const;
   /// What the update reports of the BA it carries (time, iterations, outliers).
   static void reportBa(const BaSummary& s, msg::LocalMapUpdate& u);
   /// Moves every keyframe by its delta (T_w_c_after T_w_c_before^-1) or its nearest ancestor's, and every

@@ -6,6 +6,7 @@
 #include <limits>
 #include <unordered_map>
 
+#include "binloop/map/keypoint_geometry.h"
 #include "binloop/map/keypoint_grid.h"
 #include "binloop/map/scale_pyramid.h"
 #include "binloop/optim/pose_optimizer.h"
@@ -34,8 +35,6 @@ Eigen::Vector3d pointOf(const msg::KeyFrame& kf, const msg::KeyPoint& k) {
   const StereoCamera& c = kf.camera;
   return {(k.x - c.cx) / c.fx * k.depth, (k.y - c.cy) / c.fy * k.depth, static_cast<double>(k.depth)};
 }
-
-bool stereo(const msg::KeyPoint& k) { return k.depth > 0 && k.right_x >= 0; }
 
 // Pose optimisation of T_query_candidate on the pairs; drops the outliers from `pairs`.
 int refine(const msg::KeyFrame& q, const msg::KeyFrame& c, const ScalePyramid& s,
@@ -69,7 +68,7 @@ void guidedSearch(const msg::KeyFrame& q, const msg::KeyFrame& c, const ScalePyr
   const KeypointGrid grid(q.keypoints, q.camera.width, q.camera.height);
   const double log_scale = std::log(static_cast<double>(q.scale_factor));
   for (size_t j = 0; j < c.keypoints.size(); ++j) {
-    if (c_used[j] || !stereo(c.keypoints[j])) continue;
+    if (c_used[j] || !hasStereo(c.keypoints[j])) continue;
     const Eigen::Vector3d pc = pointOf(c, c.keypoints[j]);
     const Eigen::Vector3d pq = T * pc;
     if (pq.z() <= 0) continue;
@@ -106,13 +105,13 @@ std::vector<std::pair<int, int>> descriptorPairs(const msg::KeyFrame& q, const m
   };
   std::unordered_map<uint32_t, Cell> cells;
   for (size_t j = 0; j < c.keypoints.size(); ++j) {
-    if (!stereo(c.keypoints[j])) continue;
+    if (!hasStereo(c.keypoints[j])) continue;
     Cell& cell = cells[words ? (*candidate_words)[j] : 0];
     cell.index.push_back(static_cast<int>(j));
     cell.desc.add(c.descriptors[j]);
   }
   for (size_t i = 0; i < q.keypoints.size(); ++i) {
-    if (!stereo(q.keypoints[i])) continue;
+    if (!hasStereo(q.keypoints[i])) continue;
     auto cell = cells.find(words ? (*words)[i] : 0);
     if (cell == cells.end()) continue;
     const DescriptorBlock::Nearest n = cell->second.desc.nearest(q.descriptors[i]);

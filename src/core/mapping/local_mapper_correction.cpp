@@ -61,11 +61,7 @@ msg::LocalMapUpdatePtr LocalMapper::apply(const msg::Correction& c) {
       startGlobalBa(all);
     } else {
       abort_ = false;  // a keyframe that arrives meanwhile cuts it short, as a new loop stops ORB-SLAM2's
-      msg::LocalMapUpdate ba;
-      const LocalBaResult r = bundleAdjust(all, globalBaParams(), ba);
-      noteGlobalBa(r, all.size());
-      reportBa(r.summary, *u);
-      u->culled_points = ba.culled_points;
+      noteGlobalBa(bundleAdjust(all, globalBaParams(), *u), all.size());
     }
   }
 

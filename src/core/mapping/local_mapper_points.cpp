@@ -13,16 +13,21 @@
 
 namespace binloop {
 
+int LocalMapper::observerCount(const MP& mp) const {
+  if (!p_.cull_stereo_counts_twice) return static_cast<int>(mp.obs.size());
+  int n = 0;
+  for (const auto& [k, idx] : mp.obs) n += hasStereo(map_.keyframes().at(k).keypoints[idx]) ? 2 : 1;
+  return n;
+}
+
 void LocalMapper::cullRecentPoints(msg::LocalMapUpdate& u) {
   std::deque<MapPointId> keep;
   for (MapPointId id : recent_) {
     auto it = map_.points().find(id);
     if (it == map_.points().end()) continue;
     const uint64_t age = seq_ - it->second.first_seq;
-    int observers = 0;
-    for (const auto& [k, idx] : it->second.obs)
-      observers += p_.cull_stereo_counts_twice && map_.keyframes().at(k).keypoints[idx].right_x >= 0 ? 2 : 1;
-    if (age >= static_cast<uint64_t>(p_.cull_after_keyframes) && observers < p_.cull_min_observers) {
+    if (age >= static_cast<uint64_t>(p_.cull_after_keyframes) &&
+        observerCount(it->second) < p_.cull_min_observers) {
       removePoint(id);
       u.culled_points.push_back(id);
     } else if (age < static_cast<uint64_t>(p_.cull_after_keyframes) + 1) {

@@ -28,8 +28,6 @@ Eigen::Vector2d normalised(const StereoCamera& c, const msg::KeyPoint& k) {
   return {(k.x - c.cx) / c.fx, (k.y - c.cy) / c.fy};
 }
 
-bool hasStereo(const msg::KeyPoint& k) { return k.right_x >= 0 && k.depth > 0; }
-
 // The angle the baseline subtends at the stereo point: the parallax a single stereo view already has.
 double stereoCos(const StereoCamera& c, const msg::KeyPoint& k) {
   return std::cos(2 * std::atan2(c.baseline_m / 2, static_cast<double>(k.depth)));
