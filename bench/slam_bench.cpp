@@ -19,7 +19,9 @@
 // `render --route .../06.txt --calib kitti04 --end <frames-1>` writes); else those rows are skipped with a
 // message. About 1.5 minutes on the 2-core VM with the defaults, rendering (15-25 s) included.
 //
-//   bench_slam_bench [--sequence DIR] [--start N] [--frames N] [--runs N] [--compare] [shared_data_dir]
+//   bench_slam_bench [--sequence DIR] [--start N] [--frames N] [--runs N] [--config YAML] [--compare]
+//                    [shared_data_dir]
+//   --config times the tracker and local mapper with a SLAM config's settings instead of their defaults.
 //   --compare adds the extractor comparison (binloop's ORB-SLAM-style extractor, OpenCV ORB, grid-spread
 //   OpenCV ORB: count, coverage, stereo match rate) and the stereo matcher settings tables.
 #include <algorithm>
@@ -40,6 +42,7 @@
 #include "binloop/features/stereo_matcher.h"
 #include "binloop/io/kitti_sequence.h"
 #include "binloop/io/trajectory_io.h"
+#include "binloop/pipeline/slam_config.h"
 #include "binloop/pipeline/slam_pipeline.h"
 #include "binloop/sim/stereo_renderer.h"
 #include "binloop/sim/texture_bank.h"
@@ -173,8 +176,9 @@ struct PipelineRun {
   int tracked = 0, lost = 0, keyframes = 0;
 };
 
-PipelineRun runPipeline(const std::vector<StereoFrame>& frames, const StereoCamera& cam) {
-  SlamPipeline slam(cam, TrackerParams{}, LocalMapperParams{}, PipelineMode::kLockStep);
+PipelineRun runPipeline(const std::vector<StereoFrame>& frames, const StereoCamera& cam,
+                        const SlamConfig& config) {
+  SlamPipeline slam(cam, config.tracker, config.mapper, PipelineMode::kLockStep);
   std::vector<msg::TrackedFrame> out;
   out.reserve(frames.size());
   const auto t0 = Clock::now();
@@ -375,8 +379,8 @@ void compareExtractors(const std::vector<StereoFrame>& frames, const StereoCamer
 int usage(const char* msg) {
   if (msg) std::fprintf(stderr, "bench_slam_bench: %s\n", msg);
   std::fprintf(stderr,
-               "usage: bench_slam_bench [--sequence DIR] [--start N] [--frames N] [--runs N] [--compare] "
-               "[shared_data_dir]\n");
+               "usage: bench_slam_bench [--sequence DIR] [--start N] [--frames N] [--runs N] [--config YAML] "
+               "[--compare] [shared_data_dir]\n");
   return msg ? 2 : 0;
 }
 
@@ -390,13 +394,15 @@ int main(int argc, char** argv) {
   size_t start = 0, n_frames = 300;
   int stretch_runs = kStretchRuns;
   bool compare = false;
+  SlamConfig config;  // the parameter structs' defaults unless --config names a YAML (e.g. to time an option)
   for (int i = 1; i < argc; ++i) {
     const std::string a = argv[i];
     const bool has_value = i + 1 < argc;
     if (a == "--help" || a == "-h") return usage(nullptr);
     if (a == "--compare") {
       compare = true;
-    } else if ((a == "--sequence" || a == "--start" || a == "--frames" || a == "--runs") && !has_value) {
+    } else if ((a == "--sequence" || a == "--start" || a == "--frames" || a == "--runs" || a == "--config") &&
+               !has_value) {
       return usage((a + " needs a value").c_str());
     } else if (a == "--sequence") {
       sequence_dir = argv[++i];
@@ -406,6 +412,12 @@ int main(int argc, char** argv) {
       n_frames = std::strtoul(argv[++i], nullptr, 10);
     } else if (a == "--runs") {
       stretch_runs = std::atoi(argv[++i]);
+    } else if (a == "--config") {
+      try {
+        config = loadSlamConfig(argv[++i]);
+      } catch (const std::exception& e) {
+        return usage(e.what());
+      }
     } else if (!a.empty() && a[0] == '-') {
       return usage(("unknown option " + a).c_str());
     } else {
@@ -479,7 +491,7 @@ int main(int argc, char** argv) {
     stereo_row.data = buf;
     std::vector<PipelineRun> runs;
     for (int run = 0; run < kRealRuns; ++run) {
-      runs.push_back(runPipeline(real, real_cam));
+      runs.push_back(runPipeline(real, real_cam, config));
       track_real_row.runs.push_back(runs.back().track_ms);
     }
     const int tracked = runs.front().tracked;
@@ -514,7 +526,7 @@ int main(int argc, char** argv) {
   } else {
     std::vector<PipelineRun> runs;
     for (int run = 0; run < stretch_runs; ++run) {
-      runs.push_back(runPipeline(stretch.frames, stretch.cam));
+      runs.push_back(runPipeline(stretch.frames, stretch.cam, config));
       const PipelineRun& r = runs.back();
       std::fprintf(stderr, "stretch run %d/%d: %.2f frames/s, %d tracked, %d lost, %d keyframes\n", run + 1,
                    stretch_runs, r.fps, r.tracked, r.lost, r.keyframes);

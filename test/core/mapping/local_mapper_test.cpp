@@ -145,7 +145,8 @@ TEST_F(LocalMapperTest, CovisibilityCountsSharedPointsAndTheSpanningTreeFollowsT
 
 // ORB-SLAM2's count for culling new points (`cull_stereo_counts_twice`): a keyframe that sees a point in both
 // images counts twice, so with its bound (4) a point two keyframes see stays when both saw it in stereo and
-// goes when the second saw it in the left image only; binloop's own count (3 keyframes) culls both.
+// goes when the second saw it in the left image only; a count of keyframes (the option off, bound 3) culls
+// both.
 TEST_F(LocalMapperTest, ANewPointSeenInStereoByTwoKeyframesStaysUnderOrbSlam2sCount) {
   for (int i = 0; i < 100; ++i) addPoint({rng.uniform(-6, 6), rng.uniform(-2, 1), rng.uniform(8, 18)});
   for (const bool twice : {false, true}) {
