@@ -31,11 +31,6 @@ msg::LoopStatus loopStatusOf(LoopRejection r) {
 
 namespace {
 
-Eigen::Vector3d pointOf(const msg::KeyFrame& kf, const msg::KeyPoint& k) {
-  const StereoCamera& c = kf.camera;
-  return {(k.x - c.cx) / c.fx * k.depth, (k.y - c.cy) / c.fy * k.depth, static_cast<double>(k.depth)};
-}
-
 // Pose optimisation of T_query_candidate on the pairs; drops the outliers from `pairs`.
 int refine(const msg::KeyFrame& q, const msg::KeyFrame& c, const ScalePyramid& s,
            const PoseOptimizerParams& p, Pose3* T, std::vector<std::pair<int, int>>* pairs) {
@@ -43,7 +38,7 @@ int refine(const msg::KeyFrame& q, const msg::KeyFrame& c, const ScalePyramid& s
   for (const auto& [qi, ci] : *pairs) {
     const msg::KeyPoint& kq = q.keypoints[qi];
     PoseObservation o;
-    o.p_w = pointOf(c, c.keypoints[ci]);
+    o.p_w = unprojectKeypoint(c.keypoints[ci], c.camera);
     o.uv = {kq.x, kq.y};
     o.u_right = kq.right_x;
     o.inv_sigma2 = s.inv_sigma2[kq.octave];
@@ -69,7 +64,7 @@ void guidedSearch(const msg::KeyFrame& q, const msg::KeyFrame& c, const ScalePyr
   const double log_scale = std::log(static_cast<double>(q.scale_factor));
   for (size_t j = 0; j < c.keypoints.size(); ++j) {
     if (c_used[j] || !hasStereo(c.keypoints[j])) continue;
-    const Eigen::Vector3d pc = pointOf(c, c.keypoints[j]);
+    const Eigen::Vector3d pc = unprojectKeypoint(c.keypoints[j], c.camera);
     const Eigen::Vector3d pq = T * pc;
     if (pq.z() <= 0) continue;
     const Eigen::Vector2d uv = q.camera.project(pq);
@@ -168,8 +163,8 @@ LoopVerification verifyLoop(const msg::KeyFrame& q, const msg::KeyFrame& c, cons
   // 2. RANSAC over Horn on the 3-D pairs.
   std::vector<Eigen::Vector3d> a, b;
   for (const auto& [qi, ci] : pairs) {
-    a.push_back(pointOf(q, q.keypoints[qi]));
-    b.push_back(pointOf(c, c.keypoints[ci]));
+    a.push_back(unprojectKeypoint(q.keypoints[qi], q.camera));
+    b.push_back(unprojectKeypoint(c.keypoints[ci], c.camera));
   }
   const RigidRansacResult rr = rigidRansac(a, b, p.ransac, hashCombine(p.seed, hashCombine(q.id, c.id)));
   v.first_inliers = rr.inliers;
