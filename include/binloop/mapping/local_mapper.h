@@ -40,6 +40,9 @@ struct LocalMapperParams {
   // ... counting a keyframe that sees it in both images twice (ORB-SLAM2's count, whose stereo bound is 4:
   // two stereo sightings keep a point)
   bool cull_stereo_counts_twice = false;
+  // ... only when its stereo depth is close (isCloseDepth with `stereo`): a far point two keyframes see is
+  // judged by a count of keyframes
+  bool cull_twice_close_only = false;
   bool triangulate = true;         // new points from keypoints matched with covisible keyframes
   int triangulate_neighbors = 10;  // strongest covisible keyframes searched (ORB-SLAM2)
   EpipolarParams epipolar;

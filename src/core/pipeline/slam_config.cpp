@@ -100,6 +100,7 @@ Sections backEndSettings(SlamConfig& c) {
         {"cull_after_keyframes", {S::kInt, &m.cull_after_keyframes, 1}},
         {"cull_min_observers", {S::kInt, &m.cull_min_observers, 1}},
         {"cull_stereo_counts_twice", {S::kBool, &m.cull_stereo_counts_twice, 0}},
+        {"cull_twice_close_only", {S::kBool, &m.cull_twice_close_only, 0}},
         {"triangulate", {S::kBool, &m.triangulate, 0}},
         {"triangulate_neighbors", {S::kInt, &m.triangulate_neighbors, 1}},
         {"fuse", {S::kBool, &m.fuse, 0}},

@@ -167,6 +167,29 @@ TEST_F(LocalMapperTest, ANewPointSeenInStereoByTwoKeyframesStaysUnderOrbSlam2sCo
   }
 }
 
+// The count with `cull_twice_close_only`: a stereo sighting counts twice only when its depth is close
+// (isCloseDepth, 40 baselines: 21 m here), so of the points two keyframes see in stereo the close ones stay
+// and the far ones go, as under a count of keyframes.
+TEST_F(LocalMapperTest, OnlyCloseStereoSightingsCountTwiceWhenAskedTo) {
+  for (int i = 0; i < 60; ++i) addPoint({rng.uniform(-6, 6), rng.uniform(-2, 1), rng.uniform(8, 18)});
+  for (int i = 0; i < 40; ++i) addPoint({rng.uniform(-12, 12), rng.uniform(-3, 1), rng.uniform(30, 45)});
+  LocalMapperParams p;
+  p.triangulate = p.fuse = p.local_ba = p.cull_keyframes = false;
+  p.cull_after_keyframes = 1;
+  p.cull_stereo_counts_twice = p.cull_twice_close_only = true;
+  p.cull_min_observers = 4;
+  LocalMapper m(p);
+  m.process(keyframe(0, range(0, 100), true));
+  const auto o2 = m.process(keyframe(0.5, range(0, 100), false));
+  EXPECT_EQ(m.pointCount(), 60u);
+  ASSERT_EQ(o2.update->culled_points.size(), 40u);
+  for (MapPointId id : o2.update->culled_points)
+    EXPECT_GT(
+        std::find_if(scene.begin(), scene.end(), [&](const ScenePoint& s) { return s.id == id; })->p_w.z(),
+        25)
+        << "a close point was culled";
+}
+
 // A map segment tracking started afresh after it was lost (Tracker, restart_after_lost): its first keyframe
 // shares no point with the map and hangs from the parent tracking gave it. That parent stays (the segment's
 // only tie), the next keyframe of the segment takes the first as its parent, and the segment's BA holds its
