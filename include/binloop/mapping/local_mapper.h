@@ -36,13 +36,13 @@ class StateReader;
 struct LocalMapperParams {
   int covisibility_min = 15;     // shared points for an edge of the covisibility graph
   int cull_after_keyframes = 2;  // a new point is judged this many keyframes after its creation...
-  int cull_min_observers = 3;    // ... and culled if fewer keyframes see it
-  // ... counting a keyframe that sees it in both images twice (ORB-SLAM2's count, whose stereo bound is 4:
-  // two stereo sightings keep a point)
-  bool cull_stereo_counts_twice = false;
-  // ... only when its stereo depth is close (isCloseDepth with `stereo`): a far point two keyframes see is
-  // judged by a count of keyframes
-  bool cull_twice_close_only = false;
+  int cull_min_observers = 3;    // ... and culled if its sightings count fewer
+  // How a keyframe's sighting counts there. kKeyframes: once. kStereoTwice: twice when in both images
+  // (ORB-SLAM2's count; with its bound, 4, two stereo sightings keep a point). kCloseStereoTwice: twice only
+  // when in both images at close depth (isCloseDepth with `stereo`), so a far point is judged by its count
+  // of keyframes.
+  enum class CullCount { kKeyframes, kStereoTwice, kCloseStereoTwice };
+  CullCount cull_count = CullCount::kKeyframes;
   bool triangulate = true;         // new points from keypoints matched with covisible keyframes
   int triangulate_neighbors = 10;  // strongest covisible keyframes searched (ORB-SLAM2)
   EpipolarParams epipolar;
@@ -188,7 +188,8 @@ class LocalMapper {
   void removeBaOutliers(const BaSetup& b, const LocalBaResult& r, msg::LocalMapUpdate& u);
   LocalBaParams globalBaParams() const;
   void noteGlobalBa(const LocalBaResult& r, size_t keyframes);  // into global_ba_'s last* fields
-  /// How many keyframes see a point, for culling (a stereo sighting twice with cull_stereo_counts_twice).
+  /// A point's sightings as culling counts them (`cull_count`: keyframes, or a stereo or close-stereo
+  /// sighting twice).
   int observerCount(const MP& mp) const;
   /// What the update reports of the BA it carries (time, iterations, outliers).
   static void reportBa(const BaSummary& s, msg::LocalMapUpdate& u);

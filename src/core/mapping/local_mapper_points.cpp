@@ -14,11 +14,13 @@
 namespace binloop {
 
 int LocalMapper::observerCount(const MP& mp) const {
-  if (!p_.cull_stereo_counts_twice) return static_cast<int>(mp.obs.size());
+  using Count = LocalMapperParams::CullCount;
+  if (p_.cull_count == Count::kKeyframes) return static_cast<int>(mp.obs.size());
+  const bool close_only = p_.cull_count == Count::kCloseStereoTwice;
   int n = 0;
   for (const auto& [k, idx] : mp.obs) {
     const msg::KeyPoint& kp = map_.keyframes().at(k).keypoints[idx];
-    n += hasStereo(kp) && (!p_.cull_twice_close_only || isCloseDepth(kp.depth, camera_, p_.stereo)) ? 2 : 1;
+    n += hasStereo(kp) && (!close_only || isCloseDepth(kp.depth, camera_, p_.stereo)) ? 2 : 1;
   }
   return n;
 }

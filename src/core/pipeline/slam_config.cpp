@@ -16,8 +16,9 @@ namespace {
 
 // One setting: where it lives in the structs and the smallest value it accepts.
 struct Setting {
-  // kSubPixelFit: 0 parabola, 1 equiangular; kPattern: 0 Gaussian, 1 ORB's learned pattern
-  enum Kind { kInt, kFloat, kDouble, kBool, kSubPixelFit, kPattern } kind;
+  // kSubPixelFit: 0 parabola, 1 equiangular; kPattern: 0 Gaussian, 1 ORB's learned pattern; kCullCount: 0
+  // keyframes, 1 a stereo sighting twice, 2 a close stereo sighting twice
+  enum Kind { kInt, kFloat, kDouble, kBool, kSubPixelFit, kPattern, kCullCount } kind;
   void* ptr;
   double min;
 };
@@ -99,8 +100,7 @@ Sections backEndSettings(SlamConfig& c) {
        {{"covisibility_min", {S::kInt, &m.covisibility_min, 1}},
         {"cull_after_keyframes", {S::kInt, &m.cull_after_keyframes, 1}},
         {"cull_min_observers", {S::kInt, &m.cull_min_observers, 1}},
-        {"cull_stereo_counts_twice", {S::kBool, &m.cull_stereo_counts_twice, 0}},
-        {"cull_twice_close_only", {S::kBool, &m.cull_twice_close_only, 0}},
+        {"cull_count", {S::kCullCount, &m.cull_count, 0}},
         {"triangulate", {S::kBool, &m.triangulate, 0}},
         {"triangulate_neighbors", {S::kInt, &m.triangulate_neighbors, 1}},
         {"fuse", {S::kBool, &m.fuse, 0}},
@@ -168,6 +168,8 @@ double valueOf(const Setting& s) {
              StereoMatchParams::SubPixelFit::kEquiangular;
     case Setting::kPattern:
       return *static_cast<BriefPatternKind*>(s.ptr) == BriefPatternKind::kOrbLearned;
+    case Setting::kCullCount:
+      return static_cast<int>(*static_cast<LocalMapperParams::CullCount*>(s.ptr));
   }
   return 0;
 }
@@ -212,13 +214,14 @@ void setFromYaml(const Setting& s, const cv::FileNode& v, const std::string& whe
   }
   const bool binary =
       s.kind == Setting::kBool || s.kind == Setting::kSubPixelFit || s.kind == Setting::kPattern;
-  if ((s.kind == Setting::kInt || binary) && x != std::floor(x))
+  if ((s.kind == Setting::kInt || s.kind == Setting::kCullCount || binary) && x != std::floor(x))
     throw ConfigError(where + " must be a whole number");
   if (s.kind == Setting::kInt && x > std::numeric_limits<int>::max()) {
     throw ConfigError(where + " = " + std::to_string(x) + " is out of range (at most " +
                       std::to_string(std::numeric_limits<int>::max()) + ")");
   }
   if (binary && x > 1) throw ConfigError(where + " must be 0 or 1");
+  if (s.kind == Setting::kCullCount && x > 2) throw ConfigError(where + " must be 0, 1 or 2");
   switch (s.kind) {
     case Setting::kInt:
       *static_cast<int*>(s.ptr) = static_cast<int>(x);
@@ -239,6 +242,10 @@ void setFromYaml(const Setting& s, const cv::FileNode& v, const std::string& whe
     case Setting::kPattern:
       *static_cast<BriefPatternKind*>(s.ptr) =
           x != 0 ? BriefPatternKind::kOrbLearned : BriefPatternKind::kGaussian;
+      break;
+    case Setting::kCullCount:
+      *static_cast<LocalMapperParams::CullCount*>(s.ptr) =
+          static_cast<LocalMapperParams::CullCount>(static_cast<int>(x));
       break;
   }
 }

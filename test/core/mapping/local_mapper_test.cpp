@@ -143,9 +143,9 @@ TEST_F(LocalMapperTest, CovisibilityCountsSharedPointsAndTheSpanningTreeFollowsT
   EXPECT_EQ(m.pointCount(), 200u);
 }
 
-// ORB-SLAM2's count for culling new points (`cull_stereo_counts_twice`): a keyframe that sees a point in both
+// ORB-SLAM2's count for culling new points (`cull_count` kStereoTwice): a keyframe that sees a point in both
 // images counts twice, so with its bound (4) a point two keyframes see stays when both saw it in stereo and
-// goes when the second saw it in the left image only; a count of keyframes (the option off, bound 3) culls
+// goes when the second saw it in the left image only; a count of keyframes (the default, bound 3) culls
 // both.
 TEST_F(LocalMapperTest, ANewPointSeenInStereoByTwoKeyframesStaysUnderOrbSlam2sCount) {
   for (int i = 0; i < 100; ++i) addPoint({rng.uniform(-6, 6), rng.uniform(-2, 1), rng.uniform(8, 18)});
@@ -154,7 +154,8 @@ TEST_F(LocalMapperTest, ANewPointSeenInStereoByTwoKeyframesStaysUnderOrbSlam2sCo
     LocalMapperParams p;
     p.triangulate = p.fuse = p.local_ba = p.cull_keyframes = false;
     p.cull_after_keyframes = 1;  // judged when the second keyframe comes
-    p.cull_stereo_counts_twice = twice;
+    p.cull_count =
+        twice ? LocalMapperParams::CullCount::kStereoTwice : LocalMapperParams::CullCount::kKeyframes;
     p.cull_min_observers = twice ? 4 : 3;
     LocalMapper m(p);
     const msg::KeyFrame k1 = keyframe(0, range(0, 100), true);
@@ -167,7 +168,7 @@ TEST_F(LocalMapperTest, ANewPointSeenInStereoByTwoKeyframesStaysUnderOrbSlam2sCo
   }
 }
 
-// The count with `cull_twice_close_only`: a stereo sighting counts twice only when its depth is close
+// The count with `cull_count` kCloseStereoTwice: a stereo sighting counts twice only when its depth is close
 // (isCloseDepth, 40 baselines: 21 m here), so of the points two keyframes see in stereo the close ones stay
 // and the far ones go, as under a count of keyframes.
 TEST_F(LocalMapperTest, OnlyCloseStereoSightingsCountTwiceWhenAskedTo) {
@@ -176,18 +177,18 @@ TEST_F(LocalMapperTest, OnlyCloseStereoSightingsCountTwiceWhenAskedTo) {
   LocalMapperParams p;
   p.triangulate = p.fuse = p.local_ba = p.cull_keyframes = false;
   p.cull_after_keyframes = 1;
-  p.cull_stereo_counts_twice = p.cull_twice_close_only = true;
+  p.cull_count = LocalMapperParams::CullCount::kCloseStereoTwice;
   p.cull_min_observers = 4;
   LocalMapper m(p);
   m.process(keyframe(0, range(0, 100), true));
   const auto o2 = m.process(keyframe(0.5, range(0, 100), false));
   EXPECT_EQ(m.pointCount(), 60u);
   ASSERT_EQ(o2.update->culled_points.size(), 40u);
-  for (MapPointId id : o2.update->culled_points)
-    EXPECT_GT(
-        std::find_if(scene.begin(), scene.end(), [&](const ScenePoint& s) { return s.id == id; })->p_w.z(),
-        25)
-        << "a close point was culled";
+  for (MapPointId id : o2.update->culled_points) {
+    const auto it = std::find_if(scene.begin(), scene.end(), [&](const ScenePoint& s) { return s.id == id; });
+    ASSERT_NE(it, scene.end()) << "culled point " << id << " is not one of the scene's";
+    EXPECT_GT(it->p_w.z(), 25) << "a close point was culled";
+  }
 }
 
 // A map segment tracking started afresh after it was lost (Tracker, restart_after_lost): its first keyframe

@@ -215,6 +215,28 @@ TEST(SlamConfig, LearnedPatternChoosesTheBriefTests) {
             std::string::npos);
 }
 
+TEST(SlamConfig, CullCountChoosesHowSightingsCount) {
+  TempDir dir;
+  using Count = LocalMapperParams::CullCount;
+  EXPECT_EQ(SlamConfig{}.mapper.cull_count, Count::kKeyframes) << "the default";
+  int n = 0;
+  for (const auto& [value, count] :
+       {std::pair{"0", Count::kKeyframes}, {"1", Count::kStereoTwice}, {"2", Count::kCloseStereoTwice}}) {
+    const std::string path = configFile(dir, std::string("mapping:\n  cull_count: ") + value + "\n",
+                                        "ok" + std::to_string(n++) + ".yaml");
+    const SlamConfig c = loadSlamConfig(path);
+    EXPECT_EQ(c.mapper.cull_count, count) << value;
+    EXPECT_NE(describe(c).find(std::string("mapping.cull_count: ") + value), std::string::npos) << value;
+  }
+  const std::string three = configFile(dir, "mapping:\n  cull_count: 3\n", "three.yaml");
+  EXPECT_THROW_WITH(loadSlamConfig(three), ConfigError, three + ": mapping.cull_count must be 0, 1 or 2");
+  const std::string half = configFile(dir, "mapping:\n  cull_count: 1.5\n", "half.yaml");
+  EXPECT_THROW_WITH(loadSlamConfig(half), ConfigError, half + ": mapping.cull_count must be a whole number");
+  // The two flags it replaced are unknown keys now, not silently ignored.
+  const std::string old = configFile(dir, "mapping:\n  cull_stereo_counts_twice: 1\n", "old.yaml");
+  EXPECT_THROW(loadSlamConfig(old), ConfigError);
+}
+
 // Beyond INT_MAX a value used to wrap (OpenCV's YAML reader wraps integer literals itself, and a cast
 // wrapped real ones), so a typo of a few digits became a negative or arbitrary setting.
 TEST(SlamConfig, IntValueBeyondIntRangeIsOutOfRange) {
