@@ -36,13 +36,13 @@ class StateReader;
 struct LocalMapperParams {
   int covisibility_min = 15;     // shared points for an edge of the covisibility graph
   int cull_after_keyframes = 2;  // a new point is judged this many keyframes after its creation...
-  int cull_min_observers = 3;    // ... and culled if its sightings count fewer
+  int cull_min_observers = 4;    // ... and culled if its sightings count fewer
   // How a keyframe's sighting counts there. kKeyframes: once. kStereoTwice: twice when in both images
   // (ORB-SLAM2's count; with its bound, 4, two stereo sightings keep a point). kCloseStereoTwice: twice only
   // when in both images at close depth (isCloseDepth with `stereo`), so a far point is judged by its count
   // of keyframes.
   enum class CullCount { kKeyframes, kStereoTwice, kCloseStereoTwice };
-  CullCount cull_count = CullCount::kKeyframes;
+  CullCount cull_count = CullCount::kCloseStereoTwice;
   bool triangulate = true;         // new points from keypoints matched with covisible keyframes
   int triangulate_neighbors = 10;  // strongest covisible keyframes searched (ORB-SLAM2)
   EpipolarParams epipolar;

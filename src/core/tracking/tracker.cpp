@@ -141,7 +141,10 @@ bool Tracker::trackInMap(Frame& f, int mapping_queue, Output* out) {
   msg::TrackedFrame& tf = out->frame;
   Prediction pred = predict(f);
   f.T_w_c = pred.T_w_c;
-  bool ok = state_ == msg::TrackingState::kOk && trackFromLastFrame(f, pred);
+  // A last frame older than the motion model reaches (the camera may have been carried anywhere meanwhile)
+  // is not matched against: on a road whose texture repeats it lent a frame 100 m away 30 chance inliers.
+  const bool last_is_stale = pred.dt > p_.predict_through_loss_s;
+  bool ok = state_ == msg::TrackingState::kOk && !last_is_stale && trackFromLastFrame(f, pred);
   bool relocalized = false;  // found from scratch, not near the prediction
   if (!ok) ok = recover(f, pred, &relocalized);
   if (ok && p_.localize_only && !relocalized && inliers_ < p_.localize_relocalize_below)
@@ -180,7 +183,11 @@ bool Tracker::trackInMap(Frame& f, int mapping_queue, Output* out) {
   tf.mapping_queue = mapping_queue;
   if (!p_.localize_only) {  // a map that stays as loaded needs no keyframe decision
     tf.reference_points = referencePoints();
-    if (needKeyframe(f, mapping_queue, tf.reference_points)) out->keyframe = makeKeyframe(f);
+    // A frame found again after lost frames near the prediction (not from scratch) is a keyframe even when
+    // it holds too few inliers for needKeyframe (more than 15): otherwise the next frames had no points
+    // near enough to track and were lost until tracking restarted in a new map segment.
+    const bool found_again = tf.state == msg::TrackingState::kRelocalized && !relocalized;
+    if (found_again || needKeyframe(f, mapping_queue, tf.reference_points)) out->keyframe = makeKeyframe(f);
   }
   return true;
 }

@@ -218,7 +218,7 @@ TEST(SlamConfig, LearnedPatternChoosesTheBriefTests) {
 TEST(SlamConfig, CullCountChoosesHowSightingsCount) {
   TempDir dir;
   using Count = LocalMapperParams::CullCount;
-  EXPECT_EQ(SlamConfig{}.mapper.cull_count, Count::kKeyframes) << "the default";
+  EXPECT_EQ(SlamConfig{}.mapper.cull_count, Count::kCloseStereoTwice) << "the default";
   int n = 0;
   for (const auto& [value, count] :
        {std::pair{"0", Count::kKeyframes}, {"1", Count::kStereoTwice}, {"2", Count::kCloseStereoTwice}}) {
