@@ -81,32 +81,64 @@ TEST(RealFrames, Sample00EndsWhereThePeerEnds) {
   EXPECT_LT(median(dr), 0.5);
 }
 
-// real_06_000_050, scored against KITTI's poses (a measurement here): with far matches' disparities left out
-// of pose optimisation and BA (`stereo.far_disparity: 0`) binloop's ATE must not exceed the median of
-// ORB-SLAM2's three runs on the same frames (0.058 m). Measured 2026-11-26, lock-step: 0.051 m (shipped
-// settings, far disparities measured: 0.085 m; docs/decisions.md says why that is still the default).
-TEST(RealFrames, Real06WithoutFarDisparitiesIsAsCloseToTheTruthAsThePeer) {
-  const std::string dir = test::sharedData("kitti/real_06_000_050");
-  const std::string peer = test::sharedData("../reference/orbslam2/real_06_000_050");
-  BINLOOP_REQUIRE_DATA(dir);
-  BINLOOP_REQUIRE_DATA(peer);
-  const std::vector<Pose3> truth = readKittiPoses(dir + "/poses.txt");
-  auto ate = [&](const std::vector<Pose3>& poses) {
+namespace {
+
+// real_06_000_050's ATE against KITTI's poses (a measurement here) and the median of ORB-SLAM2's three runs
+// on the same frames (0.058 m); the peer's runs, when found.
+struct Real06 {
+  std::vector<Pose3> truth;
+  double peer_median_m = 0;
+  double ate(const std::vector<Pose3>& poses) const {
     MatchedPoses m;
     for (size_t i = 0; i < poses.size(); ++i) m.frames.push_back(static_cast<int>(i));
     m.gt = truth;
     m.est = poses;
     m.gt_frames = truth.size();
     return evaluateTrajectory(m).ate_rmse_m;
-  };
-  const std::vector<Pose3> poses = trackLockStep(KittiSequence::open(dir), false);
-  ASSERT_EQ(poses.size(), truth.size());
+  }
+};
+
+Real06 real06(const std::string& dir, const std::string& peer) {
+  Real06 r;
+  r.truth = readKittiPoses(dir + "/poses.txt");
   std::vector<double> peer_ate;
-  for (const auto& r : peerRuns(peer)) peer_ate.push_back(ate(r));
-  ASSERT_EQ(peer_ate.size(), 3u) << peer;
-  const double mine = ate(poses);
-  std::cout << "ATE binloop " << mine << " m, ORB-SLAM2 median " << median(peer_ate) << " m\n";
-  EXPECT_LE(mine, median(peer_ate));
+  for (const auto& run : peerRuns(peer)) peer_ate.push_back(r.ate(run));
+  EXPECT_EQ(peer_ate.size(), 3u) << peer;
+  if (!peer_ate.empty()) r.peer_median_m = median(peer_ate);
+  return r;
+}
+
+}  // namespace
+
+// The shipped settings must not exceed the peer's error. Measured 2026-11-29: lock-step 0.045 m; at 1x every
+// model 0.042-0.048 (3 runs each); before that day's culling default 0.085-0.090 (docs/decisions.md).
+TEST(RealFrames, Real06IsAsCloseToTheTruthAsThePeer) {
+  const std::string dir = test::sharedData("kitti/real_06_000_050");
+  const std::string peer = test::sharedData("../reference/orbslam2/real_06_000_050");
+  BINLOOP_REQUIRE_DATA(dir);
+  BINLOOP_REQUIRE_DATA(peer);
+  const Real06 r = real06(dir, peer);
+  const std::vector<Pose3> poses = trackLockStep(KittiSequence::open(dir));
+  ASSERT_EQ(poses.size(), r.truth.size());
+  const double mine = r.ate(poses);
+  std::cout << "ATE binloop " << mine << " m, ORB-SLAM2 median " << r.peer_median_m << " m\n";
+  EXPECT_LE(mine, r.peer_median_m);
+}
+
+// The same with far matches' disparities left out of pose optimisation and BA (`stereo.far_disparity: 0`,
+// an option for rigs whose disparities are biased). Measured lock-step: 0.051 m (2026-11-26), 0.035 m with
+// the culling default of 2026-11-29.
+TEST(RealFrames, Real06WithoutFarDisparitiesIsAsCloseToTheTruthAsThePeer) {
+  const std::string dir = test::sharedData("kitti/real_06_000_050");
+  const std::string peer = test::sharedData("../reference/orbslam2/real_06_000_050");
+  BINLOOP_REQUIRE_DATA(dir);
+  BINLOOP_REQUIRE_DATA(peer);
+  const Real06 r = real06(dir, peer);
+  const std::vector<Pose3> poses = trackLockStep(KittiSequence::open(dir), false);
+  ASSERT_EQ(poses.size(), r.truth.size());
+  const double mine = r.ate(poses);
+  std::cout << "ATE binloop " << mine << " m, ORB-SLAM2 median " << r.peer_median_m << " m\n";
+  EXPECT_LE(mine, r.peer_median_m);
 }
 
 // The covariance a tracked frame carries against its real error on real frames: as on the render
