@@ -171,6 +171,7 @@ class Tracker {
   struct Prediction {
     Pose3 last_pose, T_w_c;
     double dt = 0;             // since the last tracked frame
+    bool last_stale = false;   // dt is beyond the motion model's reach (predict_through_loss_s)
     bool from_motion = false;  // the motion model predicts (else the last pose stands in)
     bool hinted = false;       // a pose hint stands in
     MotionReach reach;
@@ -216,7 +217,9 @@ class Tracker {
   void updateLocalKeyframes(const Frame& f);
   /// The reference keyframe's points seen by enough keyframes to count (ORB-SLAM2's nRefMatches).
   int referencePoints() const;
-  bool needKeyframe(const Frame& f, int mapping_queue, int reference_points) const;
+  /// ORB-SLAM2's keyframe rule; `found_again`: the frame was found near the prediction after lost frames,
+  /// which makes a keyframe whatever the rule says.
+  bool needKeyframe(const Frame& f, int mapping_queue, int reference_points, bool found_again) const;
   /// Tracking's fresh start at the prediction (`restart_after_lost`), when its conditions hold.
   bool restartAtPrediction(Frame& f, const Prediction& pred, Output* out);
   msg::KeyFramePtr makeKeyframe(Frame& f);

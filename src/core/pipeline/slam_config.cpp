@@ -204,6 +204,27 @@ void checkIntegerLiterals(const std::string& path) {
   }
 }
 
+// How many values a setting that picks one of several choices takes (0, 1, ...); 0 for a plain number.
+int choicesOf(Setting::Kind kind) {
+  switch (kind) {
+    case Setting::kBool:
+    case Setting::kSubPixelFit:
+    case Setting::kPattern:
+      return 2;
+    case Setting::kCullCount:
+      return 3;
+    default:
+      return 0;
+  }
+}
+
+// "0 or 1", "0, 1 or 2", ...
+std::string choiceList(int choices) {
+  std::string list;
+  for (int i = 0; i + 1 < choices; ++i) list += (i > 0 ? ", " : "") + std::to_string(i);
+  return list + " or " + std::to_string(choices - 1);
+}
+
 // One setting from its YAML value, checked against its kind and range; `where` names it in the messages.
 void setFromYaml(const Setting& s, const cv::FileNode& v, const std::string& where) {
   if (!v.isInt() && !v.isReal()) throw ConfigError(where + " must be a number");
@@ -212,16 +233,14 @@ void setFromYaml(const Setting& s, const cv::FileNode& v, const std::string& whe
     throw ConfigError(where + " = " + std::to_string(x) + " is out of range (at least " +
                       std::to_string(s.min) + ")");
   }
-  const bool binary =
-      s.kind == Setting::kBool || s.kind == Setting::kSubPixelFit || s.kind == Setting::kPattern;
-  if ((s.kind == Setting::kInt || s.kind == Setting::kCullCount || binary) && x != std::floor(x))
+  const int choices = choicesOf(s.kind);
+  if ((s.kind == Setting::kInt || choices > 0) && x != std::floor(x))
     throw ConfigError(where + " must be a whole number");
   if (s.kind == Setting::kInt && x > std::numeric_limits<int>::max()) {
     throw ConfigError(where + " = " + std::to_string(x) + " is out of range (at most " +
                       std::to_string(std::numeric_limits<int>::max()) + ")");
   }
-  if (binary && x > 1) throw ConfigError(where + " must be 0 or 1");
-  if (s.kind == Setting::kCullCount && x > 2) throw ConfigError(where + " must be 0, 1 or 2");
+  if (choices > 0 && x >= choices) throw ConfigError(where + " must be " + choiceList(choices));
   switch (s.kind) {
     case Setting::kInt:
       *static_cast<int*>(s.ptr) = static_cast<int>(x);

@@ -122,7 +122,8 @@ Tracker::Prediction Tracker::predict(const Frame& f) const {
   // The motion model over the time since the last tracked frame, so that frames lost in between (a dropped
   // message, a skipped bad image) do not leave the prediction behind.
   p.dt = f.stamp_s - last_->stamp_s;
-  p.from_motion = have_velocity_ && p.dt <= p_.predict_through_loss_s;
+  p.last_stale = p.dt > p_.predict_through_loss_s;
+  p.from_motion = have_velocity_ && !p.last_stale;
   // A pose hint while lost stands in for the prediction: the frame is searched for there and must be found
   // within its radius.
   p.hinted = hint_ && state_ == msg::TrackingState::kLost;
@@ -143,8 +144,7 @@ bool Tracker::trackInMap(Frame& f, int mapping_queue, Output* out) {
   f.T_w_c = pred.T_w_c;
   // A last frame older than the motion model reaches (the camera may have been carried anywhere meanwhile)
   // is not matched against: on a road whose texture repeats it lent a frame 100 m away 30 chance inliers.
-  const bool last_is_stale = pred.dt > p_.predict_through_loss_s;
-  bool ok = state_ == msg::TrackingState::kOk && !last_is_stale && trackFromLastFrame(f, pred);
+  bool ok = state_ == msg::TrackingState::kOk && !pred.last_stale && trackFromLastFrame(f, pred);
   bool relocalized = false;  // found from scratch, not near the prediction
   if (!ok) ok = recover(f, pred, &relocalized);
   if (ok && p_.localize_only && !relocalized && inliers_ < p_.localize_relocalize_below)
@@ -183,11 +183,8 @@ bool Tracker::trackInMap(Frame& f, int mapping_queue, Output* out) {
   tf.mapping_queue = mapping_queue;
   if (!p_.localize_only) {  // a map that stays as loaded needs no keyframe decision
     tf.reference_points = referencePoints();
-    // A frame found again after lost frames near the prediction (not from scratch) is a keyframe even when
-    // it holds too few inliers for needKeyframe (more than 15): otherwise the next frames had no points
-    // near enough to track and were lost until tracking restarted in a new map segment.
     const bool found_again = tf.state == msg::TrackingState::kRelocalized && !relocalized;
-    if (found_again || needKeyframe(f, mapping_queue, tf.reference_points)) out->keyframe = makeKeyframe(f);
+    if (needKeyframe(f, mapping_queue, tf.reference_points, found_again)) out->keyframe = makeKeyframe(f);
   }
   return true;
 }
@@ -632,7 +629,12 @@ int Tracker::referencePoints() const {
   return n;
 }
 
-bool Tracker::needKeyframe(const Frame& f, int mapping_queue, int ref_matches) const {
+bool Tracker::needKeyframe(const Frame& f, int mapping_queue, int ref_matches, bool found_again) const {
+  // A frame found again after lost frames near the prediction (not from scratch) is a keyframe even when
+  // it holds too few inliers for the rule below (more than 15), and whatever the mapping queue: otherwise
+  // the next frames had no points near enough to track and were lost until tracking restarted in a new
+  // map segment.
+  if (found_again) return true;
   if (mapping_queue >= p_.max_mapping_queue) return false;
   const size_t kfs = map_.keyframeCount();
   int tracked_close = 0, untracked_close = 0;
