@@ -213,9 +213,12 @@ int choicesOf(Setting::Kind kind) {
       return 2;
     case Setting::kCullCount:
       return 3;
-    default:
-      return 0;
+    case Setting::kInt:
+    case Setting::kFloat:
+    case Setting::kDouble:
+      return 0;  // numbers, not choices
   }
+  return 0;
 }
 
 // "0 or 1", "0, 1 or 2", ...
