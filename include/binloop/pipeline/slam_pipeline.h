@@ -10,6 +10,7 @@
 // the switch) and, in threaded mode, addExternalLoop() (any thread: it only queues). In threaded mode each
 // stage object is touched by its own thread alone, and mapper() and the logs are read only after finish().
 #include <atomic>
+#include <chrono>
 #include <functional>
 #include <memory>
 #include <mutex>
@@ -130,11 +131,20 @@ class SlamPipeline {
   void map(const MappingInput& in);
   void searchLoops(const LoopInput& in);
   void drainUpdates();
+  /// Threaded: until mapping has processed every keyframe sent (pending_ 0), within the lag allowed
+  /// (`wait_for_mapping_ms` behind the frames' clock).
+  void waitForMapping(const StereoFrame& frame);
   /// Calls f(name, stage) for each stage that runs, in the order stageNames() lists them.
   template <class Self, class F>
   static void forEachStage(Self& self, F&& f);
 
   PipelineMode mode_;
+  double wait_for_mapping_ms_;
+  // How far frames reach process() behind their time stamps' pace (s), and the last call's wall time and
+  // stamp: waitForMapping spends only what is left of the allowance.
+  double behind_s_ = 0;
+  std::optional<std::chrono::steady_clock::time_point> last_call_;
+  double last_stamp_s_ = 0;
   Tracker tracker_;
   LocalMapper mapper_;
   std::unique_ptr<LoopDetector> detector_;

@@ -40,6 +40,12 @@ struct TrackerParams {
   // because a frame was black, and on repetitive facades a pose found without any prior can be off by one
   // facade (rendered 06: 874 inliers 2.3 m from the truth).
   double predict_through_loss_s = 3.0;
+  // Threaded pipeline: before tracking a frame, wait for local mapping to finish the keyframes sent to it,
+  // so the frame is tracked against the map lock-step would give it, as long as tracking stays within this
+  // many ms of the frames' clock (their time stamps). While the machine keeps up, runs at a camera's pace
+  // then repeat each other instead of depending on which thread won; when mapping takes longer, tracking
+  // goes on against the map as it stands, as without the wait. 0: never wait.
+  double wait_for_mapping_ms = 0;
   // After this many frames lost in a row while the motion model still predicts, tracking starts again at
   // its prediction: the frame becomes a keyframe with points from its own stereo, the first of a new map
   // segment whose only tie to the old map is that prediction (its spanning-tree parent, in the pose graph)
@@ -83,8 +89,12 @@ struct TrackerParams {
           // 2 halved the ATE on rendered 05: with 3, turns thinned the map first)
   int keyframe_close_tracked_max = 100;   // ... or fewer close points tracked than this
   int keyframe_close_untracked_min = 70;  // ... while at least this many close points could be added
-  int max_mapping_queue = 3;              // while mapping is busy, insert only if its queue is shorter
-  int new_points_min = 100;               // a keyframe makes at least this many new points (closest first)
+  // ... or the camera turned more than this since the last keyframe (degrees; 0: no such rule). In a sharp
+  // turn the view sweeps past far points in a few frames; keyframes by turn see each of them often enough to
+  // keep it, and far points are what holds the rotation there.
+  double keyframe_max_turn_deg = 0;
+  int max_mapping_queue = 3;  // while mapping is busy, insert only if its queue is shorter
+  int new_points_min = 100;   // a keyframe makes at least this many new points (closest first)
   // ... and, when true, a point for every stereo match, far ones too. ORB-SLAM2 stops at the close ones and
   // leaves far points to triangulation over keyframes; on rendered 06 making them here (their depth is then
   // refined by local BA) took t_rel from 1.14 % to 0.36 % and r_rel from 0.57 to 0.14 deg/100 m, because far
@@ -220,6 +230,8 @@ class Tracker {
   /// ORB-SLAM2's keyframe rule; `found_again`: the frame was found near the prediction after lost frames,
   /// which makes a keyframe whatever the rule says.
   bool needKeyframe(const Frame& f, int mapping_queue, int reference_points, bool found_again) const;
+  /// The camera turned more than keyframe_max_turn_deg since the last keyframe.
+  bool turned(const Frame& f) const;
   /// Tracking's fresh start at the prediction (`restart_after_lost`), when its conditions hold.
   bool restartAtPrediction(Frame& f, const Prediction& pred, Output* out);
   msg::KeyFramePtr makeKeyframe(Frame& f);
@@ -242,6 +254,9 @@ class Tracker {
   bool have_stamp_ = false;
   SlamKeyframeId reference_ = kNoId;
   uint64_t last_keyframe_frame_ = 0;
+  SlamKeyframeId last_keyframe_ = kNoId;
+  Eigen::Matrix3d last_keyframe_R_w_c_ =
+      Eigen::Matrix3d::Identity();  // as tracked, for when the map lacks it
   std::vector<SlamKeyframeId> local_keyframes_;
   int inliers_ = 0;
   int lost_in_a_row_ = 0;

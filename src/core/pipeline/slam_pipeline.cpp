@@ -1,5 +1,6 @@
 #include "binloop/pipeline/slam_pipeline.h"
 
+#include <algorithm>
 #include <chrono>
 #include <filesystem>
 
@@ -12,6 +13,7 @@ namespace binloop {
 SlamPipeline::SlamPipeline(const StereoCamera& cam, const TrackerParams& tp, const LocalMapperParams& mp,
                            PipelineMode mode, size_t queue_capacity, std::optional<LoopClosingSetup> loops)
     : mode_(mode),
+      wait_for_mapping_ms_(tp.wait_for_mapping_ms),
       tracker_(cam, tp),
       mapper_([&] {
         LocalMapperParams m = mp;  // threaded, a global BA runs beside mapping (lock-step: in it)
@@ -199,7 +201,23 @@ void SlamPipeline::drainUpdates() {
   while (auto u = updates_.tryPop()) tracker_.apply(**u);
 }
 
+void SlamPipeline::waitForMapping(const StereoFrame& frame) {
+  const auto now = std::chrono::steady_clock::now();
+  if (last_call_) {
+    const double wall_s = std::chrono::duration<double>(now - *last_call_).count();
+    behind_s_ = std::max(0.0, behind_s_ + wall_s - (frame.stamp_s - last_stamp_s_));
+  }
+  last_call_ = now;
+  last_stamp_s_ = frame.stamp_s;
+  const double allowed_ms = wait_for_mapping_ms_ - 1000.0 * behind_s_;
+  if (allowed_ms <= 0) return;
+  const auto deadline = now + std::chrono::duration<double, std::milli>(allowed_ms);
+  while (pending_.load() > 0 && std::chrono::steady_clock::now() < deadline)
+    std::this_thread::sleep_for(std::chrono::microseconds(200));
+}
+
 msg::TrackedFrame SlamPipeline::process(const StereoFrame& frame) {
+  if (mode_ == PipelineMode::kThreaded && wait_for_mapping_ms_ > 0) waitForMapping(frame);
   drainUpdates();
   Tracker::Output out = tracker_.track(frame, pending_.load());
   if (out.keyframe) {

@@ -629,6 +629,15 @@ int Tracker::referencePoints() const {
   return n;
 }
 
+bool Tracker::turned(const Frame& f) const {
+  if (p_.keyframe_max_turn_deg <= 0) return false;
+  Eigen::Matrix3d R_w_k = last_keyframe_R_w_c_;
+  // As the map holds it now: a loop correction since has moved it with the frames.
+  if (const msg::KeyframeState* k = map_.keyframe(last_keyframe_)) R_w_k = k->T_w_c.linear();
+  const double deg = Eigen::AngleAxisd(R_w_k.transpose() * f.T_w_c.linear()).angle() * 180.0 / M_PI;
+  return deg > p_.keyframe_max_turn_deg;
+}
+
 bool Tracker::needKeyframe(const Frame& f, int mapping_queue, int ref_matches, bool found_again) const {
   // A frame found again after lost frames near the prediction (not from scratch) is a keyframe even when
   // it holds too few inliers for the rule below (more than 15), and whatever the mapping queue: otherwise
@@ -654,7 +663,7 @@ bool Tracker::needKeyframe(const Frame& f, int mapping_queue, int ref_matches, b
   const bool c1a = f.index >= last_keyframe_frame_ + static_cast<uint64_t>(p_.keyframe_max_frames);
   const bool c1b = mapping_queue == 0;
   const bool c1c = inliers < ref_matches * 0.25 || need_close;
-  const bool c2 = (inliers < ref_matches * ref_ratio || need_close) && inliers > 15;
+  const bool c2 = (inliers < ref_matches * ref_ratio || need_close || turned(f)) && inliers > 15;
   return (c1a || c1b || c1c) && c2;
 }
 
@@ -710,6 +719,8 @@ msg::KeyFramePtr Tracker::makeKeyframe(Frame& f) {
   if (keyframe_db_) keyframe_db_->add(kf->id, kf->descriptors);
   reference_ = kf->id;
   last_keyframe_frame_ = f.index;
+  last_keyframe_ = kf->id;
+  last_keyframe_R_w_c_ = f.T_w_c.linear();
   return kf;
 }
 
