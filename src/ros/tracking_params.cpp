@@ -38,9 +38,9 @@ TrackingParams TrackingParams::read(const ros::NodeHandle& pnh) {
   p.stale_after_s = numberParam(pnh, "stale_after_s", 2);
   p.path_max_poses = static_cast<size_t>(std::max(1.0, numberParam(pnh, "path_max_poses", 1000)));
   p.config = slamConfigFrom(pnh);
-  if (p.config.tracker.wait_for_mapping_ms > 0) {
+  if (p.config.pipeline.wait_for_mapping_ms > 0) {
     ROS_WARN(
-        "binloop/Tracking: tracking.wait_for_mapping_ms is for the runner (run, eval-slam) and is ignored "
+        "binloop/Tracking: pipeline.wait_for_mapping_ms is for the runner (run, eval-slam) and is ignored "
         "here; ~lockstep holds pairs while keyframes are in flight");
   }
   p.config.tracker.seed = static_cast<uint64_t>(numberParam(pnh, "seed", 1));

@@ -365,8 +365,10 @@ int main(int argc, char** argv) {
 
     std::optional<LoopClosingSetup> loops;
     if (detector != "none") loops = loopClosingSetup(args, config, detector);
-    SlamPipeline slam(seq.camera(), config.tracker, config.mapper,
-                      lockstep ? PipelineMode::kLockStep : PipelineMode::kThreaded, 3, loops);
+    PipelineParams pipeline = config.pipeline;
+    pipeline.mode = lockstep ? PipelineMode::kLockStep : PipelineMode::kThreaded;
+    pipeline.rate = rate;
+    SlamPipeline slam(seq.camera(), config.tracker, config.mapper, pipeline, loops);
     if (args.has("load-map")) slam.loadMap(args.str("load-map"));
     const Played played = play(slam, seq, start, end, rate);
     if (args.has("save-map")) {

@@ -8,6 +8,7 @@
 #include "binloop/loop/loop_closer.h"
 #include "binloop/loop/loop_detector.h"
 #include "binloop/mapping/local_mapper.h"
+#include "binloop/pipeline/pipeline_params.h"
 #include "binloop/tracking/tracker.h"
 
 namespace binloop {
@@ -25,6 +26,8 @@ struct SlamConfig {
   // The place models' thresholds (file loop_detection section); model_file and the extractor check are set
   // where a model is loaded.
   RecognizerOptions models;
+  // The offline pipeline (file section `pipeline`); its mode and rate come from the runner's options.
+  PipelineParams pipeline;
 };
 
 /// Keys the file gives override the defaults; keys it leaves out keep them.

@@ -11,6 +11,7 @@
 // stage object is touched by its own thread alone, and mapper() and the logs are read only after finish().
 #include <atomic>
 #include <chrono>
+#include <condition_variable>
 #include <functional>
 #include <memory>
 #include <mutex>
@@ -23,11 +24,10 @@
 #include "binloop/loop/loop_detector.h"
 #include "binloop/mapping/local_mapper.h"
 #include "binloop/pipeline/bounded_queue.h"
+#include "binloop/pipeline/pipeline_params.h"
 #include "binloop/tracking/tracker.h"
 
 namespace binloop {
-
-enum class PipelineMode { kLockStep, kThreaded };
 
 /// Loop closing, when wanted: the detector's settings and how it makes models, the closer's settings,
 /// shadow models, and switches of the active model at given keyframe counts.
@@ -45,8 +45,7 @@ class SlamPipeline {
   /// Throws PlaceError when loop closing's first model, a shadow model or a model named in `switches`
   /// cannot be made.
   SlamPipeline(const StereoCamera& cam, const TrackerParams& tp, const LocalMapperParams& mp,
-               PipelineMode mode, size_t queue_capacity = 3,
-               std::optional<LoopClosingSetup> loops = std::nullopt);
+               const PipelineParams& pp, std::optional<LoopClosingSetup> loops = std::nullopt);
   ~SlamPipeline();
   SlamPipeline(const SlamPipeline&) = delete;
   SlamPipeline& operator=(const SlamPipeline&) = delete;
@@ -131,17 +130,18 @@ class SlamPipeline {
   void map(const MappingInput& in);
   void searchLoops(const LoopInput& in);
   void drainUpdates();
-  /// Threaded: until mapping has processed every keyframe sent (pending_ 0), within the lag allowed
+  /// Threaded: until mapping has processed every keyframe sent, within the lag allowed
   /// (`wait_for_mapping_ms` behind the frames' clock).
   void waitForMapping(const StereoFrame& frame);
+  /// Until mapping has processed every keyframe sent (pending_ 0), or until `deadline` when one is given.
+  void waitUntilMappingIdle(std::optional<std::chrono::steady_clock::time_point> deadline);
   /// Calls f(name, stage) for each stage that runs, in the order stageNames() lists them.
   template <class Self, class F>
   static void forEachStage(Self& self, F&& f);
 
-  PipelineMode mode_;
-  double wait_for_mapping_ms_;
-  // How far frames reach process() behind their time stamps' pace (s), and the last call's wall time and
-  // stamp: waitForMapping spends only what is left of the allowance.
+  PipelineParams params_;
+  // How far frames reach process() behind the pace of their stamps at params_.rate (s), and the last call's
+  // wall time and stamp: waitForMapping spends only what is left of the allowance.
   double behind_s_ = 0;
   std::optional<std::chrono::steady_clock::time_point> last_call_;
   double last_stamp_s_ = 0;
@@ -157,6 +157,8 @@ class SlamPipeline {
   BoundedQueue<LoopInput> loop_inbox_;
   BoundedQueue<msg::LocalMapUpdatePtr> updates_;
   std::atomic<int> pending_{0};  // keyframes sent to mapping and not yet processed
+  std::mutex idle_mutex_;        // with idle_: map() tells waiters that pending_ went down
+  std::condition_variable idle_;
   std::vector<MappingTime> mapping_times_;
   std::vector<LoopLogEntry> loop_log_;
   double last_correction_ba_ms_ = 0;

@@ -40,12 +40,6 @@ struct TrackerParams {
   // because a frame was black, and on repetitive facades a pose found without any prior can be off by one
   // facade (rendered 06: 874 inliers 2.3 m from the truth).
   double predict_through_loss_s = 3.0;
-  // Threaded pipeline: before tracking a frame, wait for local mapping to finish the keyframes sent to it,
-  // so the frame is tracked against the map lock-step would give it, as long as tracking stays within this
-  // many ms of the frames' clock (their time stamps). While the machine keeps up, runs at a camera's pace
-  // then repeat each other instead of depending on which thread won; when mapping takes longer, tracking
-  // goes on against the map as it stands, as without the wait. 0: never wait.
-  double wait_for_mapping_ms = 0;
   // After this many frames lost in a row while the motion model still predicts, tracking starts again at
   // its prediction: the frame becomes a keyframe with points from its own stereo, the first of a new map
   // segment whose only tie to the old map is that prediction (its spanning-tree parent, in the pose graph)

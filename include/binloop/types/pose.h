@@ -2,6 +2,7 @@
 // Rigid transforms named by their frames: T_a_b maps coordinates in frame b to frame a
 // (p_a = T_a_b * p_b). Poses are always typed Eigen transforms, never cv::Mat.
 #include <Eigen/Geometry>
+#include <cmath>
 #include <vector>
 
 namespace binloop {
@@ -25,6 +26,9 @@ inline Eigen::Matrix3d skew(const Eigen::Vector3d& v) {
   m << 0, -v.z(), v.y(), v.z(), 0, -v.x(), -v.y(), v.x(), 0;
   return m;
 }
+
+/// The angle of a rotation, in degrees (0 to 180).
+inline double rotationDeg(const Eigen::Matrix3d& R) { return Eigen::AngleAxisd(R).angle() * 180.0 / M_PI; }
 
 /// A pose with its time, e.g. one line of a trajectory file (T_w_c of the left camera).
 struct StampedPose {

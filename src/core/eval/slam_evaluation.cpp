@@ -36,7 +36,7 @@ LoopPoseError loopPoseError(int query, int match, const Pose3& T_query_match, co
   const Pose3 diff = truth.inverse() * T_query_match;
   LoopPoseError e;
   e.translation_m = diff.translation().norm();
-  e.rotation_deg = Eigen::AngleAxisd(diff.linear()).angle() * 180.0 / M_PI;
+  e.rotation_deg = rotationDeg(diff.linear());
   return e;
 }
 

@@ -53,7 +53,6 @@ Sections trackingSettings(TrackerParams& t) {
         {"local_map_radius", {S::kFloat, &t.local_map_radius, 0.1}},
         {"lost_radius", {S::kFloat, &t.lost_radius, 0.1}},
         {"predict_through_loss_s", {S::kDouble, &t.predict_through_loss_s, 0}},
-        {"wait_for_mapping_ms", {S::kDouble, &t.wait_for_mapping_ms, 0}},
         {"restart_after_lost", {S::kInt, &t.restart_after_lost, 0}},
         {"recovery_min_gate_m", {S::kDouble, &t.recovery_min_gate_m, 0}},
         {"recovery_max_accel_mps2", {S::kDouble, &t.recovery_max_accel_mps2, 0}},
@@ -90,7 +89,8 @@ Sections trackingSettings(TrackerParams& t) {
   };
 }
 
-// The back end's sections: local mapping, loop detection and loop closing.
+// The back end's sections: local mapping, loop detection and loop closing; and how the offline pipeline
+// runs them.
 Sections backEndSettings(SlamConfig& c) {
   LocalMapperParams& m = c.mapper;
   LoopDetectorParams& d = c.detector;
@@ -145,6 +145,7 @@ Sections backEndSettings(SlamConfig& c) {
         {"reanchor_min_m", {S::kDouble, &l.reanchor_min_m, 0}},
         {"fuse", {S::kBool, &l.fuse, 0}},
         {"resend_corrections_after_updates", {S::kInt, &l.resend_corrections_after_updates, 1}}}},
+      {"pipeline", {{"wait_for_mapping_ms", {S::kDouble, &c.pipeline.wait_for_mapping_ms, 0}}}},
   };
 }
 
@@ -292,7 +293,8 @@ SlamConfig loadSlamConfig(const std::string& path) {
   if (!root.isMap()) {
     throw ConfigError(
         path +
-        ": expected sections (orb, stereo, tracking, recovery, mapping, loop_detection, loop_closing)");
+        ": expected sections (orb, stereo, tracking, recovery, mapping, loop_detection, loop_closing, "
+        "pipeline)");
   }
   for (const std::string& section : root.keys()) {
     auto sec = settings.find(section);

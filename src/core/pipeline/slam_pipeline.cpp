@@ -11,16 +11,15 @@
 namespace binloop {
 
 SlamPipeline::SlamPipeline(const StereoCamera& cam, const TrackerParams& tp, const LocalMapperParams& mp,
-                           PipelineMode mode, size_t queue_capacity, std::optional<LoopClosingSetup> loops)
-    : mode_(mode),
-      wait_for_mapping_ms_(tp.wait_for_mapping_ms),
+                           const PipelineParams& pp, std::optional<LoopClosingSetup> loops)
+    : params_(pp),
       tracker_(cam, tp),
       mapper_([&] {
         LocalMapperParams m = mp;  // threaded, a global BA runs beside mapping (lock-step: in it)
-        m.global_ba_in_background = mode == PipelineMode::kThreaded;
+        m.global_ba_in_background = pp.mode == PipelineMode::kThreaded;
         return m;
       }()),
-      mapping_inbox_(queue_capacity),
+      mapping_inbox_(pp.queue_capacity),
       loop_inbox_(1u << 20),
       updates_(1u << 20) {
   if (loops) {
@@ -32,7 +31,7 @@ SlamPipeline::SlamPipeline(const StereoCamera& cam, const TrackerParams& tp, con
     make_model_ = loops->make_model;
     for (const auto& [at, model] : switches_) make_model_(model);  // a bad file fails now, not mid-run
   }
-  if (mode_ == PipelineMode::kThreaded) {
+  if (params_.mode == PipelineMode::kThreaded) {
     mapping_thread_ = std::thread([this] {
       while (auto in = mapping_inbox_.pop()) map(*in);
     });
@@ -94,7 +93,7 @@ void SlamPipeline::addExternalLoop(SlamKeyframeId query, SlamKeyframeId match, c
   if (!closer_) throw PlaceError("loop closing is off: no external loop can be added");
   LoopInput in;
   in.external = ExternalLoop{query, match, source};
-  if (mode_ == PipelineMode::kLockStep) {
+  if (params_.mode == PipelineMode::kLockStep) {
     searchLoops(in);
   } else {
     loop_inbox_.push(in);
@@ -102,7 +101,7 @@ void SlamPipeline::addExternalLoop(SlamKeyframeId query, SlamKeyframeId match, c
 }
 
 void SlamPipeline::sendCorrection(const msg::CorrectionPtr& c) {
-  if (mode_ == PipelineMode::kLockStep) {
+  if (params_.mode == PipelineMode::kLockStep) {
     const auto t0 = std::chrono::steady_clock::now();
     map(c);
     loop_log_.back().correction_ms = msSince(t0);
@@ -116,7 +115,7 @@ void SlamPipeline::sendCorrection(const msg::CorrectionPtr& c) {
 void SlamPipeline::sendMapUpdate(const msg::LocalMapUpdatePtr& u, bool loop_thread_running) {
   updates_.push(u);
   if (!closer_) return;
-  if (mode_ == PipelineMode::kThreaded && loop_thread_running) {
+  if (params_.mode == PipelineMode::kThreaded && loop_thread_running) {
     loop_inbox_.push({nullptr, u, std::nullopt});
   } else {
     closer_->apply(*u);  // what it would send again is ignored here: in one process no correction is lost
@@ -142,9 +141,13 @@ void SlamPipeline::map(const MappingInput& in) {
                             out.update->triangulation_ms, out.update->points_triangulated});
   if (on_keyframe) on_keyframe(out.refined);
   updates_.push(out.update);
-  --pending_;
+  {
+    std::lock_guard<std::mutex> lk(idle_mutex_);  // a waiter cannot miss the change between test and wait
+    --pending_;
+  }
+  idle_.notify_all();
   if (!detector_) return;
-  if (mode_ == PipelineMode::kLockStep) {
+  if (params_.mode == PipelineMode::kLockStep) {
     searchLoops({out.refined, out.update, std::nullopt});
   } else {
     loop_inbox_.push({out.refined, out.update, std::nullopt});
@@ -201,28 +204,37 @@ void SlamPipeline::drainUpdates() {
   while (auto u = updates_.tryPop()) tracker_.apply(**u);
 }
 
+void SlamPipeline::waitUntilMappingIdle(std::optional<std::chrono::steady_clock::time_point> deadline) {
+  std::unique_lock<std::mutex> lk(idle_mutex_);
+  const auto idle = [this] { return pending_.load() == 0; };
+  if (deadline) {
+    idle_.wait_until(lk, *deadline, idle);
+  } else {
+    idle_.wait(lk, idle);
+  }
+}
+
 void SlamPipeline::waitForMapping(const StereoFrame& frame) {
   const auto now = std::chrono::steady_clock::now();
-  if (last_call_) {
+  if (last_call_ && params_.rate > 0) {  // flat out there is no clock to fall behind
     const double wall_s = std::chrono::duration<double>(now - *last_call_).count();
-    behind_s_ = std::max(0.0, behind_s_ + wall_s - (frame.stamp_s - last_stamp_s_));
+    behind_s_ = std::max(0.0, behind_s_ + wall_s - (frame.stamp_s - last_stamp_s_) / params_.rate);
   }
   last_call_ = now;
   last_stamp_s_ = frame.stamp_s;
-  const double allowed_ms = wait_for_mapping_ms_ - 1000.0 * behind_s_;
+  const double allowed_ms = params_.wait_for_mapping_ms - 1000.0 * behind_s_;
   if (allowed_ms <= 0) return;
-  const auto deadline = now + std::chrono::duration<double, std::milli>(allowed_ms);
-  while (pending_.load() > 0 && std::chrono::steady_clock::now() < deadline)
-    std::this_thread::sleep_for(std::chrono::microseconds(200));
+  const auto allowance = std::chrono::duration<double, std::milli>(allowed_ms);
+  waitUntilMappingIdle(now + std::chrono::duration_cast<std::chrono::steady_clock::duration>(allowance));
 }
 
 msg::TrackedFrame SlamPipeline::process(const StereoFrame& frame) {
-  if (mode_ == PipelineMode::kThreaded && wait_for_mapping_ms_ > 0) waitForMapping(frame);
+  if (params_.mode == PipelineMode::kThreaded && params_.wait_for_mapping_ms > 0) waitForMapping(frame);
   drainUpdates();
   Tracker::Output out = tracker_.track(frame, pending_.load());
   if (out.keyframe) {
     ++pending_;
-    if (mode_ == PipelineMode::kLockStep) {
+    if (params_.mode == PipelineMode::kLockStep) {
       map(out.keyframe);
       drainUpdates();
     } else {
@@ -237,10 +249,10 @@ msg::TrackedFrame SlamPipeline::process(const StereoFrame& frame) {
 void SlamPipeline::finish() {
   if (finished_) return;
   finished_ = true;
-  if (mode_ == PipelineMode::kThreaded) {
+  if (params_.mode == PipelineMode::kThreaded) {
     // Mapping first finishes its keyframes, then the loop stages their queue (a correction they send still
     // reaches mapping), then mapping whatever came back.
-    while (pending_.load() > 0) std::this_thread::sleep_for(std::chrono::milliseconds(1));
+    waitUntilMappingIdle(std::nullopt);
     loop_inbox_.close();
     if (loop_thread_.joinable()) loop_thread_.join();
     mapping_inbox_.close();

@@ -634,8 +634,7 @@ bool Tracker::turned(const Frame& f) const {
   Eigen::Matrix3d R_w_k = last_keyframe_R_w_c_;
   // As the map holds it now: a loop correction since has moved it with the frames.
   if (const msg::KeyframeState* k = map_.keyframe(last_keyframe_)) R_w_k = k->T_w_c.linear();
-  const double deg = Eigen::AngleAxisd(R_w_k.transpose() * f.T_w_c.linear()).angle() * 180.0 / M_PI;
-  return deg > p_.keyframe_max_turn_deg;
+  return rotationDeg(R_w_k.transpose() * f.T_w_c.linear()) > p_.keyframe_max_turn_deg;
 }
 
 bool Tracker::needKeyframe(const Frame& f, int mapping_queue, int ref_matches, bool found_again) const {

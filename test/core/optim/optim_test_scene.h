@@ -34,7 +34,7 @@ inline Pose3 perturb(const Pose3& T_c_w, double deg, double m, HashRng& rng) {
 }
 
 inline double rotationErrorDeg(const Pose3& a, const Pose3& b) {
-  return Eigen::AngleAxisd(a.linear() * b.linear().transpose()).angle() * 180 / kPi;
+  return rotationDeg(a.linear() * b.linear().transpose());
 }
 
 /// Distance between the camera centres of two T_c_w.

@@ -38,7 +38,7 @@ DriveRun runDrive(const LoopDrive& d, bool close_loops, PipelineMode mode = Pipe
   if (close_loops) {
     loops = test::tinyHbowLoopSetup(d);
   }
-  SlamPipeline slam(d.cam, {}, mp, mode, 3, loops);
+  SlamPipeline slam(d.cam, {}, mp, mode, loops);
   std::vector<msg::TrackedFrame> tracked;
   for (const auto& f : d.frames) tracked.push_back(slam.process(f));
   if (before_finish) before_finish(slam, tracked);
@@ -213,8 +213,8 @@ TEST(LoopClosingPipeline, ASwitchToAModelThatCannotBeMadeIsRefusedAtOnce) {
   const StereoCamera cam = kittiCameraByName("kitti04");
   LoopClosingSetup bad = l;
   bad.switches = {{5, "vladpq"}};
-  EXPECT_THROW(SlamPipeline(cam, {}, {}, PipelineMode::kThreaded, 3, bad), PlaceError);
-  SlamPipeline slam(cam, {}, {}, PipelineMode::kThreaded, 3, l);
+  EXPECT_THROW(SlamPipeline(cam, {}, {}, PipelineMode::kThreaded, bad), PlaceError);
+  SlamPipeline slam(cam, {}, {}, PipelineMode::kThreaded, l);
   EXPECT_THROW(slam.switchDetector("vladpq"), PlaceError);
   EXPECT_NO_THROW(slam.switchDetector("hmvlad"));
   SlamPipeline off(cam, {}, {}, PipelineMode::kLockStep);

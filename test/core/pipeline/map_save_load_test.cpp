@@ -41,7 +41,7 @@ std::string bytesOf(const std::string& path) {
 
 // The first lap, mapped with loop closing on, saved into `dir`.
 void saveFirstLap(const LoopDrive& d, const std::string& dir) {
-  SlamPipeline slam(d.cam, trackerParams(d), {}, PipelineMode::kLockStep, 3, loopSetup(d));
+  SlamPipeline slam(d.cam, trackerParams(d), {}, PipelineMode::kLockStep, loopSetup(d));
   for (size_t i = 0; i < d.lap; ++i) slam.process(d.frames[i]);
   slam.finish();
   slam.saveMap(dir);
@@ -56,7 +56,7 @@ TEST(MapSaveLoad, ARoundTripChangesNoByteAndTheLoadedMapIsTrackedAndClosed) {
   const std::string first = dir / "first", again = dir / "again";
   saveFirstLap(*d, first);
 
-  SlamPipeline loaded(d->cam, trackerParams(*d), {}, PipelineMode::kLockStep, 3, loopSetup(*d));
+  SlamPipeline loaded(d->cam, trackerParams(*d), {}, PipelineMode::kLockStep, loopSetup(*d));
   loaded.loadMap(first);
   loaded.saveMap(again);
   for (const char* s : kStages) {
@@ -116,7 +116,7 @@ TEST(MapSaveLoad, LocalisationOnlyTracksInTheLoadedMapAndChangesNothing) {
 
   TrackerParams tp = trackerParams(*d);
   tp.localize_only = true;
-  SlamPipeline loaded(d->cam, tp, {}, PipelineMode::kLockStep, 3, loopSetup(*d));
+  SlamPipeline loaded(d->cam, tp, {}, PipelineMode::kLockStep, loopSetup(*d));
   loaded.loadMap(dir / "map");
   const size_t keyframes = loaded.mapper().keyframeCount();
   size_t tracked = 0, made = 0;
@@ -152,7 +152,7 @@ TEST(MapSaveLoad, BrokenOrMismatchedFilesAreRefusedWithTheReason) {
   const std::string map = dir / "map";
   saveFirstLap(*d, map);
   auto loadInto = [&](const std::string& from, const std::string& identity = "tiny hbow") {
-    SlamPipeline slam(d->cam, trackerParams(*d), {}, PipelineMode::kLockStep, 3, loopSetup(*d, identity));
+    SlamPipeline slam(d->cam, trackerParams(*d), {}, PipelineMode::kLockStep, loopSetup(*d, identity));
     slam.loadMap(from);
   };
   EXPECT_THROW_WITH(loadInto(dir / "nothing"), DataError, "no such folder");

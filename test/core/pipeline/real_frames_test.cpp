@@ -101,7 +101,7 @@ TEST(RealFrames, Sample00EndsWhereThePeerEnds) {
     ASSERT_EQ(r.size(), poses.size());
     const Pose3 d = r.back().inverse() * poses.back();
     dt.push_back(d.translation().norm());
-    dr.push_back(Eigen::AngleAxisd(d.linear()).angle() * 180.0 / M_PI);
+    dr.push_back(rotationDeg(d.linear()));
   }
   EXPECT_LT(median(dt), 0.10);
   EXPECT_LT(median(dr), 0.5);

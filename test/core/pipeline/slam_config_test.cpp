@@ -130,8 +130,9 @@ TEST(SlamConfig, UnknownSectionNamesFileAndSection) {
   TempDir dir;
   const std::string path = configFile(dir, "orb:\n  features: 1000\nmaping:\n  fuse: 0\n");
   EXPECT_THROW_WITH(loadSlamConfig(path), ConfigError, path + ": unknown section 'maping'");
-  EXPECT_THROW_WITH(loadSlamConfig(path), ConfigError,
-                    "known: loop_closing, loop_detection, mapping, orb, recovery, stereo, tracking");
+  EXPECT_THROW_WITH(
+      loadSlamConfig(path), ConfigError,
+      "known: loop_closing, loop_detection, mapping, orb, pipeline, recovery, stereo, tracking");
 }
 
 TEST(SlamConfig, RecoveryKeysReachTheTracker) {
@@ -147,6 +148,19 @@ TEST(SlamConfig, RecoveryKeysReachTheTracker) {
   EXPECT_EQ(c.tracker.far_pose.iterations, SlamConfig{}.tracker.far_pose.iterations);
   EXPECT_THROW_WITH(loadSlamConfig(configFile(dir, "recovery:\n  rotation_iterations: 0\n", "bad.yaml")),
                     ConfigError, "recovery.rotation_iterations = 0.000000 is out of range (at least 1");
+}
+
+// The wait for mapping is the offline pipeline's, not the tracker's: it has its own section, and the file
+// leaves the mode and the rate (the runner's options) alone.
+TEST(SlamConfig, PipelineSectionReachesThePipeline) {
+  TempDir dir;
+  const SlamConfig c = loadSlamConfig(configFile(dir, "pipeline:\n  wait_for_mapping_ms: 150\n"));
+  EXPECT_EQ(c.pipeline.wait_for_mapping_ms, 150);
+  EXPECT_EQ(c.pipeline.mode, PipelineMode::kLockStep);
+  EXPECT_EQ(c.pipeline.rate, 1);
+  EXPECT_EQ(SlamConfig{}.pipeline.wait_for_mapping_ms, 0) << "the default: never wait";
+  EXPECT_THROW_WITH(loadSlamConfig(configFile(dir, "tracking:\n  wait_for_mapping_ms: 150\n", "old.yaml")),
+                    ConfigError, "unknown key 'tracking.wait_for_mapping_ms'");
 }
 
 TEST(SlamConfig, UnknownKeyNamesFileAndKey) {

@@ -31,8 +31,6 @@ using namespace binloop;
 
 namespace {
 
-double rotationDeg(const Pose3& T) { return Eigen::AngleAxisd(T.linear()).angle() * 180.0 / M_PI; }
-
 // Frames first..first+n-1 of KITTI route 06 rendered as the `render` tool does (kitti04 camera, seed 1): by
 // default with its road texture that repeats every 8 m, or as `render --aperiodic-ground`. frames[k] shows
 // route[first + k].
@@ -62,9 +60,9 @@ const RenderedStretch* renderedStretch(int n, bool aperiodic_ground = false, int
 }
 
 std::vector<msg::TrackedFrame> runOn(const std::vector<StereoFrame>& frames, const StereoCamera& cam,
-                                     PipelineMode mode, std::vector<Pose3>* final_poses = nullptr,
+                                     const PipelineParams& pp, std::vector<Pose3>* final_poses = nullptr,
                                      const TrackerParams& tp = {}) {
-  SlamPipeline slam(cam, tp, {}, mode);
+  SlamPipeline slam(cam, tp, {}, pp);
   std::vector<msg::TrackedFrame> out;
   for (const auto& f : frames) out.push_back(slam.process(f));
   slam.finish();
@@ -98,7 +96,7 @@ TEST(SlamPipeline, RealKittiSampleIsTrackedThroughout) {
   const Pose3 err = seq.poses().back().inverse() * poses.back();
   const double travelled = seq.poses().back().translation().norm();
   EXPECT_LT(err.translation().norm(), 0.2 * travelled) << "last pose " << err.translation().transpose();
-  EXPECT_LT(rotationDeg(err), 1.5);
+  EXPECT_LT(rotationDeg(err.linear()), 1.5);
   // Forward, as the car drives, by most of the ground truth's distance.
   EXPECT_GT(poses.back().translation().z(), 0.75 * travelled);
 }
@@ -159,21 +157,22 @@ TEST(SlamPipeline, ThreadedModeTracksTheSameStretch) {
   // Looser than lock-step: how many keyframes mapping finishes in time depends on the machine's load (a
   // run beside other jobs ended 0.503 m off after 170 m).
   EXPECT_LT(err.translation().norm(), 0.8);
-  EXPECT_LT(rotationDeg(err), 0.5);
+  EXPECT_LT(rotationDeg(err.linear()), 0.5);
 }
 
-// Tracking that waits for mapping (`tracking.wait_for_mapping_ms`) sees the map lock-step would give it, so
+// Tracking that waits for mapping (`pipeline.wait_for_mapping_ms`) sees the map lock-step would give it, so
 // a threaded run repeats the lock-step run bit for bit while mapping keeps up (here the allowance is a minute
 // and the frames come as fast as tracking takes them, so it always does).
 TEST(SlamPipeline, ThreadedModeThatWaitsForMappingRepeatsLockStep) {
   const RenderedStretch* s = renderedStretch(300);
   if (!s) GTEST_SKIP() << "needs " << test::sharedData("kitti/poses/06.txt");
   const std::vector<StereoFrame> frames(s->frames.begin(), s->frames.begin() + 80);
-  TrackerParams waiting;
+  PipelineParams waiting(PipelineMode::kThreaded);
   waiting.wait_for_mapping_ms = 60000;
+  waiting.rate = 0;
   std::vector<Pose3> lock_step, threaded;
   runOn(frames, s->cam, PipelineMode::kLockStep, &lock_step);
-  const auto tracked = runOn(frames, s->cam, PipelineMode::kThreaded, &threaded, waiting);
+  const auto tracked = runOn(frames, s->cam, waiting, &threaded);
   ASSERT_EQ(lock_step.size(), threaded.size());
   for (size_t i = 0; i < tracked.size(); ++i) {
     EXPECT_EQ(tracked[i].mapping_queue, 0) << "frame " << i << " was tracked while mapping was busy";
@@ -187,7 +186,7 @@ double largestTurnBetweenKeyframes(const std::vector<msg::TrackedFrame>& tracked
   const msg::TrackedFrame* last = nullptr;
   for (const auto& tf : tracked) {
     if (tf.new_keyframe == kNoId) continue;
-    if (last) largest = std::max(largest, rotationDeg(last->T_w_c.inverse() * tf.T_w_c));
+    if (last) largest = std::max(largest, rotationDeg((last->T_w_c.inverse() * tf.T_w_c).linear()));
     last = &tf;
   }
   return largest;

@@ -89,7 +89,7 @@ TEST(FarKeyframePose, FindsTheFrameWhereTheMapsDepthsAreMetresOff) {
   const FarPoseResult r = farKeyframePose(camera(), sc.matches, prior, {}, 9);
   ASSERT_TRUE(r.ok) << r.inliers << " inliers";
   EXPECT_LT((r.T_w_c.translation() - sc.truth.translation()).norm(), 0.15);
-  EXPECT_LT(Eigen::AngleAxisd(sc.truth.linear().transpose() * r.T_w_c.linear()).angle() * 180 / M_PI, 0.2);
+  EXPECT_LT(rotationDeg(sc.truth.linear().transpose() * r.T_w_c.linear()), 0.2);
   int wrong_kept = 0;
   for (size_t i = 0; i < sc.matches.size(); ++i) wrong_kept += sc.wrong[i] && r.inlier[i];
   EXPECT_LE(wrong_kept, 1);
