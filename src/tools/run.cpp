@@ -92,18 +92,19 @@ Played play(SlamPipeline& slam, const KittiSequence& seq, long start, long end, 
   ProgressBar bar("run", static_cast<size_t>(end - start));
   const auto t0 = std::chrono::steady_clock::now();
   for (long i = start; i < end; ++i) {
+    std::optional<std::chrono::steady_clock::time_point> due;
     if (rate > 0) {
-      const auto due = t0 + std::chrono::duration_cast<std::chrono::steady_clock::duration>(
-                                std::chrono::duration<double>((seq.times()[i] - seq.times()[start]) / rate));
+      due = t0 + std::chrono::duration_cast<std::chrono::steady_clock::duration>(
+                     std::chrono::duration<double>((seq.times()[i] - seq.times()[start]) / rate));
       const auto now = std::chrono::steady_clock::now();
-      if (now < due)
-        std::this_thread::sleep_until(due);
+      if (now < *due)
+        std::this_thread::sleep_until(*due);
       else
-        p.max_lag_s = std::max(p.max_lag_s, std::chrono::duration<double>(now - due).count());
+        p.max_lag_s = std::max(p.max_lag_s, std::chrono::duration<double>(now - *due).count());
     }
     msg::TrackedFrame tf;
     try {
-      tf = slam.process(seq.load(static_cast<size_t>(i)));
+      tf = slam.process(seq.load(static_cast<size_t>(i)), due);
     } catch (const DataError& e) {  // an unreadable image: reported, skipped, the run goes on
       tf.frame_index = static_cast<uint64_t>(i);
       tf.stamp_s = seq.times()[i];
@@ -367,7 +368,6 @@ int main(int argc, char** argv) {
     if (detector != "none") loops = loopClosingSetup(args, config, detector);
     PipelineParams pipeline = config.pipeline;
     pipeline.mode = lockstep ? PipelineMode::kLockStep : PipelineMode::kThreaded;
-    pipeline.rate = rate;
     SlamPipeline slam(seq.camera(), config.tracker, config.mapper, pipeline, loops);
     if (args.has("load-map")) slam.loadMap(args.str("load-map"));
     const Played played = play(slam, seq, start, end, rate);

@@ -1,6 +1,6 @@
 #pragma once
 // How the offline pipeline (SlamPipeline: `run`, `eval-slam`, the tests) runs its stages together. The
-// settings file's `pipeline` section gives wait_for_mapping_ms; the runner sets mode and rate from its
+// settings file's `pipeline` section gives wait_for_mapping_ms; the runner sets the mode from its
 // options. The ROS graph runs each stage in its own nodelet and reads none of it.
 #include <cstddef>
 
@@ -18,12 +18,9 @@ struct PipelineParams {
   // frame is tracked against the map lock-step would give it, as long as tracking stays within this many ms
   // of the frames' clock. While the machine keeps up, runs at a camera's pace then repeat each other instead
   // of depending on which thread won; when mapping takes longer, tracking goes on against the map as it
-  // stands, as without the wait. 0: never wait.
+  // stands, as without the wait. 0: never wait. The frames' clock is the caller's (SlamPipeline::process's
+  // `due`).
   double wait_for_mapping_ms = 0;
-  // Threaded: the pace frames reach process() at, as a multiple of their stamps' (the runner's --rate), so
-  // the wait knows how far behind the frames' clock tracking is; 0 (flat out): there is no clock to keep and
-  // every frame may wait the whole allowance.
-  double rate = 1;
 };
 
 }  // namespace binloop

@@ -26,7 +26,8 @@ struct SlamConfig {
   // The place models' thresholds (file loop_detection section); model_file and the extractor check are set
   // where a model is loaded.
   RecognizerOptions models;
-  // The offline pipeline (file section `pipeline`); its mode and rate come from the runner's options.
+  // The offline pipeline (file section `pipeline`); its mode comes from the runner's options (the pace
+  // reaches `process` as `due`).
   PipelineParams pipeline;
 };
 

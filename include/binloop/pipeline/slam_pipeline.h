@@ -51,7 +51,11 @@ class SlamPipeline {
   SlamPipeline& operator=(const SlamPipeline&) = delete;
 
   /// Tracks one frame (on the caller's thread). Never throws for bad input (see Tracker::track).
-  msg::TrackedFrame process(const StereoFrame& frame);
+  /// `due`: the wall time the frame was due by its clock, when the caller paces frames (the runner at a
+  /// rate); the wait for mapping (`wait_for_mapping_ms`) ends that long after it. Without it (flat out,
+  /// the tests) every frame may wait the whole allowance.
+  msg::TrackedFrame process(const StereoFrame& frame,
+                            std::optional<std::chrono::steady_clock::time_point> due = std::nullopt);
   /// Waits until every stage has processed everything sent to it and tracking has applied every update.
   void finish();
 
@@ -130,9 +134,6 @@ class SlamPipeline {
   void map(const MappingInput& in);
   void searchLoops(const LoopInput& in);
   void drainUpdates();
-  /// Threaded: until mapping has processed every keyframe sent, within the lag allowed
-  /// (`wait_for_mapping_ms` behind the frames' clock).
-  void waitForMapping(const StereoFrame& frame);
   /// Until mapping has processed every keyframe sent (pending_ 0), or until `deadline` when one is given.
   void waitUntilMappingIdle(std::optional<std::chrono::steady_clock::time_point> deadline);
   /// Calls f(name, stage) for each stage that runs, in the order stageNames() lists them.
@@ -140,11 +141,6 @@ class SlamPipeline {
   static void forEachStage(Self& self, F&& f);
 
   PipelineParams params_;
-  // How far frames reach process() behind the pace of their stamps at params_.rate (s), and the last call's
-  // wall time and stamp: waitForMapping spends only what is left of the allowance.
-  double behind_s_ = 0;
-  std::optional<std::chrono::steady_clock::time_point> last_call_;
-  double last_stamp_s_ = 0;
   Tracker tracker_;
   LocalMapper mapper_;
   std::unique_ptr<LoopDetector> detector_;

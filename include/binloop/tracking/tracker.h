@@ -247,10 +247,12 @@ class Tracker {
   double last_stamp_ = 0;
   bool have_stamp_ = false;
   SlamKeyframeId reference_ = kNoId;
-  uint64_t last_keyframe_frame_ = 0;
-  SlamKeyframeId last_keyframe_ = kNoId;
-  Eigen::Matrix3d last_keyframe_R_w_c_ =
-      Eigen::Matrix3d::Identity();  // as tracked, for when the map lacks it
+  struct LastKeyframe {
+    uint64_t frame = 0;  // the frame it was made from
+    SlamKeyframeId id = kNoId;
+    Eigen::Matrix3d R_w_c = Eigen::Matrix3d::Identity();  // as tracked, for when the map lacks it
+  };
+  LastKeyframe last_keyframe_;  // the last one this tracker made
   std::vector<SlamKeyframeId> local_keyframes_;
   int inliers_ = 0;
   int lost_in_a_row_ = 0;

@@ -214,22 +214,16 @@ void SlamPipeline::waitUntilMappingIdle(std::optional<std::chrono::steady_clock:
   }
 }
 
-void SlamPipeline::waitForMapping(const StereoFrame& frame) {
-  const auto now = std::chrono::steady_clock::now();
-  if (last_call_ && params_.rate > 0) {  // flat out there is no clock to fall behind
-    const double wall_s = std::chrono::duration<double>(now - *last_call_).count();
-    behind_s_ = std::max(0.0, behind_s_ + wall_s - (frame.stamp_s - last_stamp_s_) / params_.rate);
+msg::TrackedFrame SlamPipeline::process(const StereoFrame& frame,
+                                        std::optional<std::chrono::steady_clock::time_point> due) {
+  if (params_.mode == PipelineMode::kThreaded && params_.wait_for_mapping_ms > 0) {
+    // Within wait_for_mapping_ms of the frame's due time (loading it included): a frame that comes late
+    // waits less, or not at all; one that comes early no longer than the allowance.
+    const auto allowance = std::chrono::duration_cast<std::chrono::steady_clock::duration>(
+        std::chrono::duration<double, std::milli>(params_.wait_for_mapping_ms));
+    const auto now = std::chrono::steady_clock::now();
+    waitUntilMappingIdle(std::min(due.value_or(now), now) + allowance);
   }
-  last_call_ = now;
-  last_stamp_s_ = frame.stamp_s;
-  const double allowed_ms = params_.wait_for_mapping_ms - 1000.0 * behind_s_;
-  if (allowed_ms <= 0) return;
-  const auto allowance = std::chrono::duration<double, std::milli>(allowed_ms);
-  waitUntilMappingIdle(now + std::chrono::duration_cast<std::chrono::steady_clock::duration>(allowance));
-}
-
-msg::TrackedFrame SlamPipeline::process(const StereoFrame& frame) {
-  if (params_.mode == PipelineMode::kThreaded && params_.wait_for_mapping_ms > 0) waitForMapping(frame);
   drainUpdates();
   Tracker::Output out = tracker_.track(frame, pending_.load());
   if (out.keyframe) {

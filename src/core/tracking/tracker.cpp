@@ -631,9 +631,9 @@ int Tracker::referencePoints() const {
 
 bool Tracker::turned(const Frame& f) const {
   if (p_.keyframe_max_turn_deg <= 0) return false;
-  Eigen::Matrix3d R_w_k = last_keyframe_R_w_c_;
+  Eigen::Matrix3d R_w_k = last_keyframe_.R_w_c;
   // As the map holds it now: a loop correction since has moved it with the frames.
-  if (const msg::KeyframeState* k = map_.keyframe(last_keyframe_)) R_w_k = k->T_w_c.linear();
+  if (const msg::KeyframeState* k = map_.keyframe(last_keyframe_.id)) R_w_k = k->T_w_c.linear();
   return rotationDeg(R_w_k.transpose() * f.T_w_c.linear()) > p_.keyframe_max_turn_deg;
 }
 
@@ -659,7 +659,7 @@ bool Tracker::needKeyframe(const Frame& f, int mapping_queue, int ref_matches, b
       tracked_close < p_.keyframe_close_tracked_max && untracked_close > p_.keyframe_close_untracked_min;
   const float ref_ratio = kfs < 2 ? 0.4f : p_.keyframe_ref_ratio;
   const int inliers = f.matchedInliers();
-  const bool c1a = f.index >= last_keyframe_frame_ + static_cast<uint64_t>(p_.keyframe_max_frames);
+  const bool c1a = f.index >= last_keyframe_.frame + static_cast<uint64_t>(p_.keyframe_max_frames);
   const bool c1b = mapping_queue == 0;
   const bool c1c = inliers < ref_matches * 0.25 || need_close;
   const bool c2 = (inliers < ref_matches * ref_ratio || need_close || turned(f)) && inliers > 15;
@@ -717,9 +717,7 @@ msg::KeyFramePtr Tracker::makeKeyframe(Frame& f) {
   map_.add(*kf);
   if (keyframe_db_) keyframe_db_->add(kf->id, kf->descriptors);
   reference_ = kf->id;
-  last_keyframe_frame_ = f.index;
-  last_keyframe_ = kf->id;
-  last_keyframe_R_w_c_ = f.T_w_c.linear();
+  last_keyframe_ = {f.index, kf->id, f.T_w_c.linear()};
   return kf;
 }
 

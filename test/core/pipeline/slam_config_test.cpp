@@ -151,13 +151,12 @@ TEST(SlamConfig, RecoveryKeysReachTheTracker) {
 }
 
 // The wait for mapping is the offline pipeline's, not the tracker's: it has its own section, and the file
-// leaves the mode and the rate (the runner's options) alone.
+// leaves the mode (the runner's option) alone.
 TEST(SlamConfig, PipelineSectionReachesThePipeline) {
   TempDir dir;
   const SlamConfig c = loadSlamConfig(configFile(dir, "pipeline:\n  wait_for_mapping_ms: 150\n"));
   EXPECT_EQ(c.pipeline.wait_for_mapping_ms, 150);
   EXPECT_EQ(c.pipeline.mode, PipelineMode::kLockStep);
-  EXPECT_EQ(c.pipeline.rate, 1);
   EXPECT_EQ(SlamConfig{}.pipeline.wait_for_mapping_ms, 0) << "the default: never wait";
   EXPECT_THROW_WITH(loadSlamConfig(configFile(dir, "tracking:\n  wait_for_mapping_ms: 150\n", "old.yaml")),
                     ConfigError, "unknown key 'tracking.wait_for_mapping_ms'");

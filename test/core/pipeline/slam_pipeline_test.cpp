@@ -169,7 +169,6 @@ TEST(SlamPipeline, ThreadedModeThatWaitsForMappingRepeatsLockStep) {
   const std::vector<StereoFrame> frames(s->frames.begin(), s->frames.begin() + 80);
   PipelineParams waiting(PipelineMode::kThreaded);
   waiting.wait_for_mapping_ms = 60000;
-  waiting.rate = 0;
   std::vector<Pose3> lock_step, threaded;
   runOn(frames, s->cam, PipelineMode::kLockStep, &lock_step);
   const auto tracked = runOn(frames, s->cam, waiting, &threaded);
