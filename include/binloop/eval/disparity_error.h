@@ -14,7 +14,6 @@ namespace binloop {
 struct DisparityError {
   float true_disparity = 0;  // px, fx * baseline / the true depth at the keypoint
   float error = 0;           // measured - true disparity, px
-  float row = 0;             // the keypoint's image row
 };
 
 /// One sample per stereo-matched keypoint (depth > 0) whose true depth is smooth around it: within 3 % over

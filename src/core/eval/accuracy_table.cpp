@@ -10,19 +10,11 @@
 #include "binloop/io/data_error.h"
 #include "binloop/io/trajectory_io.h"
 #include "binloop/util/fixed_decimals.h"
+#include "binloop/util/median.h"
 
 namespace binloop {
 
 namespace {
-
-// The median of the finite values (the mean of the middle two for an even count); NaN when there are none.
-double median(std::vector<double> v) {
-  v.erase(std::remove_if(v.begin(), v.end(), [](double x) { return !std::isfinite(x); }), v.end());
-  if (v.empty()) return NAN;
-  std::sort(v.begin(), v.end());
-  const size_t n = v.size();
-  return n % 2 ? v[n / 2] : 0.5 * (v[n / 2 - 1] + v[n / 2]);
-}
 
 double minOf(const std::vector<double>& v) {
   double m = NAN;

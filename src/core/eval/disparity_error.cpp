@@ -4,19 +4,9 @@
 #include <cmath>
 #include <stdexcept>
 
+#include "binloop/util/median.h"
+
 namespace binloop {
-
-namespace {
-
-// The upper of the two middle values for an even count: the summaries are of thousands of samples.
-double median(std::vector<double> v) {
-  if (v.empty()) return 0;
-  auto mid = v.begin() + v.size() / 2;
-  std::nth_element(v.begin(), mid, v.end());
-  return *mid;
-}
-
-}  // namespace
 
 std::vector<DisparityError> disparityErrors(const std::vector<msg::KeyPoint>& keypoints, const cv::Mat& depth,
                                             const StereoCamera& cam) {
@@ -44,7 +34,6 @@ std::vector<DisparityError> disparityErrors(const std::vector<msg::KeyPoint>& ke
     DisparityError e;
     e.true_disparity = static_cast<float>(bf / z);
     e.error = static_cast<float>(bf / k.depth - bf / z);
-    e.row = k.y;
     out.push_back(e);
   }
   return out;

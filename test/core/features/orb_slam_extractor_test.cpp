@@ -12,6 +12,7 @@
 #include "binloop/features/feature_error.h"
 #include "binloop/io/kitti_sequence.h"
 #include "binloop/util/hash_random.h"
+#include "binloop/util/median.h"
 #include "support/test_support.h"
 
 using namespace binloop;
@@ -86,11 +87,6 @@ double nearestNeighbourShare(const OrbFeatures& a, const OrbFeatures& b, const s
     hits += best == p.b;
   }
   return pairs.empty() ? 0 : static_cast<double>(hits) / pairs.size();
-}
-
-double median(std::vector<double> v) {
-  std::sort(v.begin(), v.end());
-  return v.empty() ? 0 : v[v.size() / 2];
 }
 
 }  // namespace

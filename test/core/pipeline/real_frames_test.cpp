@@ -14,6 +14,7 @@
 #include "binloop/io/trajectory_io.h"
 #include "binloop/pipeline/slam_config.h"
 #include "binloop/pipeline/slam_pipeline.h"
+#include "binloop/util/median.h"
 #include "covariance_check.h"
 #include "support/test_support.h"
 
@@ -48,11 +49,6 @@ std::vector<std::vector<Pose3>> peerRuns(const std::string& dir) {
     if (std::filesystem::exists(f)) runs.push_back(readKittiPoses(f));
   }
   return runs;
-}
-
-double median(std::vector<double> v) {
-  std::sort(v.begin(), v.end());
-  return v[v.size() / 2];
 }
 
 // The ATE of poses for frames 0, 1, ... against the truth.
