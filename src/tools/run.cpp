@@ -248,6 +248,8 @@ int writeLoops(const fs::path& out, const SlamPipeline& slam, const KittiSequenc
                                        .add("merged", g.merged)
                                        .add("stopped_by_a_loop", g.aborted)
                                        .add("last_added_meanwhile", g.last_added_meanwhile));
+  const LocalMapper::LocalBaStats& l = slam.mapper().localBaStats();
+  js.add("local_ba", JsonObject().add("runs", l.runs).add("cut_short", l.cut_short));
   if (g.last_keyframes > 0)  // the last global BA that reached the map, threaded or not
     js.add("global_ba_last", JsonObject()
                                  .add("ms", g.last.ms())

@@ -53,6 +53,9 @@ struct LocalMapperParams {
   int fuse_max_hamming = 50;  // ORB-SLAM2's TH_LOW
   bool local_ba = true;
   int local_ba_max_keyframes = 30;  // optimised keyframes (the new one and its strongest neighbours)
+  // A keyframe waiting cuts the running local BA short (ORB-SLAM2's abort flag; threaded only). False: it
+  // runs its iterations out and the keyframe waits, so the map no longer depends on when keyframes arrive.
+  bool local_ba_yields = true;
   LocalBaParams ba;
   bool cull_keyframes = true;
   // After a loop correction, a bundle adjustment of the whole map. On by default
@@ -106,7 +109,12 @@ class LocalMapper {
     int last_keyframes = 0, last_added_meanwhile = 0;
   };
   const GlobalBaStats& globalBaStats() const { return global_ba_; }
-  /// Set from another thread to cut a running local BA short (a new keyframe is waiting).
+  struct LocalBaStats {
+    int runs = 0, cut_short = 0;  // cut_short: stopped early by a waiting keyframe
+  };
+  const LocalBaStats& localBaStats() const { return local_ba_; }
+  /// Set from another thread to cut a running local BA short (a new keyframe is waiting), unless
+  /// `local_ba_yields` is off; the caller clears it before process() (left set, it cuts the next one short).
   std::atomic<bool>& abortFlag() { return abort_; }
 
   struct KeyframePose {
@@ -176,9 +184,10 @@ class LocalMapper {
   std::vector<MapPointId> pointsOf(const std::vector<SlamKeyframeId>& keyframes) const;
   void localBundleAdjustment(KF& kf, msg::LocalMapUpdate& u);
   /// Bundle adjustment of the `free` keyframes and every point they see; other keyframes that see those
-  /// points hold still. Returns the solver's report (its points and keyframes are in the map already).
+  /// points hold still; `abort`, when set meanwhile, stops it early. Returns the solver's report (its points
+  /// and keyframes are in the map already).
   LocalBaResult bundleAdjust(const std::vector<SlamKeyframeId>& free, const LocalBaParams& params,
-                             msg::LocalMapUpdate& u);
+                             std::atomic<bool>* abort, msg::LocalMapUpdate& u);
   struct BaSetup {
     BaProblem problem;
     size_t free = 0;  // the first `free` keyframes of the problem are optimised
@@ -225,6 +234,7 @@ class LocalMapper {
   std::deque<MapPointId> recent_;
   std::vector<MapPointId> touched_;  // points whose state goes into this update
   std::atomic<bool> abort_{false};
+  LocalBaStats local_ba_;
   IdCounter point_ids_{IdIssuer::kLocalMapping};
   uint64_t seq_ = 0, updates_ = 0;
   SlamKeyframeId first_kf_ = kNoId;

@@ -209,7 +209,6 @@ std::vector<MapPointId> LocalMapper::pointsOf(const std::vector<SlamKeyframeId>&
 
 LocalMapper::Output LocalMapper::process(const msg::KeyFrame& in) {
   const auto t0 = std::chrono::steady_clock::now();
-  abort_ = false;
   auto u = std::make_shared<msg::LocalMapUpdate>();
   u->sequence = ++updates_;
   u->keyframe = in.id;

@@ -15,7 +15,9 @@ void LocalMapper::localBundleAdjustment(KF& kf, msg::LocalMapUpdate& u) {
   // Local keyframes: the new one and its covisible neighbours; fixed: the others that see their points.
   std::vector<SlamKeyframeId> free{kf.state.id};
   for (SlamKeyframeId k : neighbors(kf, p_.local_ba_max_keyframes - 1)) free.push_back(k);
-  bundleAdjust(free, p_.ba, u);
+  const LocalBaResult r = bundleAdjust(free, p_.ba, p_.local_ba_yields ? &abort_ : nullptr, u);
+  ++local_ba_.runs;
+  local_ba_.cut_short += r.aborted;
 }
 
 LocalMapper::BaSetup LocalMapper::makeBaProblem(const std::vector<SlamKeyframeId>& free) const {
@@ -56,10 +58,10 @@ LocalMapper::BaSetup LocalMapper::makeBaProblem(const std::vector<SlamKeyframeId
 }
 
 LocalBaResult LocalMapper::bundleAdjust(const std::vector<SlamKeyframeId>& free, const LocalBaParams& params,
-                                        msg::LocalMapUpdate& u) {
+                                        std::atomic<bool>* abort, msg::LocalMapUpdate& u) {
   const BaSetup b = makeBaProblem(free);
   if (b.problem.points.empty()) return {};
-  LocalBaResult r = binloop::localBundleAdjustment(camera_, b.problem, params, &abort_);
+  LocalBaResult r = binloop::localBundleAdjustment(camera_, b.problem, params, abort);
   reportBa(r.summary, u);
   for (const BaRefinedKeyframe& rk : r.keyframes)
     map_.keyframes().at(rk.id).state.T_w_c = orthonormalized(rk.T_c_w.inverse());

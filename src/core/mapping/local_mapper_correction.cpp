@@ -61,7 +61,7 @@ msg::LocalMapUpdatePtr LocalMapper::apply(const msg::Correction& c) {
       startGlobalBa(all);
     } else {
       abort_ = false;  // a keyframe that arrives meanwhile cuts it short, as a new loop stops ORB-SLAM2's
-      noteGlobalBa(bundleAdjust(all, globalBaParams(), *u), all.size());
+      noteGlobalBa(bundleAdjust(all, globalBaParams(), &abort_, *u), all.size());
     }
   }
 

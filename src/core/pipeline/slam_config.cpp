@@ -109,6 +109,7 @@ Sections backEndSettings(SlamConfig& c) {
         {"fuse_radius", {S::kFloat, &m.fuse_radius, 0.1}},
         {"local_ba", {S::kBool, &m.local_ba, 0}},
         {"local_ba_max_keyframes", {S::kInt, &m.local_ba_max_keyframes, 1}},
+        {"local_ba_yields", {S::kBool, &m.local_ba_yields, 0}},
         {"ba_robust_iterations", {S::kInt, &m.ba.robust_iterations, 1}},
         {"ba_refine_iterations", {S::kInt, &m.ba.refine_iterations, 0}},
         {"cull_keyframes", {S::kBool, &m.cull_keyframes, 0}},

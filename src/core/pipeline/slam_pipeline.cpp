@@ -136,6 +136,7 @@ void SlamPipeline::map(const MappingInput& in) {
   }
   mergeGlobalBa(false, true);  // one that finished since the last input goes out first
   const msg::KeyFramePtr& kf = std::get<msg::KeyFramePtr>(in);
+  mapper_.abortFlag() = false;  // a keyframe that comes from now on cuts this one's local BA short
   LocalMapper::Output out = mapper_.process(*kf);
   mapping_times_.push_back({kf->id, kf->frame_index, out.update->total_ms, out.update->ba_ms,
                             out.update->triangulation_ms, out.update->points_triangulated});

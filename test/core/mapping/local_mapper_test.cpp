@@ -6,6 +6,7 @@
 
 #include <algorithm>
 #include <chrono>
+#include <cmath>
 #include <thread>
 
 #include "../optim/optim_test_scene.h"
@@ -220,6 +221,35 @@ TEST_F(LocalMapperTest, ANewMapSegmentKeepsItsParentAndItsFirstKeyframeIsHeld) {
   ASSERT_TRUE(m.keyframePose(k4.id, &T4));
   EXPECT_EQ(T3.translation(), k3.state.T_w_c.translation()) << "the segment's first keyframe moved";
   EXPECT_LT((T4.translation() - Eigen::Vector3d(0, 0, 40.5)).norm(), 0.01) << "the second did not";
+}
+
+// `local_ba_yields`: with a keyframe waiting (the abort flag set), a local BA that yields stops before its
+// first step and leaves the keyframe where tracking put it, 0.22 m off; one that does not runs its
+// iterations out and moves the keyframe back onto its points.
+TEST_F(LocalMapperTest, ALocalBaThatDoesNotYieldRunsOutWhileAKeyframeWaits) {
+  for (int i = 0; i < 200; ++i) addPoint({rng.uniform(-6, 6), rng.uniform(-2, 1), rng.uniform(8, 18)});
+  for (bool yields : {true, false}) {
+    LocalMapperParams p;
+    p.triangulate = p.fuse = p.cull_keyframes = false;
+    p.cull_min_observers = 1;
+    p.local_ba_yields = yields;
+    LocalMapper m(p);
+    for (ScenePoint& s : scene) s.id = kNoId;
+    m.process(keyframe(0, range(0, 200), true));
+    msg::KeyFrame k2 = keyframe(1, range(0, 200), false);
+    k2.state.T_w_c.translation() += Eigen::Vector3d(0.1, 0, 0.2);
+    m.abortFlag() = true;
+    m.process(k2);
+    EXPECT_EQ(m.localBaStats().runs, 1) << "yields " << yields;
+    EXPECT_EQ(m.localBaStats().cut_short, yields ? 1 : 0) << "yields " << yields;
+    Pose3 T2;
+    ASSERT_TRUE(m.keyframePose(k2.id, &T2));
+    const double off_m = (T2.translation() - Eigen::Vector3d(0, 0, 1)).norm();
+    if (yields)
+      EXPECT_NEAR(off_m, std::hypot(0.1, 0.2), 1e-6) << "a BA cut short before its first step moved it";
+    else
+      EXPECT_LT(off_m, 0.01) << "the BA did not run out";
+  }
 }
 
 TEST_F(LocalMapperTest, KeypointsWithoutStereoSeenFromTwoKeyframesBecomePoints) {
