@@ -8,6 +8,7 @@
 
 #include "binloop/eval/trajectory_metrics.h"
 #include "binloop/eval/trajectory_plot.h"
+#include "binloop/eval/turn_tilt.h"
 #include "binloop/io/data_error.h"
 #include "binloop/io/trajectory_io.h"
 #include "binloop/util/cli_args.h"
@@ -45,7 +46,7 @@ std::string jsonString(const std::string& s) {
 int main(int argc, char** argv) {
   CliArgs args("eval-traj",
                "eval-traj --gt <poses.txt> --est <trajectory.txt> [--times times.txt] [--match index|time] "
-               "[--plot out.png] [--json]");
+               "[--plot out.png] [--turns] [--json]");
   args.option("gt", "ground truth, KITTI format (12 numbers per line, one line per frame)")
       .option("est",
               "estimate: KITTI (12 numbers per line; line i = frame i) or TUM (stamp tx ty tz qx qy qz qw; "
@@ -60,6 +61,9 @@ int main(int argc, char** argv) {
               "(1 for trajectories made from kitti2bag's bags)",
               "0")
       .option("plot", "write a top view (x-z plane) of both trajectories to this PNG")
+      .flag("turns",
+            "also the tilt each sharp turn of the ground truth leaves in the estimate (degrees, about the "
+            "horizontal axes; the estimate in the ground truth's world, as a run's is), turn by turn")
       .flag("json", "print one JSON object instead of 'key: value' lines");
   return runTool("eval-traj", [&] {
     if (!args.parse(argc, argv)) return 0;
@@ -107,6 +111,12 @@ int main(int argc, char** argv) {
                 << " (an estimate of keyframes only must be a TUM file)\n";
     const TrajectoryMetrics tm = evaluateTrajectory(m);
     const RelativeErrors& rel = tm.relative;
+    std::vector<TurnTilt> tilts;
+    double tilt_sum = 0;
+    if (args.has("turns")) {
+      tilts = tiltLeftByTurns(m, sharpTurns(gt));
+      for (const TurnTilt& t : tilts) tilt_sum += t.tilt_deg;
+    }
 
     if (args.has("plot")) {
       std::vector<Pose3> aligned;
@@ -136,6 +146,13 @@ int main(int argc, char** argv) {
           << ", \"r_rel_deg_per_100m\": " << num(rel.r_rel_deg_per_100m);
       if (!rel.valid) out << ", \"relative_note\": " << jsonString(rel.reason);
       if (args.has("plot")) out << ", \"plot\": " << jsonString(args.str("plot"));
+      if (args.has("turns")) {
+        out << ", \"turn_tilt_deg_sum\": " << num(tilt_sum) << ", \"turn_tilts\": [";
+        for (size_t i = 0; i < tilts.size(); ++i)
+          out << (i ? ", " : "") << "{\"first\": " << tilts[i].turn.first
+              << ", \"last\": " << tilts[i].turn.last << ", \"tilt_deg\": " << num(tilts[i].tilt_deg) << "}";
+        out << "]";
+      }
       out << "}\n";
     } else {
       out << "gt: " << gt_path << ", " << gt.size() << " poses\n"
@@ -149,6 +166,12 @@ int main(int argc, char** argv) {
           << "r_rel_deg_per_100m: " << fmt(rel.r_rel_deg_per_100m) << "\n";
       if (!rel.valid) out << "relative_note: " << rel.reason << "\n";
       if (args.has("plot")) out << "plot: " << args.str("plot") << "\n";
+      if (args.has("turns")) {
+        out << "turn_tilt_deg_sum: " << fmt(tilt_sum) << " (" << tilts.size() << " turns)\n";
+        for (const TurnTilt& t : tilts)
+          out << "turn_tilt_deg: frames " << t.turn.first << "-" << t.turn.last << " " << fmt(t.tilt_deg)
+              << "\n";
+      }
     }
     std::cout << out.str();
     return 0;
