@@ -12,6 +12,7 @@
 #include "binloop/io/data_error.h"
 #include "binloop/io/trajectory_io.h"
 #include "binloop/util/cli_args.h"
+#include "binloop/util/json_object.h"
 
 using namespace binloop;
 
@@ -22,23 +23,6 @@ std::string fmt(double v) {
   char buf[64];
   std::snprintf(buf, sizeof buf, "%.6g", v);
   return buf;
-}
-
-std::string jsonString(const std::string& s) {
-  std::string out = "\"";
-  for (unsigned char c : s) {
-    if (c == '"' || c == '\\') {
-      out += '\\';
-      out += static_cast<char>(c);
-    } else if (c < 0x20) {
-      char buf[8];
-      std::snprintf(buf, sizeof buf, "\\u%04x", c);
-      out += buf;
-    } else {
-      out += static_cast<char>(c);
-    }
-  }
-  return out + "\"";
 }
 
 }  // namespace
@@ -136,24 +120,32 @@ int main(int argc, char** argv) {
                                 std::to_string(gt.size()) + " ground-truth frames";
     std::ostringstream out;
     if (args.has("json")) {
-      auto num = [](double v) { return std::isfinite(v) ? fmt(v) : std::string("null"); };
-      out << "{\"gt\": " << jsonString(gt_path) << ", \"est\": " << jsonString(est_path)
-          << ", \"format\": " << jsonString(formatName(est.format))
-          << ", \"matched\": " << jsonString(matched) << ", \"frames\": " << m.frames.size()
-          << ", \"gt_frames\": " << gt.size() << ", \"path_length_m\": " << num(rel.path_length_m)
-          << ", \"segments\": " << rel.segments << ", \"ate_rmse_m\": " << num(tm.ate_rmse_m)
-          << ", \"t_rel_pct\": " << num(rel.t_rel_pct)
-          << ", \"r_rel_deg_per_100m\": " << num(rel.r_rel_deg_per_100m);
-      if (!rel.valid) out << ", \"relative_note\": " << jsonString(rel.reason);
-      if (args.has("plot")) out << ", \"plot\": " << jsonString(args.str("plot"));
+      JsonObject j;
+      j.add("gt", gt_path)
+          .add("est", est_path)
+          .add("format", formatName(est.format))
+          .add("matched", matched)
+          .add("frames", m.frames.size())
+          .add("gt_frames", gt.size())
+          .add("path_length_m", rel.path_length_m)
+          .add("segments", rel.segments)
+          .add("ate_rmse_m", tm.ate_rmse_m)
+          .add("t_rel_pct", rel.t_rel_pct)
+          .add("r_rel_deg_per_100m", rel.r_rel_deg_per_100m);
+      if (!rel.valid) j.add("relative_note", rel.reason);
+      if (args.has("plot")) j.add("plot", args.str("plot"));
       if (args.has("turns")) {
-        out << ", \"turn_tilt_deg_sum\": " << num(tilt_sum) << ", \"turn_tilts\": [";
-        for (size_t i = 0; i < tilts.size(); ++i)
-          out << (i ? ", " : "") << "{\"first\": " << tilts[i].turn.first
-              << ", \"last\": " << tilts[i].turn.last << ", \"tilt_deg\": " << num(tilts[i].tilt_deg) << "}";
-        out << "]";
+        std::string list = "[";
+        for (size_t i = 0; i < tilts.size(); ++i) {
+          JsonObject t;
+          t.add("first", tilts[i].turn.first)
+              .add("last", tilts[i].turn.last)
+              .add("tilt_deg", tilts[i].tilt_deg);
+          list += (i ? ", " : "") + t.str(1);
+        }
+        j.add("turn_tilt_deg_sum", tilt_sum).addRaw("turn_tilts", list + "]");
       }
-      out << "}\n";
+      out << j.str();
     } else {
       out << "gt: " << gt_path << ", " << gt.size() << " poses\n"
           << "estimate: " << est_path << ", " << format << ", " << est.poses.size() << " poses\n"
