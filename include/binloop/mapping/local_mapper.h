@@ -113,8 +113,9 @@ class LocalMapper {
     int runs = 0, cut_short = 0;  // cut_short: stopped early by a waiting keyframe
   };
   const LocalBaStats& localBaStats() const { return local_ba_; }
-  /// Set from another thread to cut a running local BA short (a new keyframe is waiting), unless
-  /// `local_ba_yields` is off; the caller clears it before process() (left set, it cuts the next one short).
+  /// Set from another thread to cut a running local BA (unless `local_ba_yields` is off) or foreground
+  /// global BA short: a new keyframe is waiting. The caller clears it before each process() and apply();
+  /// left set, it cuts the next one short.
   std::atomic<bool>& abortFlag() { return abort_; }
 
   struct KeyframePose {

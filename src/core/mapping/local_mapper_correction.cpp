@@ -60,7 +60,8 @@ msg::LocalMapUpdatePtr LocalMapper::apply(const msg::Correction& c) {
     if (p_.global_ba_in_background) {
       startGlobalBa(all);
     } else {
-      abort_ = false;  // a keyframe that arrives meanwhile cuts it short, as a new loop stops ORB-SLAM2's
+      // A keyframe that arrives meanwhile (the abort flag, cleared by the caller) cuts it short, as a new
+      // loop stops ORB-SLAM2's.
       noteGlobalBa(bundleAdjust(all, globalBaParams(), &abort_, *u), all.size());
     }
   }

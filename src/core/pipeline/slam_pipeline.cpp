@@ -128,6 +128,7 @@ void SlamPipeline::mergeGlobalBa(bool wait, bool loop_thread_running) {
 
 void SlamPipeline::map(const MappingInput& in) {
   if (const auto* c = std::get_if<msg::CorrectionPtr>(&in)) {
+    mapper_.abortFlag() = false;  // a keyframe that comes from now on cuts a foreground global BA short
     msg::LocalMapUpdatePtr u = mapper_.apply(**c);
     if (!u) return;  // applied already
     last_correction_ba_ms_ = u->ba_ms;
