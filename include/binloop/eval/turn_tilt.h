@@ -31,11 +31,10 @@ struct TurnTilt {
   double tilt_deg = 0;
 };
 
-/// For each turn whose first and last frames both have an estimate: how far the estimate's world-frame
-/// rotation error (est * gt^-1) about the world's two horizontal axes changed from the turn's first frame to
-/// its last, in degrees. The world is the first camera's, as in KITTI: x right, y down (the vertical, taken
-/// out), z forward; the estimate must be in that world too (a run's and ORB-SLAM2's start at the first
-/// camera, as KITTI's ground truth does), not aligned by a rotation.
+/// For each turn whose first and last frames both have an estimate: the error of the estimate's rotation
+/// from the turn's first frame to its last, about the ground truth world's two horizontal axes, in degrees.
+/// That world is the first camera's, as in KITTI: x right, y down (the vertical, taken out), z forward. The
+/// estimate's world does not matter (a run started mid-route is measured as one started at frame 0).
 std::vector<TurnTilt> tiltLeftByTurns(const MatchedPoses& m, const std::vector<SharpTurn>& turns);
 
 }  // namespace binloop

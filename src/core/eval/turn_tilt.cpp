@@ -9,9 +9,12 @@ namespace {
 
 double turnDeg(const Pose3& a, const Pose3& b) { return rotationDeg(a.linear().transpose() * b.linear()); }
 
-// est * gt^-1 as a rotation vector, degrees.
-Eigen::Vector3d worldError(const Pose3& gt, const Pose3& est) {
-  const Eigen::AngleAxisd aa(est.linear() * gt.linear().transpose());
+// How the estimate's rotation from frame a to frame b is off the truth's, as a rotation vector in the truth's
+// world (degrees). It compares motions, not poses, so the estimate's own world frame drops out: a run started
+// mid-route, whose world is that frame's camera, is measured as one started at frame 0.
+Eigen::Vector3d errorGained(const Pose3& gt_a, const Pose3& est_a, const Pose3& gt_b, const Pose3& est_b) {
+  const Eigen::AngleAxisd aa(gt_a.linear() * (est_a.linear().transpose() * est_b.linear()) *
+                             gt_b.linear().transpose());
   return aa.axis() * aa.angle() * 180.0 / M_PI;
 }
 
@@ -43,7 +46,7 @@ std::vector<TurnTilt> tiltLeftByTurns(const MatchedPoses& m, const std::vector<S
     const auto a = at.find(t.first), b = at.find(t.last);
     if (a == at.end() || b == at.end()) continue;
     const Eigen::Vector3d d =
-        worldError(m.gt[b->second], m.est[b->second]) - worldError(m.gt[a->second], m.est[a->second]);
+        errorGained(m.gt[a->second], m.est[a->second], m.gt[b->second], m.est[b->second]);
     out.push_back({t, std::hypot(d.x(), d.z())});
   }
   return out;

@@ -69,6 +69,25 @@ TEST(TurnTilt, MeasuresTheTiltATurnLeavesAndNotTheHeading) {
   EXPECT_NEAR(h[0].tilt_deg, 0, 1e-6);
 }
 
+// The same tilted estimate, expressed in the world of its frame 30's camera (as `run --start 30` writes it)
+// and turned half round: the same 0.5 degrees. Comparing world-frame errors instead read 13 degrees
+// from such a run on rendered 06.
+TEST(TurnTilt, TheEstimatesOwnWorldDoesNotMatter) {
+  const std::vector<Pose3> gt = routeWithOneTurn();
+  std::vector<Pose3> tilted = gt;
+  for (size_t i = 55; i < gt.size(); ++i)
+    tilted[i].linear() = about(Eigen::Vector3d::UnitX(), 0.5) * gt[i].linear();
+  Pose3 elsewhere = Pose3::Identity();
+  elsewhere.linear() = about(Eigen::Vector3d(0.1, 1, 0), 175);
+  elsewhere.translation() = Eigen::Vector3d(40, -2, 7);
+  const Pose3 to_frame30 = elsewhere * tilted[30].inverse();
+  std::vector<Pose3> moved;
+  for (const Pose3& T : tilted) moved.push_back(to_frame30 * T);
+  const auto t = tiltLeftByTurns(matched(gt, moved), sharpTurns(gt));
+  ASSERT_EQ(t.size(), 1u);
+  EXPECT_NEAR(t[0].tilt_deg, 0.5, 1e-6);
+}
+
 TEST(TurnTilt, ATurnWhoseEndHasNoEstimateIsLeftOut) {
   const std::vector<Pose3> gt = routeWithOneTurn();
   MatchedPoses m = matched(gt, gt);
