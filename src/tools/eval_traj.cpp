@@ -47,7 +47,7 @@ int main(int argc, char** argv) {
       .option("plot", "write a top view (x-z plane) of both trajectories to this PNG")
       .flag("turns",
             "also the tilt each sharp turn of the ground truth leaves in the estimate (degrees, about the "
-            "horizontal axes; the estimate in the ground truth's world, as a run's is), turn by turn")
+            "horizontal axes; the estimate may be in any world, e.g. a run started mid-route), turn by turn")
       .flag("json", "print one JSON object instead of 'key: value' lines");
   return runTool("eval-traj", [&] {
     if (!args.parse(argc, argv)) return 0;

@@ -13,7 +13,7 @@ Eigen::Matrix3d about(const Eigen::Vector3d& axis, double deg) {
 }
 
 // 40 frames straight ahead, a right turn of 90 degrees at 3 degrees a frame (frames 40-70), 40 frames
-// straight.
+// straight; climbing, 0.1 degrees a frame (so that a camera's axes are not the world's in the turn).
 std::vector<Pose3> routeWithOneTurn() {
   std::vector<Pose3> poses;
   Pose3 T = Pose3::Identity();
@@ -21,7 +21,7 @@ std::vector<Pose3> routeWithOneTurn() {
     poses.push_back(T);
     const double yaw = i >= 40 && i < 70 ? 3.0 : 0.0;
     Pose3 step = Pose3::Identity();
-    step.linear() = about(Eigen::Vector3d::UnitY(), yaw);
+    step.linear() = about(Eigen::Vector3d::UnitY(), yaw) * about(Eigen::Vector3d::UnitX(), -0.1);
     step.translation() = Eigen::Vector3d(0, 0, 1);
     T = T * step;
   }
