@@ -258,7 +258,8 @@ int writeLoops(const fs::path& out, const SlamPipeline& slam, const KittiSequenc
                                  .add("robust_iterations", g.last.robust_iterations)
                                  .add("outliers_removed", g.last.num_outliers)
                                  .add("initial_cost", g.last.initial_cost)
-                                 .add("final_cost", g.last.final_cost));
+                                 .add("final_cost", g.last.final_cost)
+                                 .add("foreground_cut_short", g.cut_short));
   return by_status["accepted"];
 }
 
