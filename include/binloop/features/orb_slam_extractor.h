@@ -93,13 +93,6 @@ ExtractorSettings extractorSettings(const OrbSlamParams& p, int max_side = 0);
 struct ImagePyramid {
   std::vector<cv::Mat> levels;
   std::vector<float> scale;  // scale_factor^i: level-0 pixels per level-i pixel
-
-  /// Level-0 position of a point in level-i pixels. Bilinear resizing aligns pixel centres, so level
-  /// pixel x covers level-0 (x + 0.5) * r - 0.5, with r the exact ratio of the two sizes; x * scale[i]
-  /// would put a level-7 point 1.3 px up and left of where it is, a principal point of its own per level.
-  cv::Point2f toBase(cv::Point2f p, int level) const;
-  /// The inverse of toBase.
-  cv::Point2f toLevel(cv::Point2f p, int level) const;
 };
 
 /// Throws FeatureError for an empty or non-8-bit single-channel image, or levels < 1, scale_factor <= 1.

@@ -89,10 +89,10 @@ PatchSamples samplePatches(const cv::Mat& gray, const OrbSlamExtractor& extracto
     const size_t level = static_cast<size_t>(k.octave);
     if (smoothed[level].empty()) briefSmoothed(pyr.levels[level], smoothed[level]);
     const cv::Mat& img = smoothed[level];
-    // The extractor works in level pixels and maps the point to level 0 afterwards; level points are
+    // The extractor works in level pixels and scales the point to level 0 afterwards; level points are
     // whole pixels, so rounding recovers them exactly.
-    const cv::Point2f lp = pyr.toLevel(k.pt, static_cast<int>(level));
-    const cv::Point c(cvRound(lp.x), cvRound(lp.y));
+    const float scale = pyr.scale[level];
+    const cv::Point c(cvRound(k.pt.x / scale), cvRound(k.pt.y / scale));
     float cs, sn;
     briefRotation(k.angle, &cs, &sn);
     for (size_t p = 0; p < disc.size(); ++p) {

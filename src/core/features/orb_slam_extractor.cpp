@@ -349,25 +349,6 @@ ExtractorSettings extractorSettings(const OrbSlamParams& p, int max_side) {
   return e;
 }
 
-namespace {
-// Level-0 pixels per level pixel along x and y: the exact size ratio, not the nominal scale.
-cv::Point2f levelRatio(const ImagePyramid& pyr, int level) {
-  const cv::Mat& l = pyr.levels[static_cast<size_t>(level)];
-  return {static_cast<float>(pyr.levels[0].cols) / static_cast<float>(l.cols),
-          static_cast<float>(pyr.levels[0].rows) / static_cast<float>(l.rows)};
-}
-}  // namespace
-
-cv::Point2f ImagePyramid::toBase(cv::Point2f p, int level) const {
-  const cv::Point2f r = levelRatio(*this, level);
-  return {(p.x + 0.5f) * r.x - 0.5f, (p.y + 0.5f) * r.y - 0.5f};
-}
-
-cv::Point2f ImagePyramid::toLevel(cv::Point2f p, int level) const {
-  const cv::Point2f r = levelRatio(*this, level);
-  return {(p.x + 0.5f) / r.x - 0.5f, (p.y + 0.5f) / r.y - 0.5f};
-}
-
 ImagePyramid buildPyramid(const cv::Mat& gray, int levels, float scale_factor) {
   checkImage(gray);
   require(levels >= 1, "levels must be >= 1, got " + std::to_string(levels));
@@ -450,7 +431,10 @@ OrbFeatures OrbSlamExtractor::extract(const ImagePyramid& pyr) const {
     }
     for (auto& k : kps) {
       k.octave = level;
-      k.pt = pyr.toBase(k.pt, level);
+      // ORB-SLAM2's mapping. Bilinear resizing puts level pixel x at level-0 (x + 0.5) * r - 0.5 (1.3-2.5 px
+      // away at level 7); that exact place was tried and recovery after missing frames lost by it, with no
+      // gain in accuracy (docs/decisions.md, 2026-11-30).
+      k.pt *= scale;
       out.keypoints.push_back(k);
     }
   }

@@ -105,10 +105,10 @@ bool refine(const cv::KeyPoint& kl, float right_x0, const ImagePyramid& lp, cons
             const StereoMatchParams& p, Refined* out) {
   const cv::Mat& L = lp.levels[kl.octave];
   const cv::Mat& R = rp.levels[kl.octave];
+  const float scale = lp.scale[kl.octave];
   const int w = p.sad_half_window, reach = p.sad_search_px;
-  const cv::Point2f level_pt = lp.toLevel(kl.pt, kl.octave);
-  const cv::Point pl(cvRound(level_pt.x), cvRound(level_pt.y));
-  const int ur0 = cvRound(rp.toLevel({right_x0, kl.pt.y}, kl.octave).x);
+  const cv::Point pl(cvRound(kl.pt.x / scale), cvRound(kl.pt.y / scale));
+  const int ur0 = cvRound(right_x0 / scale);
   if (pl.y - w < 0 || pl.y + w >= L.rows || pl.x - w < 0 || pl.x + w >= L.cols) return false;
   if (ur0 - reach - w < 0 || ur0 + reach + w >= R.cols) return false;
   std::vector<int> sads(2 * reach + 1);
@@ -122,7 +122,7 @@ bool refine(const cv::KeyPoint& kl, float right_x0, const ImagePyramid& lp, cons
       subPixelOffset(static_cast<float>(sads[best + reach - 1]), static_cast<float>(sads[best + reach]),
                      static_cast<float>(sads[best + reach + 1]), p.fit);
   if (delta < -1.f || delta > 1.f) return false;
-  out->right_x = rp.toBase({static_cast<float>(ur0 + best) + delta, level_pt.y}, kl.octave).x;
+  out->right_x = scale * (static_cast<float>(ur0 + best) + delta);
   out->sad = sads[best + reach] / ((2 * w + 1) * (2 * w + 1));
   return true;
 }

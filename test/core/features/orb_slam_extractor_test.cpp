@@ -272,32 +272,6 @@ TEST(OrbSlamExtractor, PyramidShrinksByTheScaleFactor) {
   EXPECT_NEAR(p.scale[7], std::pow(1.2, 7), 1e-4);
 }
 
-// A blob's centre found in any level lands back on its level-0 place: a level pixel is where bilinear
-// resizing sampled it, not at level x times the scale (1.3 px off at level 7 of a KITTI frame).
-TEST(OrbSlamExtractor, LevelPointsMapBackToWhereTheyAreInLevelZero) {
-  const cv::Point2f centre(612.3f, 187.6f);
-  cv::Mat img(376, 1241, CV_8UC1);
-  for (int y = 0; y < img.rows; ++y) {
-    for (int x = 0; x < img.cols; ++x) {
-      const float d2 = (x - centre.x) * (x - centre.x) + (y - centre.y) * (y - centre.y);
-      img.at<uint8_t>(y, x) = static_cast<uint8_t>(std::lround(20 + 200 * std::exp(-d2 / (2 * 20.f * 20.f))));
-    }
-  }
-  const ImagePyramid p = buildPyramid(img, 8, 1.2f);
-  for (int level = 0; level < 8; ++level) {
-    cv::Mat bright;
-    cv::subtract(p.levels[static_cast<size_t>(level)], cv::Scalar(20), bright);
-    const cv::Moments m = cv::moments(bright);
-    const cv::Point2f at_level(static_cast<float>(m.m10 / m.m00), static_cast<float>(m.m01 / m.m00));
-    const cv::Point2f back = p.toBase(at_level, level);
-    EXPECT_NEAR(back.x, centre.x, 0.15) << "level " << level;
-    EXPECT_NEAR(back.y, centre.y, 0.15) << "level " << level;
-    const cv::Point2f again = p.toLevel(back, level);
-    EXPECT_NEAR(again.x, at_level.x, 1e-3);
-    EXPECT_NEAR(again.y, at_level.y, 1e-3);
-  }
-}
-
 TEST(OrbSlamExtractor, RefusesBadImagesParametersAndPyramids) {
   const OrbSlamExtractor ex;
   EXPECT_THROW_WITH(ex.extract(cv::Mat()), FeatureError, "empty image");
@@ -333,11 +307,8 @@ TEST(OrbSlamExtractor, LearnedPatternGivesOpenCvOrbDescriptorsOfTheSameKeypoints
   OrbSlamParams learned;
   learned.pattern = BriefPatternKind::kOrbLearned;
   const OrbSlamExtractor ex(learned);
-  const ImagePyramid pyr = ex.pyramid(img);
-  const OrbFeatures f = ex.extract(pyr);
-  // OpenCV finds a keypoint's level pixel as pt / scale; ours are at their pixel centre's true place.
+  const OrbFeatures f = ex.extract(img);
   std::vector<cv::KeyPoint> kps = f.keypoints;
-  for (auto& k : kps) k.pt = pyr.toLevel(k.pt, k.octave) * pyr.scale[static_cast<size_t>(k.octave)];
   cv::Mat theirs;
   cv::ORB::create(2000, 1.2f, 8, 0)->compute(img, kps, theirs);
   ASSERT_EQ(static_cast<size_t>(theirs.rows), f.descriptors.size());
