@@ -184,6 +184,7 @@ msg::LocalMapUpdatePtr LocalMapper::mergeGlobalBa(bool wait) {
 }
 
 void LocalMapper::noteGlobalBa(const LocalBaResult& r, size_t keyframes) {
+  global_ba_.cut_short += r.aborted;  // only a foreground one: a merged background result is never cut short
   global_ba_.last = r.summary;
   global_ba_.last_keyframes = static_cast<int>(keyframes);
 }

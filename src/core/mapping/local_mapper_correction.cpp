@@ -62,9 +62,7 @@ msg::LocalMapUpdatePtr LocalMapper::apply(const msg::Correction& c) {
     } else {
       // A keyframe that arrives meanwhile (the abort flag, cleared by the caller) cuts it short, as a new
       // loop stops ORB-SLAM2's.
-      const LocalBaResult r = bundleAdjust(all, globalBaParams(), &abort_, *u);
-      global_ba_.cut_short += r.aborted;
-      noteGlobalBa(r, all.size());
+      noteGlobalBa(bundleAdjust(all, globalBaParams(), &abort_, *u), all.size());
     }
   }
 

@@ -252,6 +252,50 @@ TEST_F(LocalMapperTest, ALocalBaThatDoesNotYieldRunsOutWhileAKeyframeWaits) {
   }
 }
 
+// A global BA in the foreground (lock-step, or a mapper without the background thread) stops early when a
+// keyframe is waiting, as ORB-SLAM2's does when a new loop comes; summary.json reports how often
+// (`global_ba_foreground.cut_short`). Here k3 lies 0.5 m off its points: the BA that runs out moves it back,
+// the one cut short before its first step leaves it there.
+TEST_F(LocalMapperTest, AForegroundGlobalBaCutShortByAWaitingKeyframeIsCounted) {
+  for (int i = 0; i < 220; ++i) addPoint({rng.uniform(-6, 6), rng.uniform(-2, 1), rng.uniform(8, 18)});
+  for (bool waiting : {false, true}) {
+    LocalMapperParams p;
+    p.triangulate = p.fuse = p.local_ba = p.cull_keyframes = false;
+    p.cull_min_observers = 1;
+    LocalMapper m(p);
+    for (ScenePoint& s : scene) s.id = kNoId;
+    const msg::KeyFrame k1 = keyframe(0, range(0, 120), true);
+    const msg::KeyFrame k2 = keyframe(0.5, range(20, 160), true);
+    const msg::KeyFrame truth3 = keyframe(1.0, range(60, 220), false);
+    const msg::KeyFrame k3 = [&] {
+      msg::KeyFrame k = truth3;
+      k.state.T_w_c.translation() += Eigen::Vector3d(0.5, 0, 0);
+      return k;
+    }();
+    m.process(k1);
+    m.process(k2);
+    m.process(k3);
+    msg::Correction c;  // a loop that moves nothing; the global BA it starts does the work
+    c.sequence = 1;
+    c.query = k3.id;
+    c.match = k1.id;
+    c.fuse_by_projection = false;
+    for (const msg::KeyFrame* k : {&k1, &k2, &k3})
+      c.keyframes.push_back({k->id, k->state.T_w_c, k->state.T_w_c});
+    m.abortFlag() = waiting;
+    ASSERT_NE(m.apply(c), nullptr);
+    EXPECT_EQ(m.globalBaStats().cut_short, waiting ? 1 : 0) << "waiting " << waiting;
+    EXPECT_EQ(m.globalBaStats().last_keyframes, 3) << "waiting " << waiting;
+    Pose3 T;
+    ASSERT_TRUE(m.keyframePose(k3.id, &T));
+    const double off_m = (T.translation() - truth3.state.T_w_c.translation()).norm();
+    if (waiting)
+      EXPECT_NEAR(off_m, 0.5, 1e-6) << "a BA cut short before its first step moved k3";
+    else
+      EXPECT_LT(off_m, 0.05) << "the BA did not move k3 back";
+  }
+}
+
 TEST_F(LocalMapperTest, KeypointsWithoutStereoSeenFromTwoKeyframesBecomePoints) {
   LocalMapperParams p;
   p.cull_keyframes = false;
