@@ -37,6 +37,9 @@ int main(int argc, char** argv) {
       .flag("aperiodic-ground",
             "a road texture that never repeats (by default it repeats every 8 m, as every render measured "
             "before it)")
+      .flag("rigid-ground",
+            "one road surface for the whole world (by default a plane under each camera that follows it, as "
+            "in every render measured before it)")
       .flag("force", "write into an existing non-empty folder");
   return binloop::runTool("render", [&] {
     if (!args.parse(argc, argv)) return 0;
@@ -97,6 +100,7 @@ int main(int argc, char** argv) {
               << bank.textures.size() << " textures; camera " << cam.describe() << "\n";
     binloop::sim::WorldParams wp;
     wp.aperiodic_ground = args.has("aperiodic-ground");
+    wp.rigid_ground = args.has("rigid-ground");
     const auto world = binloop::sim::World::build(route, std::move(bank), wp, seed);
     std::cout << "render: world of " << world.quads().size() << " quads along " << route.size()
               << " route poses\n";

@@ -43,6 +43,13 @@ struct WorldParams {
   /// layer of incommensurate period is blended in, and the road never repeats within a route. Off by default
   /// so that renders made before it stay as they were.
   bool aperiodic_ground = false;
+  /// By default the ground is a plane fitted anew for each camera: camera_height_m under it, tilted with the
+  /// route's grade over +-20 m. It follows the camera, so it is not the same surface from one frame to the
+  /// next (in rendered 06's first U-turn it turns by 0.15-0.2 degrees a frame, which moves a road point 10 m
+  /// ahead by about 2 px) nor for the two cameras of one pair. True: one surface for the whole world, a
+  /// height field smoothed from the route's heights, as a real road is. Off by default so that renders made
+  /// before it stay as they were (the peer results binloop is compared with were made on those).
+  bool rigid_ground = false;
 };
 
 class World {
@@ -60,6 +67,10 @@ class World {
   void quadsNear(double x, double z, double radius, std::vector<int>* out) const;
   /// Ground under the camera at pose T_w_c: plane n·p = d (n points down, world y down).
   void groundPlane(const Pose3& T_w_c, Eigen::Vector3d* n, double* d) const;
+  /// With `rigid_ground`: the road surface's world y at (x, z) (y down) and its slopes dy/dx and dy/dz
+  /// (bilinear between 2 m grid nodes).
+  double groundY(double x, double z, double* dy_dx = nullptr, double* dy_dz = nullptr) const;
+  bool rigidGround() const { return !ground_y_.empty(); }
   /// Ground texture index at world (x, z).
   int groundMaterial(double x, double z) const;
   const WorldParams& params() const { return params_; }
@@ -81,8 +92,13 @@ class World {
   // route-sample grid for nearest-route queries
   std::vector<std::vector<int>> route_grid_;
   int rgw_ = 0, rgh_ = 0;  // route grid size (cells)
+  // rigid ground: world y of the road surface at grid nodes (hx0_ + i * hcell_, hz0_ + j * hcell_)
+  double hcell_ = 2.0, hx0_ = 0, hz0_ = 0;
+  int hw_ = 0, hh_ = 0;
+  std::vector<float> ground_y_;
   int nearestRouteSample(double x, double z) const;
   void indexQuads();
+  void buildGroundHeights(double x0, double z0, int nodes_x, int nodes_z);
 };
 
 }  // namespace binloop::sim

@@ -36,6 +36,30 @@ inline bool treeOpaque(float u, float v, float lu, float lv, float noise) {
   return std::abs(u - lu * 0.5f) < 0.15f && v < lv * 0.35f;
 }
 
+// Where the ray c + t * ray (world frame, unit camera z) meets the rigid ground y = H(x, z): Newton's method
+// on f(t) = H(x(t), z(t)) - y(t), from `t0` (the per-frame plane's hit, a close guess). False when it meets
+// no ground in front (the ray rises faster than the ground) or does not settle. `n_dot_ray`: the surface's
+// unit normal (pointing down) dotted with `ray`.
+bool hitGround(const World& world, const Eigen::Vector3d& c, const Eigen::Vector3d& ray, double t0, double* t,
+               double* n_dot_ray) {
+  double tt = t0;
+  for (int it = 0; it < 12; ++it) {
+    const Eigen::Vector3d p = c + tt * ray;
+    double hx, hz;
+    const double f = world.groundY(p.x(), p.z(), &hx, &hz) - p.y();
+    const double df = hx * ray.x() + hz * ray.z() - ray.y();  // negative while the ray descends onto it
+    if (df >= -1e-9) return false;
+    if (std::abs(f) < 1e-4) {
+      *t = tt;
+      *n_dot_ray = -df / std::sqrt(1 + hx * hx + hz * hz);
+      return tt > 0;
+    }
+    tt -= f / df;
+    if (!(tt > 0) || tt > 1e4) return false;
+  }
+  return false;
+}
+
 }  // namespace
 
 void ViewRenderer::render(const World& world, const StereoCamera& cam, const Pose3& T_w_c, cv::Mat* gray,
@@ -63,6 +87,7 @@ void ViewRenderer::drawGround(const World& world, const StereoCamera& cam, const
   const double n_dx = n.dot(dx);
   const auto& bank = world.bank();
   const bool aperiodic = world.params().aperiodic_ground;
+  const bool rigid = world.rigidGround();
   for (int y = 0; y < cam.height; ++y) {
     const Eigen::Vector3d row0 = R * Eigen::Vector3d(-cam.cx / cam.fx, (y - cam.cy) / cam.fy, 1.0);
     const double n_row0 = n.dot(row0);
@@ -70,14 +95,20 @@ void ViewRenderer::drawGround(const World& world, const StereoCamera& cam, const
     float* z = depth.ptr<float>(y);
     for (int x = 0; x < cam.width; ++x) {
       const double denom = n_row0 + x * n_dx;
-      if (denom <= 1e-6) continue;
-      const double t = h / denom;  // camera-z depth, as the ray has unit z
-      if (t <= near_ || t > max_distance_) continue;
       const Eigen::Vector3d ray = row0 + x * dx;
-      const Eigen::Vector3d p = c + t * ray;
+      double t, cosang;  // camera-z depth (the ray has unit z); cosine between ray and surface normal
       const double ray_len = ray.norm();
+      if (rigid) {
+        if (!hitGround(world, c, ray, denom > 1e-6 ? h / denom : max_distance_, &t, &cosang)) continue;
+        cosang /= ray_len;
+      } else {
+        if (denom <= 1e-6) continue;
+        t = h / denom;
+        cosang = denom / ray_len;
+      }
+      if (t <= near_ || t > max_distance_) continue;
+      const Eigen::Vector3d p = c + t * ray;
       const double range = t * ray_len;
-      const double cosang = denom / ray_len;
       const int level =
           mipLevel(static_cast<float>(range * kGroundTexelsPerM / (cam.fx * std::sqrt(cosang))));
       const Texture& tex = bank.textures[world.groundMaterial(p.x(), p.z())];

@@ -269,6 +269,10 @@ World World::build(const std::vector<Pose3>& route_T_w_c, TextureBank bank, cons
   }
   w.indexQuads();
 
+  if (params.rigid_ground)
+    w.buildGroundHeights(w.gx0_, w.gz0_, static_cast<int>((x1 - x0 + 2 * margin) / w.hcell_) + 2,
+                         static_cast<int>((z1 - z0 + 2 * margin) / w.hcell_) + 2);
+
   // Ground materials by distance to the route.
   w.mx0_ = w.gx0_;
   w.mz0_ = w.gz0_;
@@ -368,6 +372,78 @@ void World::groundPlane(const Pose3& T_w_c, Eigen::Vector3d* n, double* d) const
   }
   *n = down;
   *d = down.dot(c + Eigen::Vector3d(0, params_.camera_height_m, 0));
+}
+
+void World::buildGroundHeights(double x0, double z0, int nodes_x, int nodes_z) {
+  // Each route sample's road height (camera_height_m under it) spread over the nodes within 3 sigma with
+  // Gaussian weights: where the route passes itself (a U-turn, a revisit) both passes blend into one surface.
+  constexpr double kSigma = 6.0;
+  hx0_ = x0;
+  hz0_ = z0;
+  hw_ = nodes_x;
+  hh_ = nodes_z;
+  const size_t nodes = static_cast<size_t>(hw_) * hh_;
+  std::vector<double> sum(nodes, 0.0), weight(nodes, 0.0);
+  const int reach = static_cast<int>(std::ceil(3 * kSigma / hcell_));
+  for (const Eigen::Vector3d& r : route_) {
+    const int ci = static_cast<int>(std::lround((r.x() - hx0_) / hcell_));
+    const int cj = static_cast<int>(std::lround((r.z() - hz0_) / hcell_));
+    for (int j = std::max(0, cj - reach); j <= std::min(hh_ - 1, cj + reach); ++j) {
+      for (int i = std::max(0, ci - reach); i <= std::min(hw_ - 1, ci + reach); ++i) {
+        const double dx = hx0_ + i * hcell_ - r.x(), dz = hz0_ + j * hcell_ - r.z();
+        const double wgt = std::exp(-(dx * dx + dz * dz) / (2 * kSigma * kSigma));
+        sum[static_cast<size_t>(j) * hw_ + i] += wgt * (r.y() + params_.camera_height_m);
+        weight[static_cast<size_t>(j) * hw_ + i] += wgt;
+      }
+    }
+  }
+  // Nodes far from the route take their neighbours' mean, ring by ring outwards (only far ground is there).
+  constexpr int kNeighbours[4][2] = {{-1, 0}, {1, 0}, {0, -1}, {0, 1}};
+  ground_y_.assign(nodes, 0.0f);
+  std::vector<char> known(nodes, 0);
+  for (size_t k = 0; k < nodes; ++k) {
+    if (weight[k] > 1e-3) {
+      ground_y_[k] = static_cast<float>(sum[k] / weight[k]);
+      known[k] = 1;
+    }
+  }
+  for (bool grew = true; grew;) {
+    grew = false;
+    std::vector<char> next = known;
+    for (int j = 0; j < hh_; ++j) {
+      for (int i = 0; i < hw_; ++i) {
+        const size_t k = static_cast<size_t>(j) * hw_ + i;
+        if (known[k]) continue;
+        double s = 0;
+        int c = 0;
+        for (const auto& d : kNeighbours) {
+          const int a = i + d[0], b = j + d[1];
+          if (a < 0 || b < 0 || a >= hw_ || b >= hh_ || !known[static_cast<size_t>(b) * hw_ + a]) continue;
+          s += ground_y_[static_cast<size_t>(b) * hw_ + a];
+          ++c;
+        }
+        if (c > 0) {
+          ground_y_[k] = static_cast<float>(s / c);
+          next[k] = 1;
+          grew = true;
+        }
+      }
+    }
+    known.swap(next);
+  }
+}
+
+double World::groundY(double x, double z, double* dy_dx, double* dy_dz) const {
+  const double fx = std::clamp((x - hx0_) / hcell_, 0.0, hw_ - 1.000001);
+  const double fz = std::clamp((z - hz0_) / hcell_, 0.0, hh_ - 1.000001);
+  const int i = static_cast<int>(fx), j = static_cast<int>(fz);
+  const double u = fx - i, v = fz - j;
+  const size_t k = static_cast<size_t>(j) * hw_ + i;
+  const double y00 = ground_y_[k], y10 = ground_y_[k + 1], y01 = ground_y_[k + hw_],
+               y11 = ground_y_[k + hw_ + 1];
+  if (dy_dx) *dy_dx = ((y10 - y00) * (1 - v) + (y11 - y01) * v) / hcell_;
+  if (dy_dz) *dy_dz = ((y01 - y00) * (1 - u) + (y11 - y10) * u) / hcell_;
+  return (y00 * (1 - u) + y10 * u) * (1 - v) + (y01 * (1 - u) + y11 * u) * v;
 }
 
 int World::groundMaterial(double x, double z) const {

@@ -2,6 +2,9 @@
 // and bit-for-bit determinism.
 #include "binloop/sim/stereo_renderer.h"
 
+#include <algorithm>
+#include <cmath>
+
 #include <filesystem>
 #include <fstream>
 #include <opencv2/features2d.hpp>
@@ -9,6 +12,7 @@
 #include <sstream>
 
 #include "binloop/io/trajectory_io.h"
+#include "binloop/sim/view_renderer.h"
 #include "support/test_support.h"
 
 using namespace binloop;
@@ -259,6 +263,92 @@ TEST(StereoRenderer, TheAperiodicGroundDoesNotRepeatEveryEightMetres) {
   };
   EXPECT_LT(roadDifference(false), 0.5);
   EXPECT_GT(roadDifference(true), 5.0);
+}
+
+// A U-turn of 12 m radius between two straights, climbing 5 m in 100 m (y down: y falls), the camera
+// looking along the road: where the default ground turns with the camera and the rigid one does not.
+std::vector<Pose3> climbingUTurn() {
+  std::vector<Pose3> r;
+  auto at = [&](const Eigen::Vector3d& p, double yaw) {
+    Pose3 T = Pose3::Identity();
+    T.linear() = Eigen::AngleAxisd(yaw, Eigen::Vector3d::UnitY()).toRotationMatrix();
+    T.translation() = p;
+    r.push_back(T);
+  };
+  const double kR = 12, kPi = std::acos(-1.0), grade = -0.05;
+  double s = 0;  // path length so far
+  for (int i = 0; i < 40; ++i, s += 1) at({0, grade * s, s}, 0);
+  for (double a = 0; a < kPi; a += 1 / kR, s += 1)  // 1 m steps round the turn, to the right
+    at({kR - kR * std::cos(a), grade * s, 40 + kR * std::sin(a)}, a);
+  for (int i = 0; i < 40; ++i, s += 1) at({2 * kR, grade * s, 40.0 - i}, kPi);
+  return r;
+}
+
+// Median over the ground pixels of camera A of |depth B renders there - depth of A's point in B| / depth,
+// for points 4-30 m from A that B sees.
+double groundMismatch(const World& world, const StereoCamera& cam, const Pose3& A, const Pose3& B) {
+  ViewRenderer view;
+  cv::Mat gray, depth_a, depth_b;
+  view.render(world, cam, A, &gray, &depth_a);
+  view.render(world, cam, B, &gray, &depth_b);
+  std::vector<double> rel;
+  for (int y = static_cast<int>(cam.cy) + 20; y < cam.height; y += 7) {
+    for (int x = 0; x < cam.width; x += 7) {
+      const double za = depth_a.at<float>(y, x);
+      if (!(za > 4 && za < 30)) continue;
+      const Eigen::Vector3d p_w =
+          A * Eigen::Vector3d((x - cam.cx) / cam.fx * za, (y - cam.cy) / cam.fy * za, za);
+      const Eigen::Vector3d p_b = B.inverse() * p_w;
+      const double u = cam.fx * p_b.x() / p_b.z() + cam.cx, v = cam.fy * p_b.y() / p_b.z() + cam.cy;
+      if (!(u >= 1 && v >= 1 && u < cam.width - 2 && v < cam.height - 2)) continue;
+      cv::Mat patch;
+      cv::getRectSubPix(depth_b, cv::Size(1, 1), cv::Point2f(static_cast<float>(u), static_cast<float>(v)),
+                        patch);
+      const double zb = patch.at<float>(0, 0);
+      if (std::isfinite(zb)) rel.push_back(std::abs(zb - p_b.z()) / p_b.z());
+    }
+  }
+  if (rel.size() < 100) return -1;
+  std::nth_element(rel.begin(), rel.begin() + rel.size() / 2, rel.end());
+  return rel[rel.size() / 2];
+}
+
+// Successive frames, and the two cameras of a pair, must see one road: a point of it lies where the other
+// view's depth says. The default ground is a plane under each camera, tilted with the grade over +-20 m of
+// route, so in a climbing U-turn it turns from frame to frame and differs between the cameras; the rigid
+// ground (WorldParams::rigid_ground) is one surface.
+TEST(StereoRenderer, TheRigidGroundIsOneSurfaceForEveryFrameAndBothCameras) {
+  const std::vector<Pose3> route = climbingUTurn();
+  const StereoCamera cam = kitti00Camera();
+  Pose3 T_c_r = Pose3::Identity();
+  T_c_r.translation() = Eigen::Vector3d(cam.baseline_m, 0, 0);
+  const size_t apex = 40 + 19;
+  for (bool rigid : {false, true}) {
+    WorldParams p;
+    p.populate = false;
+    p.rigid_ground = rigid;
+    const World world = World::build(route, TextureBank::build({}, 3), p, 3);
+    std::ostringstream where;
+    double worst_frames = 0, worst_stereo = 0;
+    for (size_t i : {size_t{20}, apex - 10, apex, apex + 10}) {
+      const double frames = groundMismatch(world, cam, route[i], route[i + 1]);
+      const double stereo = groundMismatch(world, cam, route[i], route[i] * T_c_r);
+      ASSERT_GE(frames, 0) << "frame " << i << ": too few ground points";
+      ASSERT_GE(stereo, 0) << "frame " << i << ": too few ground points";
+      where << " frame " << i << ": next frame " << frames << ", right camera " << stereo << ";";
+      worst_frames = std::max(worst_frames, frames);
+      worst_stereo = std::max(worst_stereo, stereo);
+    }
+    std::cout << (rigid ? "rigid" : "per-camera plane")
+              << " ground, median relative depth mismatch:" << where.str() << "\n";
+    if (rigid) {
+      EXPECT_LT(worst_frames, 1e-3) << where.str();
+      EXPECT_LT(worst_stereo, 1e-3) << where.str();
+    } else {
+      EXPECT_GT(worst_frames, 3e-3) << "the default ground was expected to move between frames"
+                                    << where.str();
+    }
+  }
 }
 
 TEST(StereoRenderer, RenderFramesNumbersFromZeroAndRendersTheRouteFrames) {
