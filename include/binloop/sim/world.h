@@ -98,7 +98,7 @@ class World {
   std::vector<float> ground_y_;
   int nearestRouteSample(double x, double z) const;
   void indexQuads();
-  void buildGroundHeights(double x0, double z0, int nodes_x, int nodes_z);
+  void buildGroundHeights(double width_m, double depth_m);  // over the quad grid's extent, from its origin
 };
 
 }  // namespace binloop::sim

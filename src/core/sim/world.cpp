@@ -269,9 +269,7 @@ World World::build(const std::vector<Pose3>& route_T_w_c, TextureBank bank, cons
   }
   w.indexQuads();
 
-  if (params.rigid_ground)
-    w.buildGroundHeights(w.gx0_, w.gz0_, static_cast<int>((x1 - x0 + 2 * margin) / w.hcell_) + 2,
-                         static_cast<int>((z1 - z0 + 2 * margin) / w.hcell_) + 2);
+  if (params.rigid_ground) w.buildGroundHeights(x1 - x0 + 2 * margin, z1 - z0 + 2 * margin);
 
   // Ground materials by distance to the route.
   w.mx0_ = w.gx0_;
@@ -374,14 +372,14 @@ void World::groundPlane(const Pose3& T_w_c, Eigen::Vector3d* n, double* d) const
   *d = down.dot(c + Eigen::Vector3d(0, params_.camera_height_m, 0));
 }
 
-void World::buildGroundHeights(double x0, double z0, int nodes_x, int nodes_z) {
+void World::buildGroundHeights(double width_m, double depth_m) {
   // Each route sample's road height (camera_height_m under it) spread over the nodes within 3 sigma with
   // Gaussian weights: where the route passes itself (a U-turn, a revisit) both passes blend into one surface.
   constexpr double kSigma = 6.0;
-  hx0_ = x0;
-  hz0_ = z0;
-  hw_ = nodes_x;
-  hh_ = nodes_z;
+  hx0_ = gx0_;  // the quad grid's origin
+  hz0_ = gz0_;
+  hw_ = static_cast<int>(width_m / hcell_) + 2;
+  hh_ = static_cast<int>(depth_m / hcell_) + 2;
   const size_t nodes = static_cast<size_t>(hw_) * hh_;
   std::vector<double> sum(nodes, 0.0), weight(nodes, 0.0);
   const int reach = static_cast<int>(std::ceil(3 * kSigma / hcell_));
