@@ -7,6 +7,7 @@
 #include <algorithm>
 #include <chrono>
 #include <cmath>
+#include <initializer_list>
 #include <thread>
 
 #include "../optim/optim_test_scene.h"
@@ -98,6 +99,19 @@ class LocalMapperTest : public ::testing::Test {
     msg::KeyFrame k2 =
         withMono(keyframe(4, range(a, b), false, false, 2), keyframe(4, range(b, c), false, true, 2));
     return {k1, k2};
+  }
+
+  // A loop correction from `query` to `match` that moves none of `keyframes`: the global BA it starts does
+  // the work.
+  static msg::Correction stillLoop(const msg::KeyFrame& query, const msg::KeyFrame& match,
+                                   std::initializer_list<const msg::KeyFrame*> keyframes) {
+    msg::Correction c;
+    c.sequence = 1;
+    c.query = query.id;
+    c.match = match.id;
+    c.fuse_by_projection = false;
+    for (const msg::KeyFrame* k : keyframes) c.keyframes.push_back({k->id, k->state.T_w_c, k->state.T_w_c});
+    return c;
   }
 
   static uint32_t weightTo(const msg::KeyframeState& s, SlamKeyframeId other) {
@@ -275,15 +289,8 @@ TEST_F(LocalMapperTest, AForegroundGlobalBaCutShortByAWaitingKeyframeIsCounted) 
     m.process(k1);
     m.process(k2);
     m.process(k3);
-    msg::Correction c;  // a loop that moves nothing; the global BA it starts does the work
-    c.sequence = 1;
-    c.query = k3.id;
-    c.match = k1.id;
-    c.fuse_by_projection = false;
-    for (const msg::KeyFrame* k : {&k1, &k2, &k3})
-      c.keyframes.push_back({k->id, k->state.T_w_c, k->state.T_w_c});
     m.abortFlag() = waiting;
-    ASSERT_NE(m.apply(c), nullptr);
+    ASSERT_NE(m.apply(stillLoop(k3, k1, {&k1, &k2, &k3})), nullptr);
     EXPECT_EQ(m.globalBaStats().cut_short, waiting ? 1 : 0) << "waiting " << waiting;
     EXPECT_EQ(m.globalBaStats().last_keyframes, 3) << "waiting " << waiting;
     Pose3 T;
@@ -561,14 +568,7 @@ TEST_F(LocalMapperTest, AKeyframeMadeBeforeAGlobalBaMergeMovesWithItsParent) {
   truth4.state.parent = k3.id;
   const msg::KeyFrame k4 = offBy(truth4);  // made on k3 before the merge, merges_seen 0
 
-  msg::Correction c;  // a loop that moves nothing; the global BA it starts does the work
-  c.sequence = 1;
-  c.query = k3.id;
-  c.match = k1.id;
-  c.fuse_by_projection = false;
-  for (const msg::KeyFrame* k : {&k1, &k2, &k3})
-    c.keyframes.push_back({k->id, k->state.T_w_c, k->state.T_w_c});
-  ASSERT_NE(m.apply(c), nullptr);
+  ASSERT_NE(m.apply(stillLoop(k3, k1, {&k1, &k2, &k3})), nullptr);
   const msg::LocalMapUpdatePtr merged = m.mergeGlobalBa(true);
   ASSERT_NE(merged, nullptr) << "the global BA ran and was merged";
   EXPECT_TRUE(merged->correction);
