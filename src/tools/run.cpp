@@ -259,8 +259,6 @@ int writeLoops(const fs::path& out, const SlamPipeline& slam, const KittiSequenc
                                  .add("outliers_removed", g.last.num_outliers)
                                  .add("initial_cost", g.last.initial_cost)
                                  .add("final_cost", g.last.final_cost));
-  if (g.cut_short > 0)  // lock-step or `global_ba_in_background: 0`: a waiting keyframe stopped it early
-    js.add("global_ba_foreground", JsonObject().add("cut_short", g.cut_short));
   return by_status["accepted"];
 }
 

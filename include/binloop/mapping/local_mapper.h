@@ -103,7 +103,9 @@ class LocalMapper {
   struct GlobalBaStats {
     int started = 0, merged = 0, aborted = 0;  // aborted: stopped by a correction (or discarded at the end)
     int failed = 0;                            // threw in its thread: the map stays as it was
-    int cut_short = 0;  // run in the foreground and stopped early by a waiting keyframe (its result is kept)
+    // Run in the foreground and stopped early by a waiting keyframe (its result is kept). SlamPipeline never
+    // gets here: threaded it runs the BA in the background, lock-step no keyframe waits.
+    int cut_short = 0;
     std::string last_failure;
     // The last global BA that reached the map (merged, or run in the foreground)
     BaSummary last;

@@ -95,18 +95,15 @@ void ViewRenderer::drawGround(const World& world, const StereoCamera& cam, const
     float* z = depth.ptr<float>(y);
     for (int x = 0; x < cam.width; ++x) {
       const double denom = n_row0 + x * n_dx;
+      if (!rigid && denom <= 1e-6) continue;  // above the plane: sky
       const Eigen::Vector3d ray = row0 + x * dx;
-      double t, cosang;  // camera-z depth (the ray has unit z); cosine between ray and surface normal
-      const double ray_len = ray.norm();
-      if (rigid) {
-        if (!hitGround(world, c, ray, denom > 1e-6 ? h / denom : max_distance_, &t, &cosang)) continue;
-        cosang /= ray_len;
-      } else {
-        if (denom <= 1e-6) continue;
-        t = h / denom;
-        cosang = denom / ray_len;
-      }
+      // Camera-z depth (the ray has unit z) and the surface normal dotted with the ray: the plane's, which is
+      // also where the rigid ground's search starts.
+      double t = denom > 1e-6 ? h / denom : max_distance_, n_dot_ray = denom;
+      if (rigid && !hitGround(world, c, ray, t, &t, &n_dot_ray)) continue;
       if (t <= near_ || t > max_distance_) continue;
+      const double ray_len = ray.norm();
+      const double cosang = n_dot_ray / ray_len;
       const Eigen::Vector3d p = c + t * ray;
       const double range = t * ray_len;
       const int level =

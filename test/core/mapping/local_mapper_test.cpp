@@ -266,10 +266,9 @@ TEST_F(LocalMapperTest, ALocalBaThatDoesNotYieldRunsOutWhileAKeyframeWaits) {
   }
 }
 
-// A global BA in the foreground (lock-step, or a mapper without the background thread) stops early when a
-// keyframe is waiting, as ORB-SLAM2's does when a new loop comes; summary.json reports how often
-// (`global_ba_foreground.cut_short`). Here k3 lies 0.5 m off its points: the BA that runs out moves it back,
-// the one cut short before its first step leaves it there.
+// A global BA in the foreground (a mapper without the background thread) stops early when a keyframe is
+// waiting, as ORB-SLAM2's does when a new loop comes, and globalBaStats() counts it. Here k3 lies 0.5 m off
+// its points: the BA that runs out moves it back, the one cut short before its first step leaves it there.
 TEST_F(LocalMapperTest, AForegroundGlobalBaCutShortByAWaitingKeyframeIsCounted) {
   for (int i = 0; i < 220; ++i) addPoint({rng.uniform(-6, 6), rng.uniform(-2, 1), rng.uniform(8, 18)});
   for (bool waiting : {false, true}) {
