@@ -69,6 +69,10 @@ class VladVocabulary {
   std::vector<uint32_t> first_child_, child_count_;  // per node + 1 (entry 0 = root)
   std::vector<uint32_t> level_begin_, level_count_;  // node ranges per level
   std::vector<float> pca_, pca_mean_;                // per node: dims × 256 whitened rotation, 256 mean
+  // Derived from the two above by preparePca(), for residual(): per node the rotation transposed (256 ×
+  // dims, so that a set bit adds one contiguous row), the rotated centre and the rotated mean.
+  std::vector<float> pca_t_, pca_centre_, pca_rot_mean_;
+  void preparePca();
   void residual(const float* x, uint32_t node, float* out) const;
 };
 

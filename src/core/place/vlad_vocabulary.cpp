@@ -52,24 +52,48 @@ uint64_t descriptorSeed(const Descriptors& d) { return hashBytes(d.data(), d.siz
 
 void VladVocabulary::residual(const float* x, uint32_t node, float* out) const {
   const float* c = &centres_[static_cast<size_t>(node) * kD];
-  float r[kD];
   float n2 = 0;
-  for (int j = 0; j < kD; ++j) {
-    r[j] = x[j] - c[j];
-    n2 += r[j] * r[j];
-  }
+  for (int j = 0; j < kD; ++j) n2 += (x[j] - c[j]) * (x[j] - c[j]);
   const float inv = n2 > 0 ? 1.0f / std::sqrt(n2) : 0.0f;
   if (pca_.empty()) {
-    for (int j = 0; j < kD; ++j) out[j] = r[j] * inv;
+    for (int j = 0; j < kD; ++j) out[j] = (x[j] - c[j]) * inv;
     return;
   }
-  const float* mean = &pca_mean_[static_cast<size_t>(node) * kD];
-  const float* rot = &pca_[static_cast<size_t>(node) * dims_ * kD];
-  for (int j = 0; j < kD; ++j) r[j] = r[j] * inv - mean[j];
-  for (int i = 0; i < dims_; ++i) {
-    float s = 0;
-    for (int j = 0; j < kD; ++j) s += rot[i * kD + j] * r[j];
-    out[i] = s;
+  // R((x - c) inv - m) = inv (R x - R c) - R m, and x is 0/1: R x is the sum of R's columns at x's set
+  // bits, contiguous rows of the transposed rotation. A third of the time of the plain product.
+  const size_t base = static_cast<size_t>(node) * dims_;
+  const float* rt = &pca_t_[base * kD];
+  std::fill(out, out + dims_, 0.f);
+  for (int j = 0; j < kD; ++j) {
+    if (x[j] == 0.f) continue;
+    const float* col = rt + static_cast<size_t>(j) * dims_;
+    for (int i = 0; i < dims_; ++i) out[i] += col[i];
+  }
+  const float* rc = &pca_centre_[base];
+  const float* rm = &pca_rot_mean_[base];
+  for (int i = 0; i < dims_; ++i) out[i] = inv * (out[i] - rc[i]) - rm[i];
+}
+
+void VladVocabulary::preparePca() {
+  pca_t_.clear(), pca_centre_.clear(), pca_rot_mean_.clear();
+  if (pca_.empty()) return;
+  const size_t nodes = centres_.size() / kD;
+  pca_t_.assign(nodes * dims_ * kD, 0.f);
+  pca_centre_.assign(nodes * dims_, 0.f);
+  pca_rot_mean_.assign(nodes * dims_, 0.f);
+  for (size_t node = 0; node < nodes; ++node) {
+    const float* rot = &pca_[node * dims_ * kD];
+    for (int i = 0; i < dims_; ++i) {
+      double rc = 0, rm = 0;
+      for (int j = 0; j < kD; ++j) {
+        const float e = rot[i * kD + j];
+        pca_t_[(node * kD + j) * dims_ + i] = e;
+        rc += double(e) * centres_[node * kD + j];
+        rm += double(e) * pca_mean_[node * kD + j];
+      }
+      pca_centre_[node * dims_ + i] = static_cast<float>(rc);
+      pca_rot_mean_[node * dims_ + i] = static_cast<float>(rm);
+    }
   }
 }
 
@@ -216,6 +240,7 @@ VladVocabulary VladVocabulary::train(const std::vector<Descriptors>& images, con
   if (p.pca_dims > 0) {
     v.trainPca(data);
     v.dims_ = p.pca_dims;
+    v.preparePca();
     if (progress) progress(p.levels + 1, p.levels + 1);
   }
   return v;
@@ -261,6 +286,7 @@ VladVocabulary VladVocabulary::read(ModelReader& r) {
   for (size_t i = 0; ok && i <= nodes; ++i)
     ok = v.child_count_[i] == 0 || v.first_child_[i] + v.child_count_[i] <= nodes;
   if (!ok) throw PlaceError(r.path() + ": VLAD vocabulary sections are inconsistent");
+  v.preparePca();
   return v;
 }
 

@@ -103,15 +103,50 @@ TEST(Vlad, EmptyWordsGetCoinFlipsNotAgreement) {
   EXPECT_EQ(binarizeSigns(full, v.dims(), 5), binarizeSigns(full));
 }
 
+// With LCS-PCA each word's residuals are rotated onto their principal directions and whitened (thesis eq.
+// 4.6): over the training descriptors of a word, every kept component of the residual's direction has mean
+// ~0 and the same share of the length, 1/dims. A one-descriptor image with alpha 1 gives that direction as
+// its word's VLAD. A vocabulary read back from its file projects the same.
 TEST(Vlad, LcsPcaWhitensResiduals) {
   std::vector<Descriptors> images;
   for (int p = 0; p < 20; ++p) images.push_back(randomPlace(4, p, 100));
   VladParams p;
   p.k = 2;
   p.pca_dims = 32;
+  p.alpha = 1;
   const VladVocabulary v = VladVocabulary::train(images, p);
-  EXPECT_EQ(v.dims(), 32);
-  EXPECT_EQ(v.aggregate(images[0]).front().size(), 64u);
+  ASSERT_EQ(v.dims(), 32);
+  TempDir dir;
+  {
+    ModelHeader h;
+    h.type = ModelType::kVlad;
+    ModelWriter w(h);
+    v.write(w);
+    w.save(dir / "v.bin");
+  }
+  ModelReader r(dir / "v.bin");
+  const VladVocabulary back = VladVocabulary::read(r);
+  std::vector<double> sum(64, 0.0), sum2(64, 0.0);
+  int count[2] = {0, 0};
+  for (const auto& im : images) {
+    for (const auto& d : im) {
+      const std::vector<float> u = v.aggregate(Descriptors{d}).front();
+      ASSERT_EQ(u.size(), 64u);
+      EXPECT_EQ(back.aggregate(Descriptors{d}).front(), u);
+      const int word = u[0] != 0.f || u[1] != 0.f ? 0 : 1;
+      ++count[word];
+      for (int i = 0; i < 32; ++i)
+        sum[word * 32 + i] += u[word * 32 + i], sum2[word * 32 + i] += u[word * 32 + i] * u[word * 32 + i];
+    }
+  }
+  for (int word = 0; word < 2; ++word) {
+    ASSERT_GE(count[word], 300) << word;
+    for (int i = 0; i < 32; ++i) {
+      EXPECT_NEAR(sum[word * 32 + i] / count[word], 0.0, 0.03) << "word " << word << " component " << i;
+      EXPECT_NEAR(sum2[word * 32 + i] / count[word], 1.0 / 32, 0.5 / 32)
+          << "word " << word << " component " << i;
+    }
+  }
 }
 
 TEST(ProductQuantization, SdcAndAdcMatchBruteForce) {
