@@ -60,7 +60,7 @@ void VladVocabulary::residual(const float* x, uint32_t node, float* out) const {
     return;
   }
   // R((x - c) inv - m) = inv (R x - R c) - R m, and x is 0/1: R x is the sum of R's columns at x's set
-  // bits, contiguous rows of the transposed rotation. A third of the time of the plain product.
+  // bits, contiguous rows of the transposed rotation. About half the time of the plain product.
   const size_t base = static_cast<size_t>(node) * dims_;
   const float* rt = &pca_t_[base * kD];
   std::fill(out, out + dims_, 0.f);
