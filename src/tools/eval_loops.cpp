@@ -72,7 +72,7 @@ int main(int argc, char** argv) {
       .option("vladpq-slack",
               "vladpq's pre-filter passes keyframes sharing this many (word, code) pairs fewer than the best "
               "reference",
-              "8")
+              "1")
       .option("vlad-reference-rank",
               "vlad's and hmvlad's bar is the distance to this closest reference (1: the closest; beyond "
               "--reference: the farthest)",
