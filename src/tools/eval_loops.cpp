@@ -65,6 +65,10 @@ int main(int argc, char** argv) {
               "also score each model behind ORB-SLAM2's consistency check over this many consecutive "
               "keyframes (0 = off)",
               "3")
+      .option("near-miss",
+              "with poses: also score each model with proposals this close to their query (metres) that are "
+              "not ground-truth loops counted neither right nor wrong, as <model>~near (0 = off)",
+              "0")
       .option("segment-gap", "frames between ground-truth queries that start a new revisit segment", "50")
       .option("fabmap-l2-offset",
               "offset added to the closest reference's L2 distance in fabmap's pre-filter", "0.05")
@@ -72,7 +76,7 @@ int main(int argc, char** argv) {
       .option("vladpq-slack",
               "vladpq's pre-filter passes keyframes sharing this many (word, code) pairs fewer than the best "
               "reference",
-              "1")
+              "8")
       .option("vlad-reference-rank",
               "vlad's and hmvlad's bar is the distance to this closest reference (1: the closest; beyond "
               "--reference: the farthest)",
@@ -94,8 +98,9 @@ int main(int argc, char** argv) {
               window = static_cast<int>(args.integer("window"));
     const int nref = static_cast<int>(args.integer("reference"));
     const int consistency = static_cast<int>(args.integer("consistency"));
-    if (step < 1 || window < 0 || nref < 1 || consistency < 0)
-      throw CliError("--step and --reference must be >= 1, --window and --consistency >= 0");
+    const double near_miss = args.number("near-miss");
+    if (step < 1 || window < 0 || nref < 1 || consistency < 0 || near_miss < 0)
+      throw CliError("--step and --reference must be >= 1, --window, --consistency and --near-miss >= 0");
     std::vector<std::string> models;
     if (args.str("models") == "all") {
       models = placeModelNames();
@@ -156,6 +161,8 @@ int main(int argc, char** argv) {
     } else {
       throw CliError("--gt is required when there are no poses for every image (" + poses_path + ")");
     }
+    if (near_miss > 0 && poses.size() != images.size())
+      throw CliError("--near-miss needs a pose for every image (" + poses_path + ")");
     fs::create_directories(args.str("out"));
 
     // Keyframes and the ground truth that can be found among them.
@@ -299,6 +306,19 @@ int main(int argc, char** argv) {
         c.predictions = consistentPredictions(offers, consistency, 4 * step);
         score(c);
         runs.push_back(std::move(c));
+      }
+      if (near_miss > 0) {
+        // A proposal just beyond the ground truth's radius is a near miss, not a wrong place: dropped, so
+        // one near miss does not set the bar for a whole route.
+        ModelRun n = run;
+        n.name = name + "~near";
+        for (auto& p : n.predictions) {
+          if (p.candidate < 0 || truth.count({p.query, p.candidate})) continue;
+          if ((poses[p.query].translation() - poses[p.candidate].translation()).norm() <= near_miss)
+            p = LoopPrediction{p.query, -1, 0};
+        }
+        score(n);
+        runs.push_back(std::move(n));
       }
     }
 

@@ -1,8 +1,12 @@
 // eval-loops as a user runs it: the summary it writes for a real image pair, and one clear line for bad
 // input.
 #include <algorithm>
+#include <cstdlib>
 #include <fstream>
+#include <map>
 #include <sstream>
+#include <string>
+#include <vector>
 
 #include "support/test_support.h"
 
@@ -146,4 +150,47 @@ TEST(EvalLoopsTool, QueriesFollowThePatternAndImageSizeTheModelRecords) {
   const auto full = run(common + (tmp / "s") + " --max-side 0");
   EXPECT_EQ(full.code, 1) << full.out;
   EXPECT_NE(full.out.find("max side 320 vs none"), std::string::npos) << full.out;
+}
+
+// --near-miss scores each model a second time with proposals close to their query that the ground truth does
+// not list dropped, as <model>~near: with a radius beyond every proposal only right ones are left. It needs
+// poses and says so.
+TEST(EvalLoopsTool, NearMissesCountNeitherRightNorWrong) {
+  const std::string seq = binloop::test::sharedData("kitti/real_06_000_050");
+  BINLOOP_REQUIRE_DATA(seq + "/poses.txt");
+  const std::string vocab = std::string(BINLOOP_ROOT_DIR) + "/vocab/photos";
+  BINLOOP_REQUIRE_DATA(vocab + "/vlad.bin");
+  binloop::test::TempDir tmp;
+  const auto r =
+      run("--sequence " + seq + " --models vlad --vocab-dir " + vocab +
+          " --window 2 --reference 1 --gt-radius 4 --near-miss 1000 --consistency 0 --out " + (tmp / "out"));
+  ASSERT_EQ(r.code, 0) << r.out;
+  std::istringstream summary(binloop::test::readText(tmp / "out/summary.csv"));
+  std::map<std::string, std::vector<double>> rows;  // model -> r_at_100p, ..., precision_at_bar (column 9)
+  for (std::string line; std::getline(summary, line);) {
+    std::istringstream cells(line);
+    std::string name, cell;
+    std::getline(cells, name, ',');
+    while (std::getline(cells, cell, ',')) rows[name].push_back(cell.empty() ? -1 : std::atof(cell.c_str()));
+  }
+  ASSERT_EQ(rows.count("vlad"), 1u) << r.out;
+  ASSERT_EQ(rows.count("vlad~near"), 1u) << r.out;
+  // Only right proposals left: R@100P is the share of findable queries whose proposal is right.
+  std::istringstream queries(binloop::test::readText(tmp / "out/queries_vlad.csv"));
+  int right = 0, wrong = 0;
+  for (std::string line; std::getline(queries, line);) {
+    std::vector<std::string> cells;
+    std::istringstream cs(line);
+    for (std::string c; std::getline(cs, c, ',');) cells.push_back(c);
+    if (cells.size() > 4 && !cells[2].empty() && cells[0] != "query") (cells[4] == "1" ? right : wrong)++;
+  }
+  EXPECT_GT(wrong, 0) << "nothing to drop: the check below cannot fail";
+  EXPECT_NEAR(rows["vlad~near"][0], right / rows["vlad"][13], 1e-6) << r.out;
+  EXPECT_DOUBLE_EQ(rows["vlad~near"][7], 1.0) << "a wrong proposal was left:\n" << r.out;
+  const std::string desk = binloop::test::sharedData("tum_desk");
+  binloop::test::writeText(tmp / "gt.txt", "9 0\n");
+  const auto no_poses =
+      run("--sequence " + desk + " --gt " + (tmp / "gt.txt") + " --near-miss 5 --out " + (tmp / "o"));
+  EXPECT_EQ(no_poses.code, 2) << no_poses.out;
+  EXPECT_NE(no_poses.out.find("--near-miss needs a pose for every image"), std::string::npos) << no_poses.out;
 }

@@ -142,7 +142,7 @@ struct RecognizerOptions {
   std::string model_file;          // the trained model (vocabulary) of this model type
   double fabmap_l2_offset = 0.05;  // see FabmapRecognizer
   double hbow_min_bar = 0.005;     // see HbowRecognizer
-  int vladpq_shared_slack = 1;     // see VladPqRecognizer
+  int vladpq_shared_slack = 8;     // see VladPqRecognizer
   int vlad_reference_rank = 3;     // see VladRecognizer, HmvladRecognizer, VladPqRecognizer
   RankingParams ranking{};
   /// The extractor whose descriptors add() will get (extractor.expected; e.g.

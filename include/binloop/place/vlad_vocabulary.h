@@ -68,10 +68,17 @@ class VladVocabulary {
   std::vector<float> centres_;                       // node × 256 (nodes breadth first, root excluded)
   std::vector<uint32_t> first_child_, child_count_;  // per node + 1 (entry 0 = root)
   std::vector<uint32_t> level_begin_, level_count_;  // node ranges per level
-  std::vector<float> pca_, pca_mean_;                // per node: dims × 256 whitened rotation, 256 mean
-  // Derived from the two above by preparePca(), for residual(): per node the rotation transposed (256 ×
+  // Per node: the whitened rotation (dims × 256) as 8-bit integers with one scale per row, and the 256-float
+  // mean. Why 8 bits: float rotations of 128 dimensions made a 64-word model 8.5 MB, 8 bits 2.1 MB; the
+  // quantisation error (at most half a step of 1/127 of a row's largest entry) moved no loop-set result
+  // (docs/decisions.md, "LCS-PCA shipped in 96 and 64 dimensions").
+  std::vector<int8_t> pca_q_;
+  std::vector<float> pca_scale_, pca_mean_;
+  // Derived from the three above by preparePca(), for residual(): per node the rotation transposed (256 ×
   // dims, so that a set bit adds one contiguous row), the rotated centre and the rotated mean.
   std::vector<float> pca_t_, pca_centre_, pca_rot_mean_;
+  /// Keeps `rotation` (nodes × dims × 256 floats) as pca_q_ and pca_scale_.
+  void quantizePca(const std::vector<float>& rotation);
   void preparePca();
   void residual(const float* x, uint32_t node, float* out) const;
 };

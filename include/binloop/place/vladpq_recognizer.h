@@ -1,7 +1,7 @@
 #pragma once
 // `vladpq` (thesis 4.3 and "Loop closure detection with VLAD+PQ"): each keyframe's VLAD is also product
 // quantized into one code per word, and (word, code) pairs go into an inverted index. Keyframes that share
-// as many pairs as the best reference keyframe less a slack (default 1, at least one pair) are
+// as many pairs as the best reference keyframe less a slack (default 8 of 64 words, at least one pair) are
 // pre-candidates (the thesis asks for strictly more; with the thesis' 4 words the best reference usually
 // shares all 4, so strictly more would never pass, and even "as many" keeps out revisits the VLAD ranks
 // first — see ARCHITECTURE notes); they are verified like `vlad`, by binarized-VLAD Hamming distance below

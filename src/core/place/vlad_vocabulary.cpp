@@ -55,7 +55,7 @@ void VladVocabulary::residual(const float* x, uint32_t node, float* out) const {
   float n2 = 0;
   for (int j = 0; j < kD; ++j) n2 += (x[j] - c[j]) * (x[j] - c[j]);
   const float inv = n2 > 0 ? 1.0f / std::sqrt(n2) : 0.0f;
-  if (pca_.empty()) {
+  if (pca_t_.empty()) {
     for (int j = 0; j < kD; ++j) out[j] = (x[j] - c[j]) * inv;
     return;
   }
@@ -74,19 +74,34 @@ void VladVocabulary::residual(const float* x, uint32_t node, float* out) const {
   for (int i = 0; i < dims_; ++i) out[i] = inv * (out[i] - rc[i]) - rm[i];
 }
 
+void VladVocabulary::quantizePca(const std::vector<float>& rotation) {
+  const size_t rows = rotation.size() / kD;
+  pca_q_.assign(rotation.size(), 0);
+  pca_scale_.assign(rows, 0.f);
+  for (size_t row = 0; row < rows; ++row) {
+    const float* e = &rotation[row * kD];
+    float top = 0;
+    for (int j = 0; j < kD; ++j) top = std::max(top, std::fabs(e[j]));
+    const float scale = top > 0 ? top / 127.f : 1.f;
+    pca_scale_[row] = scale;
+    for (int j = 0; j < kD; ++j) pca_q_[row * kD + j] = static_cast<int8_t>(std::lround(e[j] / scale));
+  }
+}
+
 void VladVocabulary::preparePca() {
   pca_t_.clear(), pca_centre_.clear(), pca_rot_mean_.clear();
-  if (pca_.empty()) return;
+  if (pca_q_.empty()) return;
   const size_t nodes = centres_.size() / kD;
   pca_t_.assign(nodes * dims_ * kD, 0.f);
   pca_centre_.assign(nodes * dims_, 0.f);
   pca_rot_mean_.assign(nodes * dims_, 0.f);
   for (size_t node = 0; node < nodes; ++node) {
-    const float* rot = &pca_[node * dims_ * kD];
     for (int i = 0; i < dims_; ++i) {
+      const size_t row = node * dims_ + i;
+      const int8_t* q = &pca_q_[row * kD];
       double rc = 0, rm = 0;
       for (int j = 0; j < kD; ++j) {
-        const float e = rot[i * kD + j];
+        const float e = pca_scale_[row] * q[j];
         pca_t_[(node * kD + j) * dims_ + i] = e;
         rc += double(e) * centres_[node * kD + j];
         rm += double(e) * pca_mean_[node * kD + j];
@@ -142,7 +157,7 @@ void VladVocabulary::trainPca(const std::vector<float>& data) {
       parent = node + 1;
     }
   }
-  pca_.assign(nodes * params_.pca_dims * kD, 0.f);
+  std::vector<float> rotation(nodes * params_.pca_dims * kD, 0.f);
   pca_mean_.assign(nodes * kD, 0.f);
   for (size_t node = 0; node < nodes; ++node) {
     Eigen::MatrixXd r(members[node].size(), kD);
@@ -161,11 +176,14 @@ void VladVocabulary::trainPca(const std::vector<float>& data) {
     for (int i = 0; i < params_.pca_dims; ++i) {
       const int col = kD - 1 - i;  // eigenvalues ascend
       const double scale = 1.0 / std::sqrt(std::max(es.eigenvalues()(col), 1e-6));
-      for (int j = 0; j < kD; ++j)
-        pca_[(node * params_.pca_dims + i) * kD + j] = static_cast<float>(es.eigenvectors()(j, col) * scale);
+      for (int j = 0; j < kD; ++j) {
+        rotation[(node * params_.pca_dims + i) * kD + j] =
+            static_cast<float>(es.eigenvectors()(j, col) * scale);
+      }
     }
     for (int j = 0; j < kD; ++j) pca_mean_[node * kD + j] = static_cast<float>(mean(j));
   }
+  quantizePca(rotation);
 }
 
 VladVocabulary VladVocabulary::train(const std::vector<Descriptors>& images, const VladParams& p,
@@ -247,24 +265,26 @@ VladVocabulary VladVocabulary::train(const std::vector<Descriptors>& images, con
 }
 
 void VladVocabulary::write(ModelWriter& w) const {
+  // The fifth value says the rotation is stored in 8 bits (files with four values hold it as floats).
   const std::vector<float> par{params_.alpha, static_cast<float>(params_.pca_dims),
-                               static_cast<float>(params_.k), static_cast<float>(params_.levels)};
+                               static_cast<float>(params_.k), static_cast<float>(params_.levels), 1.f};
   w.section("VPAR", par);
   w.section("VCEN", centres_);
   w.section("VFCH", first_child_);
   w.section("VNCH", child_count_);
   w.section("VLVB", level_begin_);
   w.section("VLVC", level_count_);
-  w.section("VPCA", pca_);
+  w.section("VPCA", pca_q_);
+  w.section("VPCS", pca_scale_);
   w.section("VPCM", pca_mean_);
 }
 
 VladVocabulary VladVocabulary::read(ModelReader& r) {
   VladVocabulary v;
   const auto par = r.section<float>("VPAR");
-  if (par.size() != 4) {
+  if (par.size() != 4 && !(par.size() == 5 && par[4] == 1.f)) {
     throw PlaceError(r.path() + ": VLAD parameter section has " + std::to_string(par.size()) +
-                     " values, expected 4");
+                     " values, expected 4, or 5 with the last 1");
   }
   v.params_.alpha = par[0];
   v.params_.pca_dims = static_cast<int>(par[1]);
@@ -275,14 +295,22 @@ VladVocabulary VladVocabulary::read(ModelReader& r) {
   v.child_count_ = r.section<uint32_t>("VNCH");
   v.level_begin_ = r.section<uint32_t>("VLVB");
   v.level_count_ = r.section<uint32_t>("VLVC");
-  v.pca_ = r.section<float>("VPCA");
-  v.pca_mean_ = r.section<float>("VPCM");
   const size_t nodes = v.centres_.size() / kD;
   v.dims_ = v.params_.pca_dims > 0 ? v.params_.pca_dims : kD;
-  bool ok = v.centres_.size() == nodes * kD && nodes > 0 && v.first_child_.size() == nodes + 1 &&
-            v.child_count_.size() == nodes + 1 && !v.level_begin_.empty() &&
-            v.level_begin_.size() == v.level_count_.size() &&
-            (v.pca_.empty() || (v.pca_.size() == nodes * v.dims_ * kD && v.pca_mean_.size() == nodes * kD));
+  if (par.size() == 5) {
+    v.pca_q_ = r.section<int8_t>("VPCA");
+    v.pca_scale_ = r.section<float>("VPCS");
+  } else {
+    v.quantizePca(r.section<float>("VPCA"));
+  }
+  v.pca_mean_ = r.section<float>("VPCM");
+  bool ok =
+      v.centres_.size() == nodes * kD && nodes > 0 && v.first_child_.size() == nodes + 1 &&
+      v.child_count_.size() == nodes + 1 && !v.level_begin_.empty() &&
+      v.level_begin_.size() == v.level_count_.size() && v.params_.pca_dims >= 0 && v.params_.pca_dims <= kD &&
+      (v.params_.pca_dims > 0) == !v.pca_q_.empty() &&
+      (v.pca_q_.empty() || (v.pca_q_.size() == nodes * v.dims_ * kD &&
+                            v.pca_scale_.size() == nodes * v.dims_ && v.pca_mean_.size() == nodes * kD));
   for (size_t i = 0; ok && i <= nodes; ++i)
     ok = v.child_count_[i] == 0 || v.first_child_[i] + v.child_count_[i] <= nodes;
   if (!ok) throw PlaceError(r.path() + ": VLAD vocabulary sections are inconsistent");

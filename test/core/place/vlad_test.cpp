@@ -149,6 +149,34 @@ TEST(Vlad, LcsPcaWhitensResiduals) {
   }
 }
 
+// A file whose parameters promise whitened words but that holds no rotation is refused when read (it would
+// otherwise write 256 floats a word into 32-float slots); the same file without the promise loads.
+TEST(Vlad, AFileThatPromisesPcaWithoutRotationsIsRefused) {
+  TempDir dir;
+  auto save = [&](float pca_dims, const std::string& name) {
+    ModelHeader h;
+    h.type = ModelType::kVlad;
+    ModelWriter w(h);
+    w.section("VPAR", std::vector<float>{0.5f, pca_dims, 2.f, 1.f, 1.f});
+    w.section("VCEN", std::vector<float>(2 * 256, 0.5f));
+    w.section("VFCH", std::vector<uint32_t>{0, 0, 0});
+    w.section("VNCH", std::vector<uint32_t>{2, 0, 0});
+    w.section("VLVB", std::vector<uint32_t>{0});
+    w.section("VLVC", std::vector<uint32_t>{2});
+    w.section("VPCA", std::vector<int8_t>{});
+    w.section("VPCS", std::vector<float>{});
+    w.section("VPCM", std::vector<float>{});
+    w.save(dir / name);
+    return dir / name;
+  };
+  {
+    ModelReader plain(save(0, "plain.bin"));
+    EXPECT_EQ(VladVocabulary::read(plain).dims(), 256);
+  }
+  ModelReader promised(save(32, "promised.bin"));
+  EXPECT_THROW_WITH(VladVocabulary::read(promised), PlaceError, "VLAD vocabulary sections are inconsistent");
+}
+
 TEST(ProductQuantization, SdcAndAdcMatchBruteForce) {
   const int words = 3, dims = 5, m = 4;
   const auto vlads = randomVlads(60, words, dims, 11);
