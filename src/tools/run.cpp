@@ -83,6 +83,9 @@ struct Played {
   std::vector<msg::TrackedFrame> frames;
   int problems = 0;
   double max_lag_s = 0;  // with a rate: how far behind the sequence's clock a frame went in
+  // Per frame: how far behind the clock it went in (0 when on time or without a rate), and the wall time the
+  // SLAM took to return it, waits on the map included (where a lag builds up).
+  std::vector<double> lag_ms, process_ms;
   double wall_s = 0;
 };
 
@@ -93,6 +96,7 @@ Played play(SlamPipeline& slam, const KittiSequence& seq, long start, long end, 
   const auto t0 = std::chrono::steady_clock::now();
   for (long i = start; i < end; ++i) {
     std::optional<std::chrono::steady_clock::time_point> due;
+    double lag_s = 0;
     if (rate > 0) {
       due = t0 + std::chrono::duration_cast<std::chrono::steady_clock::duration>(
                      std::chrono::duration<double>((seq.times()[i] - seq.times()[start]) / rate));
@@ -100,8 +104,10 @@ Played play(SlamPipeline& slam, const KittiSequence& seq, long start, long end, 
       if (now < *due)
         std::this_thread::sleep_until(*due);
       else
-        p.max_lag_s = std::max(p.max_lag_s, std::chrono::duration<double>(now - *due).count());
+        lag_s = std::chrono::duration<double>(now - *due).count();
+      p.max_lag_s = std::max(p.max_lag_s, lag_s);
     }
+    const auto handed = std::chrono::steady_clock::now();
     msg::TrackedFrame tf;
     try {
       tf = slam.process(seq.load(static_cast<size_t>(i)), due);
@@ -112,6 +118,9 @@ Played play(SlamPipeline& slam, const KittiSequence& seq, long start, long end, 
       if (!p.frames.empty()) tf.T_w_c = p.frames.back().T_w_c;
       tf.problem = std::string(e.what()) + "; frame skipped";
     }
+    p.lag_ms.push_back(1e3 * lag_s);
+    p.process_ms.push_back(1e3 *
+                           std::chrono::duration<double>(std::chrono::steady_clock::now() - handed).count());
     if (!tf.problem.empty() && p.problems++ < 20)
       std::cerr << "\nrun: frame " << i << ": " << tf.problem << "\n";
     p.frames.push_back(tf);
@@ -154,16 +163,18 @@ struct FrameStats {
 };
 
 // timing.csv: a row a frame, with its keyframe's mapping times.
-FrameStats writeTiming(const fs::path& out, const std::vector<msg::TrackedFrame>& frames,
-                       const SlamPipeline& slam) {
+FrameStats writeTiming(const fs::path& out, const Played& played, const SlamPipeline& slam) {
+  const std::vector<msg::TrackedFrame>& frames = played.frames;
   std::map<SlamKeyframeId, const SlamPipeline::MappingTime*> map_time;
   for (const auto& m : slam.mappingTimes()) map_time[m.keyframe] = &m;
   std::ofstream timing(out / "timing.csv");
   timing << "frame,state,features,stereo_matches,tracked_points,keyframe,extract_ms,stereo_ms,track_ms,"
-            "mapping_ms,ba_ms,triangulation_ms,points_triangulated,reference_points,mapping_queue\n";
+            "mapping_ms,ba_ms,triangulation_ms,points_triangulated,reference_points,mapping_queue,lag_ms,"
+            "process_ms\n";
   std::vector<double> ex, stt, tr, mp, ba, tri;
   FrameStats s;
-  for (const msg::TrackedFrame& tf : frames) {
+  for (size_t i = 0; i < frames.size(); ++i) {
+    const msg::TrackedFrame& tf = frames[i];
     const auto it = map_time.find(tf.new_keyframe);
     const bool kf = tf.new_keyframe != kNoId && it != map_time.end();
     timing << tf.frame_index << "," << msg::toString(tf.state) << "," << tf.features << ","
@@ -171,7 +182,8 @@ FrameStats writeTiming(const fs::path& out, const std::vector<msg::TrackedFrame>
            << tf.extract_ms << "," << tf.stereo_ms << "," << tf.track_ms << ","
            << (kf ? it->second->total_ms : 0) << "," << (kf ? it->second->ba_ms : 0) << ","
            << (kf ? it->second->triangulation_ms : 0) << "," << (kf ? it->second->points_triangulated : 0)
-           << "," << tf.reference_points << "," << tf.mapping_queue << "\n";
+           << "," << tf.reference_points << "," << tf.mapping_queue << "," << played.lag_ms[i] << ","
+           << played.process_ms[i] << "\n";
     if (tf.features > 0) {
       ex.push_back(tf.extract_ms);
       stt.push_back(tf.stereo_ms);
@@ -383,7 +395,7 @@ int main(int argc, char** argv) {
     const LocalMapper& mapper = slam.mapper();
     const std::vector<msg::TrackedFrame>& frames = played.frames;
     writeTrajectories(out, frames, mapper);
-    const FrameStats stats = writeTiming(out, frames, slam);
+    const FrameStats stats = writeTiming(out, played, slam);
     const double fps = frames.size() / std::max(played.wall_s, 1e-9);
     JsonObject js;
     js.add("sequence", seq.directory()).add("frames", frames.size()).add("start", start).add("end", end);
