@@ -67,7 +67,8 @@ int main(int argc, char** argv) {
               "3")
       .option("near-miss",
               "with poses: also score each model with proposals this close to their query (metres) that are "
-              "not ground-truth loops counted neither right nor wrong, as <model>~near (0 = off)",
+              "not ground-truth loops counted neither right nor wrong, as <model>~near and <model>+cN~near "
+              "(0 = off)",
               "0")
       .option("segment-gap", "frames between ground-truth queries that start a new revisit segment", "50")
       .option("fabmap-l2-offset",
@@ -206,8 +207,13 @@ int main(int argc, char** argv) {
 
     std::vector<ModelRun> runs;
     // Metrics of one run's predictions, its missed segments, and its PR curve file.
-    auto score = [&](ModelRun& run) {
-      run.metrics = evaluateLoops(run.predictions, truth, positives);
+    // A proposal just beyond the ground truth's radius is a near miss, not a wrong place: the ~near rows
+    // count it neither right nor wrong, so that one near miss does not set the bar for a whole route.
+    std::set<std::pair<int, int>> near_pairs;
+    if (near_miss > 0)
+      for (const auto& pair : loopPairsFromPoses(poses, near_miss, 0)) near_pairs.insert(pair);
+    auto score = [&](ModelRun& run, const std::set<std::pair<int, int>>& ignored) {
+      run.metrics = evaluateLoops(run.predictions, truth, positives, ignored);
       run.segments_found = 0;
       run.missed_segments.clear();
       const double t = run.metrics.threshold_100p;
@@ -297,28 +303,24 @@ int main(int argc, char** argv) {
       }
       bar.finish();
       run.bytes_per_kf = rec->indexBytesPerKeyframe();
-      score(run);
+      score(run, {});
+      const size_t first = runs.size();
       runs.push_back(run);
       if (consistency > 0) {
         // Groups are a keyframe and the two on each side; two groups overlap within 4 keyframes.
         ModelRun c = run;
         c.name = name + "+c" + std::to_string(consistency);
         c.predictions = consistentPredictions(offers, consistency, 4 * step);
-        score(c);
+        score(c, {});
         runs.push_back(std::move(c));
       }
       if (near_miss > 0) {
-        // A proposal just beyond the ground truth's radius is a near miss, not a wrong place: dropped, so
-        // one near miss does not set the bar for a whole route.
-        ModelRun n = run;
-        n.name = name + "~near";
-        for (auto& p : n.predictions) {
-          if (p.candidate < 0 || truth.count({p.query, p.candidate})) continue;
-          if ((poses[p.query].translation() - poses[p.candidate].translation()).norm() <= near_miss)
-            p = LoopPrediction{p.query, -1, 0};
+        for (size_t i = first, n = runs.size(); i < n; ++i) {
+          ModelRun near = runs[i];
+          near.name += "~near";
+          score(near, near_pairs);
+          runs.push_back(std::move(near));
         }
-        score(n);
-        runs.push_back(std::move(n));
       }
     }
 
@@ -333,10 +335,12 @@ int main(int argc, char** argv) {
            "found,segments,"
            "positives,keyframes\n";
     std::ostringstream table;
-    table << std::left << std::setw(10) << "model" << std::right << std::setw(8) << "R@100P" << std::setw(7)
-          << "AUC" << std::setw(9) << "same" << std::setw(9) << "reverse" << std::setw(10) << "segments"
-          << std::setw(10) << "sig ms" << std::setw(9) << "p95" << std::setw(10) << "query ms" << std::setw(9)
-          << "p95" << std::setw(10) << "B/kf"
+    int name_width = 10;  // "vlad+c3~near" and longer names get their own column
+    for (const auto& r : runs) name_width = std::max(name_width, static_cast<int>(r.name.size()) + 1);
+    table << std::left << std::setw(name_width) << "model" << std::right << std::setw(8) << "R@100P"
+          << std::setw(7) << "AUC" << std::setw(9) << "same" << std::setw(9) << "reverse" << std::setw(10)
+          << "segments" << std::setw(10) << "sig ms" << std::setw(9) << "p95" << std::setw(10) << "query ms"
+          << std::setw(9) << "p95" << std::setw(10) << "B/kf"
           << "  P/R at bar\n";
     for (const auto& r : runs) {
       const auto& m = r.metrics;
@@ -349,8 +353,8 @@ int main(int argc, char** argv) {
           << (reverse_dir.empty() ? std::string("") : std::to_string(rev)) << "," << r.segments_found << ","
           << segments.size() << "," << m.positives << "," << kf_frames.size() << "\n";
       char line[256];
-      std::snprintf(line, sizeof line, "%-10s%8.3f%7.3f%9s%9s%10s%10.3f%9.3f%10.4f%9.4f%10zu  %.2f/%.2f\n",
-                    r.name.c_str(), m.r_at_100p, m.auc,
+      std::snprintf(line, sizeof line, "%-*s%8.3f%7.3f%9s%9s%10s%10.3f%9.3f%10.4f%9.4f%10zu  %.2f/%.2f\n",
+                    name_width, r.name.c_str(), m.r_at_100p, m.auc,
                     same_dir.empty() ? "-" : std::to_string(same).substr(0, 5).c_str(),
                     reverse_dir.empty() ? "-" : std::to_string(rev).substr(0, 5).c_str(),
                     (std::to_string(r.segments_found) + "/" + std::to_string(segments.size())).c_str(),

@@ -82,7 +82,6 @@ LoopClosingSetup loopClosingSetup(const CliArgs& args, const SlamConfig& config,
 struct Played {
   std::vector<msg::TrackedFrame> frames;
   int problems = 0;
-  double max_lag_s = 0;  // with a rate: how far behind the sequence's clock a frame went in
   // Per frame: how far behind the clock it went in (0 when on time or without a rate), and the wall time the
   // SLAM took to return it, waits on the map included (where a lag builds up).
   std::vector<double> lag_ms, process_ms;
@@ -105,7 +104,6 @@ Played play(SlamPipeline& slam, const KittiSequence& seq, long start, long end, 
         std::this_thread::sleep_until(*due);
       else
         lag_s = std::chrono::duration<double>(now - *due).count();
-      p.max_lag_s = std::max(p.max_lag_s, lag_s);
     }
     const auto handed = std::chrono::steady_clock::now();
     msg::TrackedFrame tf;
@@ -397,13 +395,15 @@ int main(int argc, char** argv) {
     writeTrajectories(out, frames, mapper);
     const FrameStats stats = writeTiming(out, played, slam);
     const double fps = frames.size() / std::max(played.wall_s, 1e-9);
+    const double max_lag_ms =
+        played.lag_ms.empty() ? 0.0 : *std::max_element(played.lag_ms.begin(), played.lag_ms.end());
     JsonObject js;
     js.add("sequence", seq.directory()).add("frames", frames.size()).add("start", start).add("end", end);
     js.add("keyframes", mapper.keyframeCount()).add("keyframes_made", slam.mappingTimes().size());
     js.add("map_points", mapper.pointCount()).add("lost_frames", stats.lost);
     js.add("relocalizations", stats.relocalized).add("problems", played.problems);
     js.add("wall_s", played.wall_s).add("frames_per_s", fps);
-    js.add("mode", lockstep ? "lockstep" : "threaded").add("rate", rate).add("max_lag_s", played.max_lag_s);
+    js.add("mode", lockstep ? "lockstep" : "threaded").add("rate", rate).add("max_lag_s", max_lag_ms / 1e3);
     js.add("seed", args.integer("seed")).add("detector", detector);
     js.add("reloc_vocab", config.tracker.vocabulary ? reloc_vocab : std::string("none"));
     for (const auto& [name, v] : stats.times) addTimes(js, name, v);

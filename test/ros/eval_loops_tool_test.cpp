@@ -20,6 +20,17 @@ binloop::test::CommandResult trainVlad(const std::string& images, const std::str
   return binloop::test::runCommand(std::string(BINLOOP_TOOL_DIR) + "/train vlad --images " + images + " " +
                                    options + " --out " + out);
 }
+/// A CSV file's rows, each split at its commas (the tools quote nothing).
+std::vector<std::vector<std::string>> csvRows(const std::string& path) {
+  std::vector<std::vector<std::string>> rows;
+  std::istringstream text(binloop::test::readText(path));
+  for (std::string line; std::getline(text, line);) {
+    std::istringstream cells(line);
+    rows.emplace_back();
+    for (std::string cell; std::getline(cells, cell, ',');) rows.back().push_back(cell);
+  }
+  return rows;
+}
 }  // namespace
 
 // TUM desk 1 and 10 (indices 0 and 9) view the same desk. The tracked kitti08 VLAD-family models are
@@ -163,27 +174,21 @@ TEST(EvalLoopsTool, NearMissesCountNeitherRightNorWrong) {
   binloop::test::TempDir tmp;
   const auto r =
       run("--sequence " + seq + " --models vlad --vocab-dir " + vocab +
-          " --window 2 --reference 1 --gt-radius 4 --near-miss 1000 --consistency 0 --out " + (tmp / "out"));
+          " --window 2 --reference 1 --gt-radius 4 --near-miss 1000 --consistency 2 --out " + (tmp / "out"));
   ASSERT_EQ(r.code, 0) << r.out;
-  std::istringstream summary(binloop::test::readText(tmp / "out/summary.csv"));
   std::map<std::string, std::vector<double>> rows;  // model -> r_at_100p, ..., precision_at_bar (column 9)
-  for (std::string line; std::getline(summary, line);) {
-    std::istringstream cells(line);
-    std::string name, cell;
-    std::getline(cells, name, ',');
-    while (std::getline(cells, cell, ',')) rows[name].push_back(cell.empty() ? -1 : std::atof(cell.c_str()));
+  for (const auto& cells : csvRows(tmp / "out/summary.csv")) {
+    for (size_t c = 1; c < cells.size(); ++c)
+      rows[cells[0]].push_back(cells[c].empty() ? -1 : std::atof(cells[c].c_str()));
   }
   ASSERT_EQ(rows.count("vlad"), 1u) << r.out;
   ASSERT_EQ(rows.count("vlad~near"), 1u) << r.out;
+  ASSERT_EQ(rows.count("vlad+c2~near"), 1u) << "the consistency row gets its near-miss twin too:\n" << r.out;
+  EXPECT_DOUBLE_EQ(rows["vlad+c2~near"][7], 1.0) << "a wrong proposal was left:\n" << r.out;
   // Only right proposals left: R@100P is the share of findable queries whose proposal is right.
-  std::istringstream queries(binloop::test::readText(tmp / "out/queries_vlad.csv"));
   int right = 0, wrong = 0;
-  for (std::string line; std::getline(queries, line);) {
-    std::vector<std::string> cells;
-    std::istringstream cs(line);
-    for (std::string c; std::getline(cs, c, ',');) cells.push_back(c);
+  for (const auto& cells : csvRows(tmp / "out/queries_vlad.csv"))
     if (cells.size() > 4 && !cells[2].empty() && cells[0] != "query") (cells[4] == "1" ? right : wrong)++;
-  }
   EXPECT_GT(wrong, 0) << "nothing to drop: the check below cannot fail";
   EXPECT_NEAR(rows["vlad~near"][0], right / rows["vlad"][13], 1e-6) << r.out;
   EXPECT_DOUBLE_EQ(rows["vlad~near"][7], 1.0) << "a wrong proposal was left:\n" << r.out;

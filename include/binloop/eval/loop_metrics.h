@@ -35,9 +35,12 @@ struct LoopMetrics {
 };
 
 /// `truth`: every (query, ref) ground-truth pair; `positive_queries`: queries that have at least one
-/// findable ref (ref stored before the query and outside its ignored window).
+/// findable ref (ref stored before the query and outside its ignored window). A prediction whose pair is in
+/// `ignored` (and not in `truth`) counts neither right nor wrong, as if the query had proposed nothing: a
+/// near miss just beyond the ground truth's radius should not set the bar for a whole route.
 LoopMetrics evaluateLoops(const std::vector<LoopPrediction>& predictions,
-                          const std::set<std::pair<int, int>>& truth, const std::set<int>& positive_queries);
+                          const std::set<std::pair<int, int>>& truth, const std::set<int>& positive_queries,
+                          const std::set<std::pair<int, int>>& ignored = {});
 
 /// Of `queries`, how many have a correct prediction at or above (tier, threshold).
 int foundAt(const std::vector<LoopPrediction>& predictions, const std::set<std::pair<int, int>>& truth,

@@ -6,13 +6,16 @@
 namespace binloop {
 
 LoopMetrics evaluateLoops(const std::vector<LoopPrediction>& predictions,
-                          const std::set<std::pair<int, int>>& truth, const std::set<int>& positive_queries) {
+                          const std::set<std::pair<int, int>>& truth, const std::set<int>& positive_queries,
+                          const std::set<std::pair<int, int>>& ignored) {
   LoopMetrics m;
   m.positives = static_cast<int>(positive_queries.size());
   m.threshold_100p = std::numeric_limits<double>::infinity();
   std::vector<const LoopPrediction*> p;
-  for (const auto& x : predictions)
-    if (x.candidate >= 0) p.push_back(&x);
+  for (const auto& x : predictions) {
+    const std::pair<int, int> pair{x.query, x.candidate};
+    if (x.candidate >= 0 && (truth.count(pair) || !ignored.count(pair))) p.push_back(&x);
+  }
   std::sort(p.begin(), p.end(), [](auto* a, auto* b) {
     return a->tier != b->tier ? a->tier > b->tier : a->confidence > b->confidence;
   });

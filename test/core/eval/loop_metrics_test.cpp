@@ -36,3 +36,15 @@ TEST(LoopMetrics, HigherTierRanksFirst) {
   EXPECT_EQ(m.tier_100p, 1);
   EXPECT_EQ(foundAt(p, {{10, 0}, {11, 1}}, {10}, m.threshold_100p, m.tier_100p), 1);
 }
+
+TEST(LoopMetrics, IgnoredPairsCountNeitherRightNorWrong) {
+  // Query 14's false loop at 0.7 is a near miss: ignored, it no longer stops the recall at 100 % precision.
+  // An ignored pair that the truth lists still counts as right.
+  const std::set<std::pair<int, int>> truth{{10, 0}, {11, 1}, {12, 2}};
+  const std::vector<LoopPrediction> p{{10, 0, 0.9}, {14, 5, 0.7}, {11, 1, 0.6}, {12, 8, 0.5}};
+  EXPECT_DOUBLE_EQ(evaluateLoops(p, truth, {10, 11, 12}).r_at_100p, 1.0 / 3);
+  const LoopMetrics m = evaluateLoops(p, truth, {10, 11, 12}, {{14, 5}, {10, 0}});
+  EXPECT_DOUBLE_EQ(m.r_at_100p, 2.0 / 3);
+  ASSERT_EQ(m.curve.size(), 3u);
+  EXPECT_DOUBLE_EQ(m.curve.back().precision, 2.0 / 3);
+}
