@@ -11,7 +11,9 @@
 // descriptors;
 // - essential-graph optimisation (build + optim/pose_graph.h) of a loop of N keyframes driven round a
 //   circle, each keyframe covisible (weight >= 100) with its 8 successors, as on rendered route 00 (1395
-//   keyframes, 11138 edges), 0.5 % drift, one loop edge from the last keyframe to the first.
+//   keyframes, 11138 edges), 0.5 % drift, one loop edge from the last keyframe to the first;
+// - tracking's map replica (map/map_replica.h) taking the whole map after a loop correction, 1300 keyframes
+//   of 2000 keypoints with 600 on points, as between two frames on rendered route 00.
 // One thread (Ceres num_threads = 1).
 //
 //   bench_closing_bench [--runs N]
@@ -30,6 +32,7 @@
 #include "bench_stats.h"
 #include "binloop/loop/essential_graph.h"
 #include "binloop/loop/loop_verifier.h"
+#include "binloop/map/map_replica.h"
 #include "binloop/optim/pose_graph.h"
 #include "binloop/place/descriptor_block.h"
 #include "binloop/util/hash_random.h"
@@ -177,6 +180,76 @@ Row essentialGraph(int n, int runs) {
   return r;
 }
 
+// Tracking's map replica taking the whole map after a loop correction (every keyframe moved, every point
+// moved, a few observations changed), as it does between two frames: on rendered route 00 at 1x, 1300
+// keyframes, and one more tracking made meanwhile. Each keyframe has 2000 keypoints, 600 of them on points,
+// each point seen by 5 consecutive keyframes (~156k points).
+Row replicaCorrection(int n, int runs) {
+  Row r{"tracking's map replica applies a whole-map correction, " + std::to_string(n) +
+            " keyframes x 2000 keypoints (600 on points, each seen 5 times; a sixth lose 10)",
+        "< 100 ms (one frame at 10 Hz)",
+        "",
+        {}};
+  constexpr int kOnPoints = 600, kSeen = 5, kNewPerKeyframe = kOnPoints / kSeen;
+  MapReplica base;
+  msg::LocalMapUpdate u;
+  u.correction = true;
+  u.corrections_seen = 1;
+  for (int i = 0; i < n; ++i) {
+    msg::KeyFrame kf;
+    kf.id = kf.state.id = static_cast<uint64_t>(i + 1);
+    kf.state.T_w_c.translation() = Eigen::Vector3d(0, 0, 1.0 * i);
+    if (i > 0) kf.state.parent = static_cast<uint64_t>(i);
+    kf.state.point_ids.assign(2000, kNoId);
+    for (int j = 0; j < kNewPerKeyframe; ++j) {
+      msg::MapPoint p;
+      p.id = static_cast<uint64_t>(i) * kNewPerKeyframe + j + 1;
+      p.p_w = Eigen::Vector3d(j % 20, j / 20, 1.0 * i + 10);
+      p.reference = kf.id;
+      kf.new_points.push_back(p);
+    }
+    // Points made by this keyframe and the 4 before it, spread over the keypoints.
+    for (int k = 0; k < kOnPoints; ++k) {
+      const int maker = i - k / kNewPerKeyframe;
+      if (maker < 0) continue;
+      kf.state.point_ids[static_cast<size_t>(k) * 3] =
+          static_cast<uint64_t>(maker) * kNewPerKeyframe + k % kNewPerKeyframe + 1;
+    }
+    base.add(kf);
+    msg::KeyframeState moved = kf.state;
+    moved.T_w_c.translation().x() += 0.01 * i;
+    if (i % 6 == 0)  // a sixth of them lost 10 points (culled or fused across the loop)
+      for (size_t k = 0; k < 30; k += 3) moved.point_ids[k] = kNoId;
+    u.keyframes.push_back(moved);
+    for (msg::MapPoint p : kf.new_points) {
+      p.p_w.x() += 0.01 * i;
+      u.points.push_back(p);
+    }
+  }
+  msg::KeyFrame unsent;  // made by tracking after the correction left mapping: it moves with its parent
+  unsent.id = unsent.state.id = static_cast<uint64_t>(n + 1);
+  unsent.state.parent = static_cast<uint64_t>(n);
+  unsent.state.point_ids.assign(2000, kNoId);
+  for (int j = 0; j < kNewPerKeyframe; ++j) {
+    msg::MapPoint p;
+    p.id = static_cast<uint64_t>(n) * kNewPerKeyframe + j + 1;
+    p.reference = unsent.id;
+    unsent.new_points.push_back(p);
+    unsent.state.point_ids[static_cast<size_t>(j) * 3] = p.id;
+  }
+  base.add(unsent);
+  for (int i = 0; i < runs; ++i) {
+    MapReplica replica = base;
+    const auto t0 = Clock::now();
+    replica.apply(u, true);
+    r.runs.push_back(ms(t0));
+    if (i == 0)
+      std::fprintf(stderr, "closing_bench: replica of %zu keyframes, %zu points\n", replica.keyframeCount(),
+                   replica.pointCount());
+  }
+  return r;
+}
+
 }  // namespace
 
 int main(int argc, char** argv) {
@@ -190,6 +263,7 @@ int main(int argc, char** argv) {
   rows.push_back(bruteForce(false, runs * 3));
   rows.push_back(essentialGraph(250, runs));
   rows.push_back(essentialGraph(1400, std::max(1, runs / 2)));
+  rows.push_back(replicaCorrection(1300, runs));
   // Global BA runs inside the SLAM (mapping.global_ba_after_loop); its time is in summary.json
   // (global_ba_ms).
   rows.push_back(
@@ -216,7 +290,8 @@ int main(int argc, char** argv) {
   record.add("cpu", bench::cpuModel()).add("verification_ms", median(rows[0].runs));
   record.add("verification_by_words_ms", median(rows[1].runs))
       .add("essential_graph_250_ms", median(rows[4].runs));
-  record.add("essential_graph_1400_ms", median(rows[5].runs));
+  record.add("essential_graph_1400_ms", median(rows[5].runs))
+      .add("replica_correction_ms", median(rows[6].runs));
   bench::writeRecord(record, ".build/bench/closing.json");
   return 0;
 }

@@ -7,6 +7,7 @@
 
 #include "binloop/map/keypoint_geometry.h"
 #include "binloop/util/stopwatch.h"
+#include "binloop/util/thread_priority.h"
 #include "global_ba_job.h"
 
 namespace binloop {
@@ -115,6 +116,9 @@ void LocalMapper::startGlobalBa(const std::vector<SlamKeyframeId>& keyframes) {
   ++global_ba_.started;
   GlobalBaJob* j = job.get();
   job->thread = std::thread([j, params = globalBaParams(), cam = camera_] {
+    // Seconds of BA on one core must not slow tracking: on 2 cores at 1x, rendered 00's last loop left
+    // tracking 0.4 s behind the camera for 5 s while it ran (2026-12-02-correction-stall.md).
+    lowerThisThreadPriority(10);
     // An exception leaving a thread's function ends the process: it is kept and reported at the merge.
     try {
       j->result = binloop::localBundleAdjustment(cam, j->setup.problem, params, &j->abort);
