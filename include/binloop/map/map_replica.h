@@ -55,12 +55,8 @@ class MapReplica {
   void load(StateReader& r);
 
  private:
-  void unlink(MapPointId p, SlamKeyframeId k);
-  void link(MapPointId p, SlamKeyframeId k);
   void unlinkKeyframe(const msg::KeyframeState& kf);
   void linkKeyframe(const msg::KeyframeState& kf);
-  /// kf's observers after its point_ids changed from `before` (kf holds the new, resolved ids).
-  void relinkKeyframe(const msg::KeyframeState& kf, const std::vector<MapPointId>& before);
   /// For apply(u, true): each held keyframe that `u` neither names nor culls -> how it moves.
   std::unordered_map<SlamKeyframeId, Pose3> unsentMoves(const msg::LocalMapUpdate& u) const;
 

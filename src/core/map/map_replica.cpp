@@ -1,7 +1,6 @@
 #include "binloop/map/map_replica.h"
 
 #include <algorithm>
-#include <optional>
 #include <unordered_set>
 
 namespace binloop {
@@ -10,60 +9,29 @@ namespace {
 const std::vector<SlamKeyframeId> kNone;
 }
 
-void MapReplica::unlink(MapPointId p, SlamKeyframeId k) {
-  auto it = observers_.find(p);
-  if (it == observers_.end()) return;
-  auto& v = it->second;
-  v.erase(std::remove(v.begin(), v.end(), k), v.end());
-  if (v.empty()) observers_.erase(it);
-}
-
-void MapReplica::link(MapPointId p, SlamKeyframeId k) {
-  auto& v = observers_[p];
-  if (std::find(v.begin(), v.end(), k) == v.end()) v.push_back(k);
-}
-
 void MapReplica::unlinkKeyframe(const msg::KeyframeState& kf) {
-  for (MapPointId p : kf.point_ids)
-    if (p != kNoId) unlink(p, kf.id);
+  for (MapPointId p : kf.point_ids) {
+    if (p == kNoId) continue;
+    auto it = observers_.find(p);
+    if (it == observers_.end()) continue;
+    auto& v = it->second;
+    v.erase(std::remove(v.begin(), v.end(), kf.id), v.end());
+    if (v.empty()) observers_.erase(it);
+  }
 }
 
 void MapReplica::linkKeyframe(const msg::KeyframeState& kf) {
-  for (MapPointId p : kf.point_ids)
-    if (p != kNoId) link(p, kf.id);
-}
-
-void MapReplica::relinkKeyframe(const msg::KeyframeState& kf, const std::vector<MapPointId>& before) {
-  const std::vector<MapPointId>& after = kf.point_ids;
-  // A loop correction or a global BA sends every keyframe again with its observations mostly as they were:
-  // only the slots that changed are relinked. Relinking every slot of 1300 keyframes took 120 ms of the
-  // 0.3 s tracking waited at a correction on rendered route 00 at 1x (2026-12-02-correction-stall.md).
-  constexpr size_t kMaxChangedSlots = 64;
-  std::vector<size_t> changed;
-  if (before.size() == after.size()) {
-    for (size_t i = 0; i < after.size() && changed.size() <= kMaxChangedSlots; ++i)
-      if (before[i] != after[i]) changed.push_back(i);
+  for (MapPointId p : kf.point_ids) {
+    if (p == kNoId) continue;
+    auto& v = observers_[p];
+    if (std::find(v.begin(), v.end(), kf.id) == v.end()) v.push_back(kf.id);
   }
-  if (before.size() != after.size() || changed.size() > kMaxChangedSlots) {
-    for (MapPointId p : before)
-      if (p != kNoId) unlink(p, kf.id);
-    linkKeyframe(kf);
-    return;
-  }
-  auto holds = [](const std::vector<MapPointId>& ids, MapPointId p) {
-    return std::find(ids.begin(), ids.end(), p) != ids.end();
-  };
-  for (size_t i : changed)  // a point seen in another slot too stays linked
-    if (before[i] != kNoId && !holds(after, before[i])) unlink(before[i], kf.id);
-  for (size_t i : changed)
-    if (after[i] != kNoId) link(after[i], kf.id);
 }
 
 void MapReplica::upsertKeyframe(const msg::KeyframeState& kf) {
   auto it = map_.keyframes().find(kf.id);
-  std::optional<std::vector<MapPointId>> before;
   if (it != map_.keyframes().end()) {
-    before = std::move(it->second.point_ids);
+    unlinkKeyframe(it->second);
     it->second = kf;
   } else {
     it = map_.keyframes().emplace(kf.id, kf).first;
@@ -72,10 +40,7 @@ void MapReplica::upsertKeyframe(const msg::KeyframeState& kf) {
   for (MapPointId& p : it->second.point_ids) {
     if (p != kNoId) p = resolve(p);
   }
-  if (before)
-    relinkKeyframe(it->second, *before);
-  else
-    linkKeyframe(it->second);
+  linkKeyframe(it->second);
   if (counterOf(kf.id) > counterOf(last_keyframe_)) last_keyframe_ = kf.id;
 }
 
@@ -147,17 +112,13 @@ void MapReplica::apply(const msg::LocalMapUpdate& u, bool carry_unsent) {
     auto it = map_.keyframes().find(id);
     if (it != map_.keyframes().end()) it->second.T_w_c = orthonormalized(d * it->second.T_w_c);
   }
-  // The points those keyframes made move with them, unless `u` sent one (the sender's position stands).
-  std::unordered_map<MapPointId, const Pose3*> carried;
-  for (const auto& [id, p] : map_.points()) {
+  std::unordered_set<MapPointId> sent;
+  for (const auto& p : u.points) sent.insert(p.id);
+  for (auto& [id, p] : map_.points()) {
     auto m = moves.find(p.reference);
-    if (m != moves.end()) carried.emplace(id, &m->second);
-  }
-  for (const auto& p : u.points) carried.erase(p.id);
-  for (const auto& [id, d] : carried) {
-    msg::MapPoint& p = map_.points().at(id);
-    p.p_w = *d * p.p_w;
-    p.normal = (d->linear().cast<float>() * p.normal).normalized();
+    if (m == moves.end() || sent.count(id)) continue;
+    p.p_w = m->second * p.p_w;
+    p.normal = (m->second.linear().cast<float>() * p.normal).normalized();
   }
 }
 

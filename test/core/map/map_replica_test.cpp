@@ -129,43 +129,6 @@ TEST(MapReplica, ReupsertedKeyframeRelinksObservers) {
   EXPECT_EQ(sorted(m.observers(P4)), (Ids{K1, K2}));
 }
 
-TEST(MapReplica, ReupsertedKeyframeKeepsAPointThatMovedToAnotherSlot) {
-  MapReplica m = twoKeyframes();
-  // K1's P1 now seen at its second keypoint; its first keypoint lost it.
-  m.upsertKeyframe(keyframe(K1, {kNoId, P1, P2, P3}));
-  EXPECT_EQ(m.observers(P1), (Ids{K1}));
-  // P2 dropped from one of two slots naming it: still observed.
-  m.upsertKeyframe(keyframe(K1, {P2, P1, P2, P3}));
-  m.upsertKeyframe(keyframe(K1, {kNoId, P1, P2, P3}));
-  EXPECT_EQ(sorted(m.observers(P2)), (Ids{K1, K2}));
-  // Gone from every slot: unlinked.
-  m.upsertKeyframe(keyframe(K1, {kNoId, kNoId, P2, P3}));
-  EXPECT_TRUE(m.observers(P1).empty());
-}
-
-TEST(MapReplica, ReupsertedKeyframeWithOtherKeypointsOrManyChangesRelinksAll) {
-  MapReplica m = twoKeyframes();
-  m.upsertKeyframe(keyframe(K1, {P4, P1}));  // fewer keypoints than before
-  EXPECT_EQ(m.observers(P1), (Ids{K1}));
-  EXPECT_EQ(m.observers(P2), (Ids{K2}));
-  EXPECT_EQ(m.observers(P3), (Ids{K2}));
-  EXPECT_EQ(sorted(m.observers(P4)), (Ids{K1, K2}));
-  // Every one of 200 slots changing (past the slot-wise limit) relinks the whole keyframe.
-  std::vector<MapPointId> many(200, kNoId), others(200, kNoId);
-  for (size_t i = 0; i < many.size(); ++i) {
-    many[i] = trackingId(1000 + i);
-    others[i] = trackingId(2000 + i);
-    m.upsertPoint(point(many[i]));
-    m.upsertPoint(point(others[i]));
-  }
-  m.upsertKeyframe(keyframe(K3, many));
-  m.upsertKeyframe(keyframe(K3, others));
-  for (size_t i = 0; i < many.size(); ++i) {
-    EXPECT_TRUE(m.observers(many[i]).empty()) << i;
-    EXPECT_EQ(m.observers(others[i]), (Ids{K3})) << i;
-  }
-}
-
 TEST(MapReplica, KeyframeNamingAPointTwiceIsOneObserver) {
   MapReplica m;
   m.upsertPoint(point(P1));
