@@ -195,7 +195,8 @@ Row replicaCorrection(int n, int runs) {
   msg::LocalMapUpdate u;
   u.correction = true;
   u.corrections_seen = 1;
-  for (int i = 0; i < n; ++i) {
+  // Keyframe i (1-based id i + 1) and the kNewPerKeyframe points it makes.
+  auto keyframe = [&](int i) {
     msg::KeyFrame kf;
     kf.id = kf.state.id = static_cast<uint64_t>(i + 1);
     kf.state.T_w_c.translation() = Eigen::Vector3d(0, 0, 1.0 * i);
@@ -208,6 +209,10 @@ Row replicaCorrection(int n, int runs) {
       p.reference = kf.id;
       kf.new_points.push_back(p);
     }
+    return kf;
+  };
+  for (int i = 0; i < n; ++i) {
+    msg::KeyFrame kf = keyframe(i);
     // Points made by this keyframe and the 4 before it, spread over the keypoints.
     for (int k = 0; k < kOnPoints; ++k) {
       const int maker = i - k / kNewPerKeyframe;
@@ -226,17 +231,10 @@ Row replicaCorrection(int n, int runs) {
       u.points.push_back(p);
     }
   }
-  msg::KeyFrame unsent;  // made by tracking after the correction left mapping: it moves with its parent
-  unsent.id = unsent.state.id = static_cast<uint64_t>(n + 1);
-  unsent.state.parent = static_cast<uint64_t>(n);
-  unsent.state.point_ids.assign(2000, kNoId);
-  for (int j = 0; j < kNewPerKeyframe; ++j) {
-    msg::MapPoint p;
-    p.id = static_cast<uint64_t>(n) * kNewPerKeyframe + j + 1;
-    p.reference = unsent.id;
-    unsent.new_points.push_back(p);
-    unsent.state.point_ids[static_cast<size_t>(j) * 3] = p.id;
-  }
+  // Made by tracking after the correction left mapping, sent nowhere yet: it moves with its parent.
+  msg::KeyFrame unsent = keyframe(n);
+  for (int j = 0; j < kNewPerKeyframe; ++j)
+    unsent.state.point_ids[static_cast<size_t>(j) * 3] = unsent.new_points[j].id;
   base.add(unsent);
   for (int i = 0; i < runs; ++i) {
     MapReplica replica = base;

@@ -4,6 +4,9 @@
 
 namespace binloop {
 
+/// The calling thread's own nice value (Linux; 0 elsewhere).
+int thisThreadNice();
+
 /// Lowers the calling thread's scheduling priority by `nice` steps (Linux: the thread's own nice value;
 /// elsewhere nothing). Returns whether it took effect; failing to lower it is never an error.
 bool lowerThisThreadPriority(int nice);

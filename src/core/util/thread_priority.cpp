@@ -8,16 +8,21 @@
 
 namespace binloop {
 
-bool lowerThisThreadPriority(int nice) {
 #if defined(__linux__)
-  // On Linux a nice value belongs to a thread (its kernel task id), not to the whole process.
-  const auto tid = static_cast<id_t>(syscall(SYS_gettid));
-  const int now = getpriority(PRIO_PROCESS, tid);
-  return setpriority(PRIO_PROCESS, tid, now + nice) == 0;
-#else
-  (void)nice;
-  return false;
-#endif
+namespace {
+// On Linux a nice value belongs to a thread (its kernel task id), not to the whole process.
+id_t thisThreadId() { return static_cast<id_t>(syscall(SYS_gettid)); }
+}  // namespace
+
+int thisThreadNice() { return getpriority(PRIO_PROCESS, thisThreadId()); }
+
+bool lowerThisThreadPriority(int nice) {
+  return setpriority(PRIO_PROCESS, thisThreadId(), thisThreadNice() + nice) == 0;
 }
+#else
+int thisThreadNice() { return 0; }
+
+bool lowerThisThreadPriority(int) { return false; }
+#endif
 
 }  // namespace binloop

@@ -5,31 +5,23 @@
 
 #include <thread>
 
-#if defined(__linux__)
-#include <sys/resource.h>
-#include <sys/syscall.h>
-#include <unistd.h>
-#endif
-
 namespace binloop {
 namespace {
 
 #if defined(__linux__)
-int threadNice() { return getpriority(PRIO_PROCESS, static_cast<id_t>(syscall(SYS_gettid))); }
-
 TEST(ThreadPriority, LowersOnlyTheCallingThread) {
-  const int before = threadNice();
+  const int before = thisThreadNice();
   if (before > 19 - 5) GTEST_SKIP() << "this process already runs at nice " << before;
   int inside = 0;
   bool lowered = false;
   std::thread t([&] {
     lowered = lowerThisThreadPriority(5);
-    inside = threadNice();
+    inside = thisThreadNice();
   });
   t.join();
   EXPECT_TRUE(lowered);
   EXPECT_EQ(inside, before + 5);
-  EXPECT_EQ(threadNice(), before) << "the caller's own thread is left as it was";
+  EXPECT_EQ(thisThreadNice(), before) << "the caller's own thread is left as it was";
 }
 #endif
 
