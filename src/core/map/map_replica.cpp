@@ -112,13 +112,19 @@ void MapReplica::apply(const msg::LocalMapUpdate& u, bool carry_unsent) {
     auto it = map_.keyframes().find(id);
     if (it != map_.keyframes().end()) it->second.T_w_c = orthonormalized(d * it->second.T_w_c);
   }
-  std::unordered_set<MapPointId> sent;
-  for (const auto& p : u.points) sent.insert(p.id);
-  for (auto& [id, p] : map_.points()) {
+  // The points the unsent keyframes made and `u` does not send move with them. They are a few hundred of
+  // the map's 100,000 or more: finding them first is cheaper than a set of every point `u` sends.
+  std::unordered_map<MapPointId, const Pose3*> carried;
+  for (const auto& [id, p] : map_.points()) {
     auto m = moves.find(p.reference);
-    if (m == moves.end() || sent.count(id)) continue;
-    p.p_w = m->second * p.p_w;
-    p.normal = (m->second.linear().cast<float>() * p.normal).normalized();
+    if (m != moves.end()) carried.emplace(id, &m->second);
+  }
+  if (carried.empty()) return;
+  for (const auto& p : u.points) carried.erase(p.id);
+  for (const auto& [id, d] : carried) {
+    msg::MapPoint& p = map_.points().at(id);
+    p.p_w = *d * p.p_w;
+    p.normal = (d->linear().cast<float>() * p.normal).normalized();
   }
 }
 

@@ -129,6 +129,25 @@ TEST(MapReplica, ReupsertedKeyframeRelinksObservers) {
   EXPECT_EQ(sorted(m.observers(P4)), (Ids{K1, K2}));
 }
 
+// Tracking reads a point's newest-linked observers first: a re-upserted keyframe goes last in the list of
+// every point it still sees, whether or not that point kept its slot, and the others keep their order.
+TEST(MapReplica, ReupsertedKeyframeGoesLastInItsPointsObserverLists) {
+  MapReplica m = twoKeyframes();
+  m.upsertKeyframe(keyframe(K3, {P2, P3}));
+  EXPECT_EQ(m.observers(P2), (Ids{K1, K2, K3}));
+  m.upsertKeyframe(keyframe(K1, {P1, kNoId, P2, P3}, 1.0));  // the same points: only the pose moved
+  EXPECT_EQ(m.observers(P2), (Ids{K2, K3, K1}));
+  EXPECT_EQ(m.observers(P3), (Ids{K2, K3, K1}));
+  EXPECT_EQ(m.observers(P1), (Ids{K1}));
+  m.upsertKeyframe(keyframe(K2, {P3, P2, kNoId, kNoId}));  // P2 and P3 swapped slots, P4 dropped
+  EXPECT_EQ(m.observers(P2), (Ids{K3, K1, K2}));
+  EXPECT_EQ(m.observers(P3), (Ids{K3, K1, K2}));
+  EXPECT_TRUE(m.observers(P4).empty());
+  m.upsertKeyframe(keyframe(K1, {P1, kNoId, kNoId, P3}));  // K1 drops P2, which the others still see
+  EXPECT_EQ(m.observers(P2), (Ids{K3, K2}));
+  EXPECT_EQ(m.observers(P3), (Ids{K3, K2, K1}));
+}
+
 TEST(MapReplica, KeyframeNamingAPointTwiceIsOneObserver) {
   MapReplica m;
   m.upsertPoint(point(P1));
