@@ -23,6 +23,13 @@ struct MapPoint {
   uint32_t observations = 0;                         // keyframes that see it
 };
 
+/// Carries `p` along when the frame it was placed in moves by `d` (a loop correction, a merge): its
+/// position and its viewing direction turn together.
+inline void moveRigidly(MapPoint& p, const Pose3& d) {
+  p.p_w = d * p.p_w;
+  p.normal = (d.linear().cast<float>() * p.normal).normalized();
+}
+
 struct CovisibleEdge {
   SlamKeyframeId id = kNoId;
   uint32_t weight = 0;  // map points both keyframes see

@@ -121,11 +121,7 @@ void MapReplica::apply(const msg::LocalMapUpdate& u, bool carry_unsent) {
   }
   if (carried.empty()) return;
   for (const auto& p : u.points) carried.erase(p.id);
-  for (const auto& [id, d] : carried) {
-    msg::MapPoint& p = map_.points().at(id);
-    p.p_w = *d * p.p_w;
-    p.normal = (d->linear().cast<float>() * p.normal).normalized();
-  }
+  for (const auto& [id, d] : carried) msg::moveRigidly(map_.points().at(id), *d);
 }
 
 std::unordered_map<SlamKeyframeId, Pose3> MapReplica::unsentMoves(const msg::LocalMapUpdate& u) const {

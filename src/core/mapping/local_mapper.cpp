@@ -102,10 +102,7 @@ void LocalMapper::insert(const msg::KeyFrame& in) {
   for (const msg::MapPoint& np : in.new_points) {
     MP& mp = map_.points()[np.id];
     mp.state = np;
-    if (is_late) {
-      mp.state.p_w = late * np.p_w;
-      mp.state.normal = (late.linear().cast<float>() * np.normal).normalized();
-    }
+    if (is_late) msg::moveRigidly(mp.state, late);
     mp.first_seq = kf.seq;
     recent_.push_back(np.id);
     created.insert(np.id);

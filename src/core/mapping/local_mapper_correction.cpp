@@ -110,9 +110,8 @@ std::vector<std::pair<SlamKeyframeId, Pose3>> LocalMapper::moveMap(
     SlamKeyframeId ref = mp.state.reference;
     if (!map_.knows(ref) && !mp.obs.empty()) ref = mp.obs.begin()->first;
     const Pose3 d = deltaOf(ref);
-    const Eigen::Vector3d* at = placedAt(id);
-    mp.state.p_w = at ? *at : d * mp.state.p_w;
-    mp.state.normal = (d.linear().cast<float>() * mp.state.normal).normalized();
+    msg::moveRigidly(mp.state, d);
+    if (const Eigen::Vector3d* at = placedAt(id)) mp.state.p_w = *at;
   }
   return moved;
 }
