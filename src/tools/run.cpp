@@ -182,7 +182,7 @@ FrameStats writeTiming(const fs::path& out, const Played& played, const SlamPipe
   std::ofstream timing(out / "timing.csv");
   timing << "frame,state,features,stereo_matches,tracked_points,keyframe,extract_ms,stereo_ms,track_ms,"
             "mapping_ms,ba_ms,triangulation_ms,points_triangulated,reference_points,mapping_queue,lag_ms,"
-            "process_ms\n";
+            "process_ms,apply_ms\n";
   std::vector<double> ex, stt, tr, mp, ba, tri;
   FrameStats s;
   for (size_t i = 0; i < frames.size(); ++i) {
@@ -195,7 +195,7 @@ FrameStats writeTiming(const fs::path& out, const Played& played, const SlamPipe
            << (kf ? it->second->total_ms : 0) << "," << (kf ? it->second->ba_ms : 0) << ","
            << (kf ? it->second->triangulation_ms : 0) << "," << (kf ? it->second->points_triangulated : 0)
            << "," << tf.reference_points << "," << tf.mapping_queue << "," << played.lag_ms[i] << ","
-           << played.process_ms[i] << "\n";
+           << played.process_ms[i] << "," << tf.apply_ms << "\n";
     if (tf.features > 0) {
       ex.push_back(tf.extract_ms);
       stt.push_back(tf.stereo_ms);

@@ -33,6 +33,9 @@ struct TrackedFrame {
   // prediction (Tracker, restart_after_lost); empty otherwise.
   std::string problem;
   double extract_ms = 0, stereo_ms = 0, track_ms = 0;
+  // Bringing tracking's copy of the map up to date with mapping's updates before this frame (in one
+  // process; the ROS nodes do it between frames): a whole corrected map after a loop costs the most.
+  double apply_ms = 0;
 };
 
 }  // namespace binloop::msg

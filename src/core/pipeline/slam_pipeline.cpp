@@ -226,8 +226,11 @@ msg::TrackedFrame SlamPipeline::process(const StereoFrame& frame,
     const auto now = std::chrono::steady_clock::now();
     waitUntilMappingIdle(std::min(due.value_or(now), now) + allowance);
   }
+  const auto applying = std::chrono::steady_clock::now();
   drainUpdates();
+  const double apply_ms = msSince(applying);
   Tracker::Output out = tracker_.track(frame, pending_.load());
+  out.frame.apply_ms = apply_ms;
   if (out.keyframe) {
     ++pending_;
     if (params_.mode == PipelineMode::kLockStep) {
