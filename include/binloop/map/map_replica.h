@@ -38,7 +38,7 @@ class MapReplica {
   MapPointId resolve(MapPointId id) const;
   const msg::MapPoint* point(MapPointId id) const;  // after resolve; nullptr when gone
   const msg::KeyframeState* keyframe(SlamKeyframeId id) const;
-  /// Keyframes whose point_ids name this point (resolved id), in the order they were made: newest last.
+  /// Keyframes whose point_ids name this point (resolved id).
   const std::vector<SlamKeyframeId>& observers(MapPointId id) const;
 
   /// The n most recently made keyframes still in the map, newest first.

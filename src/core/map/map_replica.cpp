@@ -7,18 +7,7 @@ namespace binloop {
 
 namespace {
 const std::vector<SlamKeyframeId> kNone;
-
-bool madeBefore(SlamKeyframeId a, SlamKeyframeId b) {
-  return counterOf(a) != counterOf(b) ? counterOf(a) < counterOf(b) : a < b;
 }
-
-// Observer lists are kept in the order their keyframes were made, so that the newest sightings are last
-// whatever order updates re-send keyframes in.
-void insertObserver(std::vector<SlamKeyframeId>& v, SlamKeyframeId k) {
-  auto at = std::lower_bound(v.begin(), v.end(), k, madeBefore);
-  if (at == v.end() || *at != k) v.insert(at, k);
-}
-}  // namespace
 
 void MapReplica::unlinkKeyframe(const msg::KeyframeState& kf) {
   for (MapPointId p : kf.point_ids) {
@@ -26,8 +15,7 @@ void MapReplica::unlinkKeyframe(const msg::KeyframeState& kf) {
     auto it = observers_.find(p);
     if (it == observers_.end()) continue;
     auto& v = it->second;
-    auto at = std::lower_bound(v.begin(), v.end(), kf.id, madeBefore);
-    if (at != v.end() && *at == kf.id) v.erase(at);
+    v.erase(std::remove(v.begin(), v.end(), kf.id), v.end());
     if (v.empty()) observers_.erase(it);
   }
 }
@@ -35,20 +23,13 @@ void MapReplica::unlinkKeyframe(const msg::KeyframeState& kf) {
 void MapReplica::linkKeyframe(const msg::KeyframeState& kf) {
   for (MapPointId p : kf.point_ids) {
     if (p == kNoId) continue;
-    insertObserver(observers_[p], kf.id);
+    auto& v = observers_[p];
+    if (std::find(v.begin(), v.end(), kf.id) == v.end()) v.push_back(kf.id);
   }
 }
 
 void MapReplica::upsertKeyframe(const msg::KeyframeState& kf) {
-  if (counterOf(kf.id) > counterOf(last_keyframe_)) last_keyframe_ = kf.id;
   auto it = map_.keyframes().find(kf.id);
-  if (it != map_.keyframes().end() && it->second.point_ids == kf.point_ids) {
-    // The points it holds (a pose refined, the whole map corrected): held ids are resolved already and the
-    // lists name it where they should. Most keyframes of a correction's whole map come so, and relinking
-    // each one's hundreds of points cost tracking 100-400 ms a correction on route 00.
-    it->second = kf;
-    return;
-  }
   if (it != map_.keyframes().end()) {
     unlinkKeyframe(it->second);
     it->second = kf;
@@ -60,6 +41,7 @@ void MapReplica::upsertKeyframe(const msg::KeyframeState& kf) {
     if (p != kNoId) p = resolve(p);
   }
   linkKeyframe(it->second);
+  if (counterOf(kf.id) > counterOf(last_keyframe_)) last_keyframe_ = kf.id;
 }
 
 void MapReplica::upsertPoint(const msg::MapPoint& p) {
@@ -106,7 +88,7 @@ void MapReplica::fuse(MapPointId removed, MapPointId kept) {
                             kf->second.point_ids.end();
       for (MapPointId& q : kf->second.point_ids)
         if (q == removed) q = has_kept ? kNoId : kept;
-      insertObserver(kv, k);
+      if (std::find(kv.begin(), kv.end(), k) == kv.end()) kv.push_back(k);
     }
   }
   map_.points().erase(removed);
@@ -131,17 +113,11 @@ void MapReplica::apply(const msg::LocalMapUpdate& u, bool carry_unsent) {
     if (it != map_.keyframes().end()) it->second.T_w_c = orthonormalized(d * it->second.T_w_c);
   }
   // The points the unsent keyframes made and `u` does not send move with them. They are a few hundred of
-  // the map's 100,000 or more, and each is seen by the keyframe that made it: look among those keyframes'.
+  // the map's 100,000 or more: finding them first is cheaper than a set of every point `u` sends.
   std::unordered_map<MapPointId, const Pose3*> carried;
-  for (const auto& [kf_id, d] : moves) {
-    const msg::KeyframeState* kf = keyframe(kf_id);
-    if (!kf) continue;
-    for (MapPointId id : kf->point_ids) {
-      auto p = id == kNoId ? map_.points().end() : map_.points().find(id);
-      if (p == map_.points().end()) continue;
-      auto m = moves.find(p->second.reference);
-      if (m != moves.end()) carried.emplace(id, &m->second);
-    }
+  for (const auto& [id, p] : map_.points()) {
+    auto m = moves.find(p.reference);
+    if (m != moves.end()) carried.emplace(id, &m->second);
   }
   if (carried.empty()) return;
   for (const auto& p : u.points) carried.erase(p.id);
