@@ -21,6 +21,8 @@ namespace binloop {
 class MapReplica {
  public:
   void upsertKeyframe(const msg::KeyframeState& kf);
+  /// Each in turn, as upsertKeyframe; a whole map (sorted by id) in one pass over the observer lists.
+  void upsertKeyframes(const std::vector<msg::KeyframeState>& kfs);
   void upsertPoint(const msg::MapPoint& p);
   void removePoint(MapPointId id);
   void removeKeyframe(SlamKeyframeId id);

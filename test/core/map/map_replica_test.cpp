@@ -414,6 +414,43 @@ TEST(MapReplica, KeyframesNotYetSentMoveWithTheirAncestorAfterACorrection) {
   EXPECT_TRUE(plain.point(P3)->p_w.isApprox(point(P3).p_w));
 }
 
+// A whole map sent again (sorted by id, as after a correction) leaves every observer list as sending its
+// keyframes one by one does: those not sent first in their order, then the sent ones by id. 100 keyframes,
+// each seeing the 12 points made by it and its two predecessors; updates have re-sent windows in
+// covisibility order, so the lists are out of id order; the whole map changes a fifth of the keyframes.
+TEST(MapReplica, WholeMapInOnePassLeavesTheListsAsOneByOne) {
+  constexpr uint64_t kKeyframes = 100;
+  auto points = [](uint64_t k, uint64_t shift) {
+    std::vector<MapPointId> ids;
+    for (uint64_t m = k >= 2 ? k - 2 : 0; m <= k; ++m)
+      for (uint64_t j = 0; j < 4; ++j) ids.push_back(trackingId(1000 + 4 * m + (j + shift) % 4));
+    return ids;
+  };
+  MapReplica a;
+  for (uint64_t k = 0; k < kKeyframes; ++k) {
+    msg::KeyFrame kf = keyframeMessage(trackingId(k + 1), points(k, 0), {});
+    for (uint64_t j = 0; j < 4; ++j) kf.new_points.push_back(point(trackingId(1000 + 4 * k + j)));
+    a.add(kf);
+    for (uint64_t back = 1; back <= 2 && back <= k; ++back)  // a local window, newest first
+      a.upsertKeyframe(keyframe(trackingId(k + 1 - back), points(k - back, 0), 0.5));
+  }
+  a.add(keyframeMessage(trackingId(kKeyframes + 1), points(kKeyframes - 1, 0), {}));  // not sent
+  MapReplica b = a;
+  msg::LocalMapUpdate u;
+  for (uint64_t k = 0; k < kKeyframes; ++k)
+    u.keyframes.push_back(keyframe(trackingId(k + 1), points(k, k % 5 == 0 ? 1 : 0), 1.0));
+  a.apply(u);
+  for (const auto& k : u.keyframes) b.upsertKeyframe(k);
+  size_t compared = 0;
+  for (uint64_t id = 1000; id < 1000 + 4 * kKeyframes; ++id) {
+    EXPECT_EQ(a.observers(trackingId(id)), b.observers(trackingId(id))) << "point " << id;
+    compared += a.observers(trackingId(id)).size();
+  }
+  EXPECT_GT(compared, 1000u);
+  EXPECT_EQ(a.keyframe(trackingId(50))->T_w_c.translation().x(), 1.0);
+  EXPECT_EQ(a.lastKeyframe(), b.lastKeyframe());
+}
+
 // Mapping culled K2 before the correction, so the corrected map names neither K2 nor K3 (made on K2, not yet
 // sent): K3 moves as K2's parent K1 moved, as mapping will move it when it arrives.
 TEST(MapReplica, AnUnsentKeyframeWhoseParentWasCulledMovesWithTheParentsParent) {
