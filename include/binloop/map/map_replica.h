@@ -21,8 +21,6 @@ namespace binloop {
 class MapReplica {
  public:
   void upsertKeyframe(const msg::KeyframeState& kf);
-  /// Each in turn, as upsertKeyframe; a whole map (sorted by id) in one pass over the observer lists.
-  void upsertKeyframes(const std::vector<msg::KeyframeState>& kfs);
   void upsertPoint(const msg::MapPoint& p);
   void removePoint(MapPointId id);
   void removeKeyframe(SlamKeyframeId id);
@@ -40,7 +38,7 @@ class MapReplica {
   MapPointId resolve(MapPointId id) const;
   const msg::MapPoint* point(MapPointId id) const;  // after resolve; nullptr when gone
   const msg::KeyframeState* keyframe(SlamKeyframeId id) const;
-  /// Keyframes whose point_ids name this point (resolved id).
+  /// Keyframes whose point_ids name this point (resolved id), in the order they were made: newest last.
   const std::vector<SlamKeyframeId>& observers(MapPointId id) const;
 
   /// The n most recently made keyframes still in the map, newest first.

@@ -203,8 +203,11 @@ class Tracker {
                                              const std::unordered_set<MapPointId>& skip = {}) const;
   /// `pts` projected at f.T_w_c and matched to f's free keypoints within `radius`; the number matched.
   int searchByProjection(Frame& f, const std::vector<const msg::MapPoint*>& pts, float radius) const;
-  /// The frame's matched keypoints with stereo depth, each with up to three of its point's keyframes.
+  /// The frame's matched keypoints with stereo depth, each with up to three of its point's keyframes
+  /// (sightingKeyframes).
   std::vector<FarMatch> farMatches(const Frame& f, std::vector<int>* keypoint_of) const;
+  /// Which of a point's observers farMatches uses, whatever order the replica lists them in.
+  std::vector<SlamKeyframeId> sightingKeyframes(const msg::MapPoint& mp) const;
   /// Lost at the map's last keyframe, with no motion model (after a load or an adopted map).
   void startLostAtLastKeyframe();
   /// Relocalisation from scratch against the vocabulary's (or the most recent) keyframes: the candidate

@@ -7,7 +7,19 @@ namespace binloop {
 
 namespace {
 const std::vector<SlamKeyframeId> kNone;
+
+bool madeBefore(SlamKeyframeId a, SlamKeyframeId b) {
+  return counterOf(a) != counterOf(b) ? counterOf(a) < counterOf(b) : a < b;
 }
+
+// Observer lists are kept in the order their keyframes were made: then a re-sent keyframe with the points it
+// held (every keyframe of a corrected whole map, mostly) is only copied, not relinked. Nothing reads meaning
+// into the order (Tracker::sightingKeyframes chooses by range); it only has to be one that costs nothing.
+void insertObserver(std::vector<SlamKeyframeId>& v, SlamKeyframeId k) {
+  auto at = std::lower_bound(v.begin(), v.end(), k, madeBefore);
+  if (at == v.end() || *at != k) v.insert(at, k);
+}
+}  // namespace
 
 void MapReplica::unlinkKeyframe(const msg::KeyframeState& kf) {
   for (MapPointId p : kf.point_ids) {
@@ -15,7 +27,8 @@ void MapReplica::unlinkKeyframe(const msg::KeyframeState& kf) {
     auto it = observers_.find(p);
     if (it == observers_.end()) continue;
     auto& v = it->second;
-    v.erase(std::remove(v.begin(), v.end(), kf.id), v.end());
+    auto at = std::lower_bound(v.begin(), v.end(), kf.id, madeBefore);
+    if (at != v.end() && *at == kf.id) v.erase(at);
     if (v.empty()) observers_.erase(it);
   }
 }
@@ -23,13 +36,20 @@ void MapReplica::unlinkKeyframe(const msg::KeyframeState& kf) {
 void MapReplica::linkKeyframe(const msg::KeyframeState& kf) {
   for (MapPointId p : kf.point_ids) {
     if (p == kNoId) continue;
-    auto& v = observers_[p];
-    if (std::find(v.begin(), v.end(), kf.id) == v.end()) v.push_back(kf.id);
+    insertObserver(observers_[p], kf.id);
   }
 }
 
 void MapReplica::upsertKeyframe(const msg::KeyframeState& kf) {
+  if (counterOf(kf.id) > counterOf(last_keyframe_)) last_keyframe_ = kf.id;
   auto it = map_.keyframes().find(kf.id);
+  if (it != map_.keyframes().end() && it->second.point_ids == kf.point_ids) {
+    // The points it holds (a pose refined, the whole map corrected): held ids are resolved already and the
+    // lists name it where they should. Most keyframes of a correction's whole map come so, and relinking
+    // each one's hundreds of points cost tracking 100-400 ms a correction on route 00.
+    it->second = kf;
+    return;
+  }
   if (it != map_.keyframes().end()) {
     unlinkKeyframe(it->second);
     it->second = kf;
@@ -41,37 +61,6 @@ void MapReplica::upsertKeyframe(const msg::KeyframeState& kf) {
     if (p != kNoId) p = resolve(p);
   }
   linkKeyframe(it->second);
-  if (counterOf(kf.id) > counterOf(last_keyframe_)) last_keyframe_ = kf.id;
-}
-
-void MapReplica::upsertKeyframes(const std::vector<msg::KeyframeState>& kfs) {
-  // A whole map (sorted by id) must end as upserting each in turn leaves it: in each point's list the
-  // keyframes not sent keep their order and come first, then the sent ones by id. Relinking every keyframe
-  // to get there cost tracking 93-416 ms a correction on route 00; here a keyframe with the points it holds
-  // is only copied, and the lists are put in that order in one pass.
-  constexpr size_t kWholeMap = 64;
-  bool by_id = kfs.size() >= kWholeMap;
-  for (size_t i = 1; by_id && i < kfs.size(); ++i) by_id = kfs[i - 1].id < kfs[i].id;
-  if (!by_id) {
-    for (const auto& k : kfs) upsertKeyframe(k);
-    return;
-  }
-  std::unordered_set<SlamKeyframeId> sent;
-  for (const auto& k : kfs) {
-    sent.insert(k.id);
-    auto it = map_.keyframes().find(k.id);
-    if (it == map_.keyframes().end() || it->second.point_ids != k.point_ids) {
-      upsertKeyframe(k);
-      continue;
-    }
-    it->second = k;  // held ids are resolved already, and the lists name it
-    if (counterOf(k.id) > counterOf(last_keyframe_)) last_keyframe_ = k.id;
-  }
-  const auto before = [&](SlamKeyframeId a, SlamKeyframeId b) {
-    return (sent.count(a) ? a : kNoId) < (sent.count(b) ? b : kNoId);
-  };
-  for (auto& [id, v] : observers_)
-    if (!std::is_sorted(v.begin(), v.end(), before)) std::stable_sort(v.begin(), v.end(), before);
 }
 
 void MapReplica::upsertPoint(const msg::MapPoint& p) {
@@ -118,7 +107,7 @@ void MapReplica::fuse(MapPointId removed, MapPointId kept) {
                             kf->second.point_ids.end();
       for (MapPointId& q : kf->second.point_ids)
         if (q == removed) q = has_kept ? kNoId : kept;
-      if (std::find(kv.begin(), kv.end(), k) == kv.end()) kv.push_back(k);
+      insertObserver(kv, k);
     }
   }
   map_.points().erase(removed);
@@ -136,18 +125,24 @@ void MapReplica::apply(const msg::LocalMapUpdate& u, bool carry_unsent) {
   for (MapPointId id : u.culled_points) removePoint(id);
   for (SlamKeyframeId id : u.culled_keyframes) removeKeyframe(id);
   for (const auto& p : u.points) upsertPoint(p);
-  upsertKeyframes(u.keyframes);
+  for (const auto& k : u.keyframes) upsertKeyframe(k);
   if (moves.empty()) return;
   for (const auto& [id, d] : moves) {
     auto it = map_.keyframes().find(id);
     if (it != map_.keyframes().end()) it->second.T_w_c = orthonormalized(d * it->second.T_w_c);
   }
   // The points the unsent keyframes made and `u` does not send move with them. They are a few hundred of
-  // the map's 100,000 or more: finding them first is cheaper than a set of every point `u` sends.
+  // the map's 100,000 or more, and each is seen by the keyframe that made it: look among those keyframes'.
   std::unordered_map<MapPointId, const Pose3*> carried;
-  for (const auto& [id, p] : map_.points()) {
-    auto m = moves.find(p.reference);
-    if (m != moves.end()) carried.emplace(id, &m->second);
+  for (const auto& [kf_id, d] : moves) {
+    const msg::KeyframeState* kf = keyframe(kf_id);
+    if (!kf) continue;
+    for (MapPointId id : kf->point_ids) {
+      auto p = id == kNoId ? map_.points().end() : map_.points().find(id);
+      if (p == map_.points().end()) continue;
+      auto m = moves.find(p->second.reference);
+      if (m != moves.end()) carried.emplace(id, &m->second);
+    }
   }
   if (carried.empty()) return;
   for (const auto& p : u.points) carried.erase(p.id);

@@ -437,6 +437,26 @@ std::vector<const msg::MapPoint*> Tracker::pointsOf(const std::vector<SlamKeyfra
   return pts;
 }
 
+std::vector<SlamKeyframeId> Tracker::sightingKeyframes(const msg::MapPoint& mp) const {
+  // The three observers farthest from the point, chosen so and not by the observer lists' order. From far
+  // away a keyframe fixes the point's direction and leaves its depth loose, which is what the frame's own
+  // stereo knows better (far_keyframe_pose.h); the nearest observers would hold the point at depths
+  // measured 30-40 m back.
+  std::vector<std::pair<double, SlamKeyframeId>> by_range;
+  for (SlamKeyframeId k : map_.observers(mp.id)) {
+    const msg::KeyframeState* kf = map_.keyframe(k);
+    if (!kf || !((kf->T_w_c.inverse() * mp.p_w).z() > 0)) continue;
+    by_range.emplace_back((kf->T_w_c.translation() - mp.p_w).squaredNorm(), k);
+  }
+  const size_t n = std::min<size_t>(3, by_range.size());
+  std::partial_sort(by_range.begin(), by_range.begin() + n, by_range.end(), [](const auto& a, const auto& b) {
+    return a.first != b.first ? a.first > b.first : a.second > b.second;
+  });
+  std::vector<SlamKeyframeId> ids;
+  for (size_t i = 0; i < n; ++i) ids.push_back(by_range[i].second);
+  return ids;
+}
+
 std::vector<FarMatch> Tracker::farMatches(const Frame& f, std::vector<int>* keypoint_of) const {
   const ScalePyramid& s = builder_.scales();
   std::vector<FarMatch> matches;
@@ -451,15 +471,12 @@ std::vector<FarMatch> Tracker::farMatches(const Frame& f, std::vector<int>* keyp
     m.inv_sigma2 = s.inv_sigma2[k.octave];
     // The keyframes' observations as the map has them after local BA: where the point projects, at the
     // level its distance predicts (the replica keeps poses and point ids, not keyframes' keypoints).
-    const auto& observers = map_.observers(mp->id);
-    for (auto it = observers.rbegin(); it != observers.rend() && m.sightings.size() < 3; ++it) {
-      const msg::KeyframeState* kf = map_.keyframe(*it);
-      if (!kf) continue;
+    for (const SlamKeyframeId k : sightingKeyframes(*mp)) {
+      const msg::KeyframeState* kf = map_.keyframe(k);
       KeyframeSighting ks;
-      ks.keyframe = *it;
+      ks.keyframe = k;
       ks.T_c_w = kf->T_w_c.inverse();
       const Eigen::Vector3d q = ks.T_c_w * mp->p_w;
-      if (!(q.z() > 0)) continue;
       const Eigen::Vector3d uvr = projectStereo(q, cam_);
       ks.keypoint.x = static_cast<float>(uvr.x());
       ks.keypoint.y = static_cast<float>(uvr.y());
